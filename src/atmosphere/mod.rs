@@ -1,0 +1,287 @@
+//! The atmosphere (model.md §4): molecules, a background aerosol profile (paper
+//! Eq. 5–6) and any number of aerosol or cloud layers, as point optical properties and
+//! as the piecewise-constant slabs on which the bin integral is exact.
+
+pub mod aerosol_profile;
+pub mod profile_file;
+pub mod rayleigh;
+pub mod us76;
+
+use crate::config::{
+    Channel, ExtinctionSource, LayerKind, LoadedConfig, MolecularModel, ScenarioConfig,
+};
+use crate::error::Result;
+use profile_file::MolecularProfile;
+
+/// Where the molecular number density comes from.
+#[derive(Debug, Clone)]
+pub enum MolecularSource {
+    /// No molecules.
+    None,
+    /// U.S. Standard Atmosphere 1976 (embedded, up to 86 km).
+    Us76,
+    /// A tabulated profile read from a file.
+    Profile(MolecularProfile),
+}
+
+/// Molecular scattering: Bucholtz (1995) cross-section and lidar ratio at the laser wavelength.
+#[derive(Debug, Clone)]
+pub struct Molecules {
+    /// Number density source.
+    pub source: MolecularSource,
+    /// Rayleigh cross-section per molecule σ(λ), m².
+    pub cross_section_m2: f64,
+    /// Molecular lidar ratio `S_mol = (8π/3)(1+2γ)/(1+γ)`, sr.
+    pub lidar_ratio_sr: f64,
+    /// Linear depolarization ratio of the molecular backscatter, `γ = ρn/(2−ρn)`.
+    pub depolarization: f64,
+}
+
+impl Molecules {
+    /// Number density at altitude `z_m`, m⁻³.
+    pub fn number_density_m3(&self, z_m: f64) -> f64 {
+        match &self.source {
+            MolecularSource::None => 0.0,
+            MolecularSource::Us76 => us76::number_density_m3(z_m),
+            MolecularSource::Profile(p) => p.number_density_m3(z_m),
+        }
+    }
+
+    /// Altitude above which there are no molecules, m.
+    pub fn top_m(&self) -> f64 {
+        match &self.source {
+            MolecularSource::None => f64::NEG_INFINITY,
+            MolecularSource::Us76 => us76::TOP_ALTITUDE_M,
+            MolecularSource::Profile(p) => p.top_altitude_m(),
+        }
+    }
+
+    /// `α_mol = N·σ`, m⁻¹.
+    pub fn extinction_per_m(&self, z_m: f64) -> f64 {
+        self.number_density_m3(z_m) * self.cross_section_m2
+    }
+}
+
+/// The background aerosol of Eq. 5–6: `α_aer(z) = α_aer(0)·Np(z)/Np(0)`.
+#[derive(Debug, Clone)]
+pub struct BackgroundAerosol {
+    /// Near-surface extinction at the laser wavelength, m⁻¹.
+    pub surface_extinction_per_m: f64,
+    /// Lidar ratio, sr.
+    pub lidar_ratio_sr: f64,
+    /// Linear depolarization ratio.
+    pub depolarization: f64,
+}
+
+impl BackgroundAerosol {
+    /// `α_aer(z)`, m⁻¹ (Eq. 6).
+    pub fn extinction_per_m(&self, z_m: f64) -> f64 {
+        self.surface_extinction_per_m * aerosol_profile::relative_concentration(z_m)
+    }
+}
+
+/// A homogeneous aerosol or cloud layer.
+#[derive(Debug, Clone)]
+pub struct Layer {
+    /// Cloud or aerosol.
+    pub kind: LayerKind,
+    /// Base altitude, m.
+    pub base_m: f64,
+    /// Top altitude, m.
+    pub top_m: f64,
+    /// Extinction, m⁻¹.
+    pub extinction_per_m: f64,
+    /// Lidar ratio, sr.
+    pub lidar_ratio_sr: f64,
+    /// Linear depolarization ratio.
+    pub depolarization: f64,
+    /// Multiple-scattering factor η_ms on the layer's optical depth.
+    pub multiple_scattering: f64,
+}
+
+impl Layer {
+    fn contains(&self, z_m: f64) -> bool {
+        z_m >= self.base_m && z_m < self.top_m
+    }
+}
+
+/// Point optical properties at one altitude.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Optics {
+    /// Molecular backscatter, m⁻¹ sr⁻¹.
+    pub beta_mol: f64,
+    /// Aerosol backscatter (profile and aerosol layers), m⁻¹ sr⁻¹.
+    pub beta_aer: f64,
+    /// Cloud backscatter, m⁻¹ sr⁻¹.
+    pub beta_cld: f64,
+    /// Total extinction, m⁻¹.
+    pub alpha_total: f64,
+    /// Extinction that attenuates the signal: layers' extinction times their η_ms, m⁻¹.
+    pub alpha_effective: f64,
+    /// Backscatter seen by the receiver channel, m⁻¹ sr⁻¹.
+    pub beta_channel: f64,
+}
+
+/// A slab `[z_lo, z_hi)` of constant optical properties.
+#[derive(Debug, Clone, Copy)]
+pub struct Slab {
+    /// Lower altitude, m.
+    pub z_lo: f64,
+    /// Upper altitude, m.
+    pub z_hi: f64,
+    /// Optical properties (evaluated at the slab's mid-altitude).
+    pub optics: Optics,
+}
+
+/// The whole atmosphere of a scenario.
+#[derive(Debug, Clone)]
+pub struct Atmosphere {
+    /// Molecules.
+    pub molecules: Molecules,
+    /// Background aerosol profile, if any.
+    pub aerosol: Option<BackgroundAerosol>,
+    /// Layers, overlapping ones adding.
+    pub layers: Vec<Layer>,
+    /// Vertical resolution of the piecewise representation, m.
+    pub grid_m: f64,
+    /// Receiver channel (weights each species' backscatter by its depolarization).
+    pub channel: Channel,
+}
+
+impl Atmosphere {
+    /// Builds the atmosphere of a validated config (reads the molecular profile file if any).
+    pub fn from_config(loaded: &LoadedConfig) -> Result<Self> {
+        let cfg = &loaded.config;
+        let wl = cfg.instrument.wavelength_nm;
+        let m = &cfg.atmosphere.molecular;
+        let source = match &m.model {
+            MolecularModel::Named(n) if n == "none" => MolecularSource::None,
+            MolecularModel::Named(_) => MolecularSource::Us76,
+            MolecularModel::File { file } => {
+                MolecularSource::Profile(MolecularProfile::from_file(&loaded.resolve_path(file))?)
+            }
+        };
+        let rho_n = m.depolarization.unwrap_or_else(|| rayleigh::depolarization_rho_n(wl));
+        let molecules = Molecules {
+            source,
+            cross_section_m2: rayleigh::cross_section_m2(wl),
+            lidar_ratio_sr: rayleigh::lidar_ratio_sr(rho_n),
+            depolarization: rayleigh::gamma(rho_n),
+        };
+        Ok(Atmosphere {
+            molecules,
+            aerosol: background_aerosol(cfg),
+            layers: layers(cfg),
+            grid_m: m.grid_m,
+            channel: cfg.instrument.channel,
+        })
+    }
+
+    fn share(&self, depolarization: f64) -> f64 {
+        self.channel.share(depolarization)
+    }
+
+    /// Optical properties at altitude `z_m`: `β = β_mol + β_aer + β_cld`,
+    /// `α = α_mol + α_aer + α_cld` (model.md §4).
+    pub fn optics_at(&self, z_m: f64) -> Optics {
+        let mut o = Optics::default();
+        let alpha_mol = self.molecules.extinction_per_m(z_m);
+        o.beta_mol = alpha_mol / self.molecules.lidar_ratio_sr;
+        o.alpha_total = alpha_mol;
+        o.alpha_effective = alpha_mol;
+        o.beta_channel = o.beta_mol * self.share(self.molecules.depolarization);
+        if let Some(a) = &self.aerosol {
+            let alpha = a.extinction_per_m(z_m);
+            let beta = alpha / a.lidar_ratio_sr;
+            o.beta_aer += beta;
+            o.alpha_total += alpha;
+            o.alpha_effective += alpha;
+            o.beta_channel += beta * self.share(a.depolarization);
+        }
+        for l in self.layers.iter().filter(|l| l.contains(z_m)) {
+            let beta = l.extinction_per_m / l.lidar_ratio_sr;
+            match l.kind {
+                LayerKind::Cloud => o.beta_cld += beta,
+                LayerKind::Aerosol => o.beta_aer += beta,
+            }
+            o.alpha_total += l.extinction_per_m;
+            o.alpha_effective += l.extinction_per_m * l.multiple_scattering;
+            o.beta_channel += beta * self.share(l.depolarization);
+        }
+        o
+    }
+
+    /// Altitude above which the atmosphere is empty, m.
+    pub fn top_m(&self) -> f64 {
+        let mut top = self.molecules.top_m();
+        if self.aerosol.is_some() {
+            top = top.max(aerosol_profile::PROFILE_TOP_M);
+        }
+        for l in &self.layers {
+            top = top.max(l.top_m);
+        }
+        top
+    }
+
+    /// The piecewise-constant representation of `[z_lo, z_hi)`: slabs split on the
+    /// `grid_m` grid, at every layer edge and at the tops of the molecular and aerosol
+    /// profiles, each with the optical properties of its mid-altitude. Inside a slab the
+    /// bin integral is done exactly (see `signal`).
+    pub fn slabs(&self, z_lo: f64, z_hi: f64) -> Vec<Slab> {
+        let mut edges = vec![z_lo, z_hi];
+        let first = (z_lo / self.grid_m).ceil() as i64;
+        let last = (z_hi / self.grid_m).floor() as i64;
+        edges.extend((first..=last).map(|k| k as f64 * self.grid_m));
+        edges.push(self.molecules.top_m());
+        if self.aerosol.is_some() {
+            edges.push(aerosol_profile::PROFILE_TOP_M);
+        }
+        for l in &self.layers {
+            edges.push(l.base_m);
+            edges.push(l.top_m);
+        }
+        edges.retain(|z| z.is_finite() && *z >= z_lo && *z <= z_hi);
+        edges.sort_by(f64::total_cmp);
+        edges.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+        edges
+            .windows(2)
+            .map(|w| Slab { z_lo: w[0], z_hi: w[1], optics: self.optics_at(0.5 * (w[0] + w[1])) })
+            .collect()
+    }
+}
+
+/// Eq. 5 near-surface extinction at the laser wavelength, from the visibility or from
+/// the given surface extinction (scaled by the Ångström exponent), as the config selects.
+fn background_aerosol(cfg: &ScenarioConfig) -> Option<BackgroundAerosol> {
+    let a = cfg.atmosphere.aerosol.as_ref()?;
+    let wl = cfg.instrument.wavelength_nm;
+    let source = a.extinction_from.unwrap_or(if a.surface_extinction_per_km.is_some() {
+        ExtinctionSource::SurfaceExtinction
+    } else {
+        ExtinctionSource::Visibility
+    });
+    let surface_extinction_per_m = match (source, a.surface_extinction_per_km) {
+        (ExtinctionSource::SurfaceExtinction, Some(e)) => {
+            let q = a.angstrom_exponent.unwrap_or_else(|| aerosol_profile::kruse_exponent(a.visibility_km));
+            e * 1e-3 * (a.reference_wavelength_nm / wl).powf(q)
+        }
+        _ => aerosol_profile::surface_extinction_per_m(a.visibility_km, wl),
+    };
+    Some(BackgroundAerosol { surface_extinction_per_m, lidar_ratio_sr: a.lidar_ratio_sr, depolarization: a.depolarization })
+}
+
+fn layers(cfg: &ScenarioConfig) -> Vec<Layer> {
+    cfg.atmosphere
+        .layers
+        .iter()
+        .map(|l| Layer {
+            kind: l.kind,
+            base_m: l.base_km * 1e3,
+            top_m: l.top_km * 1e3,
+            extinction_per_m: l.extinction_per_km * 1e-3,
+            lidar_ratio_sr: l.lidar_ratio_sr,
+            depolarization: l.depolarization,
+            multiple_scattering: l.multiple_scattering,
+        })
+        .collect()
+}

@@ -1,0 +1,84 @@
+//! The subcommands' work, called by the thin `lidarsim` binary.
+
+use std::io::Write;
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::output::{self, expect, snr_map};
+use crate::scenario::{ExpectedProfile, Scenario};
+use crate::snr;
+
+/// Accumulation times of the S/N map, s: 1 to 1000, log-spaced (the paper's Figs. 2–3).
+pub fn snr_map_times_s() -> Vec<f64> {
+    (0..=60).map(|k| 10f64.powf(k as f64 / 20.0)).collect()
+}
+
+/// Writes to stdout; a closed pipe (`| head`) is not an error.
+fn to_stdout(fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<()> {
+    let stdout = std::io::stdout();
+    let mut lock = stdout.lock();
+    match fill(&mut lock).and_then(|_| lock.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(Error::Io { path: "<stdout>".into(), source: e }),
+        _ => Ok(()),
+    }
+}
+
+/// `lidarsim expect`: the CSV (to a file or `-` for stdout) or the terminal table.
+pub fn expect(config: &Path, overrides: &[String], csv: Option<&Path>) -> Result<()> {
+    let sc = Scenario::load(config, overrides)?;
+    let e = sc.expected()?;
+    let shots = sc.instrument.rep_rate_hz * sc.accumulation_time_s();
+    match csv {
+        Some(p) if p == Path::new("-") => to_stdout(|w| expect::write_csv(w, &e, shots)),
+        Some(p) => output::write_atomically(p, |w| expect::write_csv(w, &e, shots)),
+        None => to_stdout(|w| expect::write_table(w, &sc, &e)),
+    }
+}
+
+/// The S/N map of a scenario: Eq. 4 against altitude and accumulation time.
+pub fn build_snr_map(sc: &Scenario, e: &ExpectedProfile) -> snr_map::SnrMap {
+    let cfg = &sc.loaded.config;
+    let i = &cfg.instrument;
+    let times = snr_map_times_s();
+    let snr = e
+        .signal
+        .iter()
+        .map(|&s| times.iter().map(|tc| snr::eq4(s, e.background, e.dark, i.rep_rate_hz * tc)).collect())
+        .collect();
+    snr_map::SnrMap {
+        altitude_km: e.altitude_m.iter().map(|z| z / 1e3).collect(),
+        accumulation_time_s: times,
+        snr,
+        title: format!("{} — S/N (Eq. 4)", cfg.name),
+        subtitle: format!(
+            "E0 = {} J, fL = {} Hz, A = {} m², {} nm, FOV {} µrad, Lλ = {:.1e}, platform {} km",
+            i.pulse_energy_j,
+            i.rep_rate_hz,
+            i.telescope_area_m2,
+            i.wavelength_nm,
+            i.fov_rad * 1e6,
+            cfg.background.radiance,
+            cfg.platform.altitude_km
+        ),
+    }
+}
+
+/// `lidarsim snr-map`: the PNG and optionally the long-format CSV
+/// (`altitude_m,accumulation_time_s,snr`).
+pub fn snr_map(config: &Path, overrides: &[String], png: &Path, csv: Option<&Path>) -> Result<()> {
+    let sc = Scenario::load(config, overrides)?;
+    let e = sc.expected()?;
+    let map = build_snr_map(&sc, &e);
+    if let Some(p) = csv {
+        output::write_atomically(p, |w| {
+            writeln!(w, "altitude_m,accumulation_time_s,snr")?;
+            for (z, row) in e.altitude_m.iter().zip(&map.snr) {
+                for (tc, s) in map.accumulation_time_s.iter().zip(row) {
+                    writeln!(w, "{z},{tc},{s:e}")?;
+                }
+            }
+            Ok(())
+        })?;
+    }
+    snr_map::write_png(png, &map)
+}

@@ -1,0 +1,631 @@
+//! Scenario configuration: TOML files with the keys of `shared/spec/interface.md`,
+//! `--set KEY=VALUE` dotted overrides, and validation of every field.
+//!
+//! Loading happens in three steps: the file is parsed into a TOML table, the
+//! overrides are applied to that table, and the table is deserialized into
+//! [`ScenarioConfig`] (unknown keys are errors) and validated ([`ScenarioConfig::validate`]).
+//! Every error names the file, the dotted key and the reason.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+/// A whole scenario: instrument, platform, acquisition, atmosphere, background, simulation.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioConfig {
+    /// Short name, used in titles.
+    pub name: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// The lidar instrument.
+    pub instrument: InstrumentConfig,
+    /// Where the lidar is and where it points.
+    pub platform: PlatformConfig,
+    /// Range window and accumulation.
+    pub acquisition: AcquisitionConfig,
+    /// Molecules, aerosols, layers.
+    pub atmosphere: AtmosphereConfig,
+    /// Sky background.
+    pub background: BackgroundConfig,
+    /// Monte Carlo settings.
+    #[serde(default)]
+    pub simulation: SimulationConfig,
+}
+
+/// Instrument parameters (paper Eq. 2–3 symbols in brackets).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct InstrumentConfig {
+    /// Laser wavelength λ0, nm.
+    pub wavelength_nm: f64,
+    /// Pulse energy E0, J.
+    pub pulse_energy_j: f64,
+    /// Pulse repetition frequency fL, Hz.
+    pub rep_rate_hz: f64,
+    /// Effective telescope collecting area A, m².
+    pub telescope_area_m2: f64,
+    /// Overall optical transmission efficiency K (signal path only).
+    #[serde(default = "one")]
+    pub optical_efficiency: f64,
+    /// Receiving optics efficiency TR.
+    pub receiver_efficiency: f64,
+    /// Spectral filter transmission TF.
+    pub filter_transmission: f64,
+    /// Detector quantum efficiency Qλ.
+    pub quantum_efficiency: f64,
+    /// Receiver full field-of-view angle θ, rad.
+    pub fov_rad: f64,
+    /// Filter width Δλ, nm.
+    pub filter_width_nm: f64,
+    /// Detector dark-count rate, counts s⁻¹.
+    pub dark_count_rate_hz: f64,
+    /// Time bin width Δt, s (2 µs = 300 m in the paper).
+    #[serde(default = "default_bin_width_s")]
+    pub bin_width_s: f64,
+    /// Which polarization the receiver channel sees.
+    #[serde(default)]
+    pub channel: Channel,
+    /// Overlap function η(r); absent = full overlap everywhere.
+    #[serde(default)]
+    pub overlap: Option<OverlapConfig>,
+}
+
+/// Receiver channel with respect to the laser's linear polarization (model.md §4).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Channel {
+    /// One channel that sees the total backscatter (default).
+    #[default]
+    Total,
+    /// Co-polarized channel: β/(1+δ).
+    Parallel,
+    /// Cross-polarized channel: β·δ/(1+δ).
+    Perpendicular,
+}
+
+impl Channel {
+    /// The share of a species' backscatter this channel sees, for linear depolarization δ
+    /// (model.md §4): total 1, parallel `1/(1+δ)`, perpendicular `δ/(1+δ)`.
+    pub fn share(self, depolarization: f64) -> f64 {
+        match self {
+            Channel::Total => 1.0,
+            Channel::Parallel => 1.0 / (1.0 + depolarization),
+            Channel::Perpendicular => depolarization / (1.0 + depolarization),
+        }
+    }
+}
+
+/// Overlap function models.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(tag = "model", rename_all = "snake_case", deny_unknown_fields)]
+pub enum OverlapConfig {
+    /// η = 0 below `full_overlap_m`, 1 beyond.
+    FullRange {
+        /// Range where overlap becomes complete, m.
+        full_overlap_m: f64,
+    },
+    /// Geometric overlap of a biaxial lidar: fraction of the laser spot inside the
+    /// receiver field of view, two circles in a plane at range r.
+    Geometric {
+        /// Laser beam radius at the exit, m.
+        beam_radius_m: f64,
+        /// Laser beam full divergence angle, rad.
+        beam_divergence_rad: f64,
+        /// Distance between the laser and telescope axes, m (0 = coaxial).
+        axis_offset_m: f64,
+    },
+}
+
+/// Platform kind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PlatformKind {
+    /// Looking down from orbit (or aircraft).
+    Spaceborne,
+    /// Looking up from the ground.
+    Ground,
+}
+
+/// Platform geometry.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlatformConfig {
+    /// Space-borne or ground-based.
+    pub kind: PlatformKind,
+    /// Platform altitude above sea level, km (space-borne: orbit; ground: station height).
+    #[serde(default)]
+    pub altitude_km: f64,
+    /// Beam angle from nadir (space-borne) or from zenith (ground), degrees.
+    #[serde(default)]
+    pub off_nadir_deg: f64,
+}
+
+/// Range window and accumulation.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct AcquisitionConfig {
+    /// Accumulation time TC per profile, s.
+    pub accumulation_time_s: f64,
+    /// Top of the altitude window, km.
+    pub top_altitude_km: f64,
+    /// Bottom of the altitude window, km.
+    pub bottom_altitude_km: f64,
+    /// Number of profiles a simulation writes.
+    #[serde(default = "one_usize")]
+    pub profiles: usize,
+    /// Signal-free bins a retrieval uses to estimate the background (model.md §2);
+    /// absent = the bins of the window above the top of the atmosphere.
+    #[serde(default)]
+    pub background_bins: Option<usize>,
+}
+
+/// Atmosphere: molecules, an aerosol profile and any number of layers.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct AtmosphereConfig {
+    /// Molecular atmosphere.
+    pub molecular: MolecularConfig,
+    /// Background aerosol profile (paper Eq. 5–6); absent = none.
+    #[serde(default)]
+    pub aerosol: Option<AerosolConfig>,
+    /// Aerosol and cloud layers.
+    #[serde(default)]
+    pub layers: Vec<LayerConfig>,
+}
+
+/// Molecular atmosphere options.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MolecularConfig {
+    /// `"us76"`, `"none"` or `{ file = "profile.txt" }`.
+    pub model: MolecularModel,
+    /// Bucholtz depolarization ρn override; absent = Bucholtz's value at the wavelength.
+    #[serde(default)]
+    pub depolarization: Option<f64>,
+    /// Vertical resolution of the piecewise-constant representation, m.
+    #[serde(default = "default_grid_m")]
+    pub grid_m: f64,
+}
+
+/// Source of the molecular number density.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum MolecularModel {
+    /// `"us76"` or `"none"`.
+    Named(String),
+    /// A tabulated profile file (see `docs/model.md`), relative to the config file.
+    File {
+        /// Path of the profile file.
+        file: PathBuf,
+    },
+}
+
+/// Where the aerosol's near-surface extinction comes from (paper Table 1 has both).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ExtinctionSource {
+    /// Eq. 5 from `visibility_km`.
+    Visibility,
+    /// `surface_extinction_per_km` as given.
+    SurfaceExtinction,
+}
+
+/// Background aerosol: Eq. 5 surface extinction with the Eq. 6 vertical shape.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct AerosolConfig {
+    /// Horizontal visibility V, km.
+    pub visibility_km: f64,
+    /// Aerosol lidar ratio (extinction-to-backscatter), sr = 1/(B/E).
+    pub lidar_ratio_sr: f64,
+    /// Near-surface extinction at `reference_wavelength_nm`, km⁻¹ (paper Table 1).
+    #[serde(default)]
+    pub surface_extinction_per_km: Option<f64>,
+    /// Which of the two sets α_aer(0); default: the extinction when given, else the visibility.
+    #[serde(default)]
+    pub extinction_from: Option<ExtinctionSource>,
+    /// Wavelength at which `surface_extinction_per_km` is given, nm.
+    #[serde(default = "default_reference_wavelength_nm")]
+    pub reference_wavelength_nm: f64,
+    /// Ångström exponent to scale `surface_extinction_per_km` to the laser
+    /// wavelength; absent = the Kruse exponent of the visibility (Eq. 5).
+    #[serde(default)]
+    pub angstrom_exponent: Option<f64>,
+    /// Linear depolarization ratio δ of the aerosol backscatter.
+    #[serde(default)]
+    pub depolarization: f64,
+}
+
+/// Layer species.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LayerKind {
+    /// A cloud layer (goes into β_cld).
+    Cloud,
+    /// An aerosol layer (goes into β_aer).
+    Aerosol,
+}
+
+/// A homogeneous layer between two altitudes, values at the laser wavelength.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct LayerConfig {
+    /// Cloud or aerosol.
+    pub kind: LayerKind,
+    /// Layer base, km.
+    pub base_km: f64,
+    /// Layer top, km.
+    pub top_km: f64,
+    /// Extinction coefficient, km⁻¹.
+    pub extinction_per_km: f64,
+    /// Lidar ratio, sr = 1/(B/E).
+    pub lidar_ratio_sr: f64,
+    /// Linear depolarization ratio δ.
+    #[serde(default)]
+    pub depolarization: f64,
+    /// Multiple-scattering factor η_ms multiplying the layer's optical depth (1 = single scattering).
+    #[serde(default = "one")]
+    pub multiple_scattering: f64,
+}
+
+/// Which efficiencies the detected sky background carries (model.md §1).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BackgroundEfficiency {
+    /// ε_bkg = TR·Qλ: the background crosses the same receiver as the signal (default).
+    #[default]
+    Receiver,
+    /// ε_bkg = 1: the paper's literal Eq. 3.
+    Paper,
+}
+
+/// Sky background.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BackgroundConfig {
+    /// Spectral radiance Lλ, photons m⁻² s⁻¹ sr⁻¹ nm⁻¹ (paper: 1.1e10 night, 1.1e15 day).
+    pub radiance: f64,
+    /// Efficiencies applied to the background.
+    #[serde(default)]
+    pub efficiency: BackgroundEfficiency,
+}
+
+/// Monte Carlo method (interface.md `--method`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// `aggregate` whenever the scene allows it, else `shot`.
+    #[default]
+    Auto,
+    /// Every shot drawn.
+    Shot,
+    /// One exact Poisson(M·λ) draw per bin per profile.
+    Aggregate,
+}
+
+/// Monte Carlo settings.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimulationConfig {
+    /// Random seed.
+    #[serde(default)]
+    pub seed: u64,
+    /// Sampling method.
+    #[serde(default)]
+    pub method: Method,
+    /// Store signal, background and dark counts separately as well.
+    #[serde(default)]
+    pub components: bool,
+}
+
+fn one() -> f64 {
+    1.0
+}
+fn one_usize() -> usize {
+    1
+}
+fn default_bin_width_s() -> f64 {
+    2e-6
+}
+fn default_grid_m() -> f64 {
+    10.0
+}
+fn default_reference_wavelength_nm() -> f64 {
+    532.0
+}
+
+/// A loaded, overridden and validated configuration with its provenance.
+#[derive(Debug, Clone)]
+pub struct LoadedConfig {
+    /// The validated configuration.
+    pub config: ScenarioConfig,
+    /// The config file as named on the command line.
+    pub path: PathBuf,
+    /// The resolved TOML after overrides (stored in output files).
+    pub resolved_toml: String,
+}
+
+impl LoadedConfig {
+    /// The config file's name for error messages.
+    pub fn file_label(&self) -> String {
+        self.path.display().to_string()
+    }
+
+    /// A path named in the config, resolved relative to the config file's directory.
+    pub fn resolve_path(&self, p: &Path) -> PathBuf {
+        if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            self.path.parent().unwrap_or(Path::new(".")).join(p)
+        }
+    }
+}
+
+/// Reads `path`, applies `overrides` (`KEY=VALUE`, dotted keys), deserializes and validates.
+pub fn load(path: &Path, overrides: &[String]) -> Result<LoadedConfig> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    load_str(&text, path, overrides)
+}
+
+/// As [`load`], from text already read; `path` names the source in errors.
+pub fn load_str(text: &str, path: &Path, overrides: &[String]) -> Result<LoadedConfig> {
+    let file = path.display().to_string();
+    let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
+        let key = e.span().map(|s| line_of(text, s.start)).unwrap_or_default();
+        Error::config(&file, key, format!("malformed TOML: {}", e.message()))
+    })?;
+    for item in overrides {
+        apply_override(&mut table, item).map_err(|reason| Error::config(&file, key_of(item), reason))?;
+    }
+    let resolved_toml = toml::to_string(&table).unwrap_or_default();
+    let de = toml::Value::Table(table);
+    let config: ScenarioConfig = serde_path_to_error::deserialize(de).map_err(|e| {
+        let key = e.path().to_string();
+        Error::config(&file, if key == "." { "(top level)".into() } else { key }, e.into_inner().to_string())
+    })?;
+    config.validate(&file)?;
+    Ok(LoadedConfig { config, path: path.to_path_buf(), resolved_toml })
+}
+
+fn line_of(text: &str, offset: usize) -> String {
+    format!("(line {})", text[..offset.min(text.len())].matches('\n').count() + 1)
+}
+
+fn key_of(item: &str) -> String {
+    item.split_once('=').map(|(k, _)| k.trim()).unwrap_or(item).to_string()
+}
+
+/// Applies one `KEY=VALUE` override to `table`. The value is read as a TOML value
+/// (number, boolean, string in quotes, inline table, array); anything that is not
+/// valid TOML is taken as a bare string, so `--set platform.kind=ground` works.
+/// Array elements are addressed by index: `atmosphere.layers.0.top_km=12`.
+pub fn apply_override(table: &mut toml::Table, item: &str) -> std::result::Result<(), String> {
+    let (key, raw) = item
+        .split_once('=')
+        .ok_or_else(|| format!("--set expects KEY=VALUE, got `{item}`"))?;
+    let key = key.trim();
+    if key.is_empty() || key.split('.').any(str::is_empty) {
+        return Err(format!("--set has an empty key part in `{item}`"));
+    }
+    let parts: Vec<&str> = key.split('.').collect();
+    let mut root = toml::Value::Table(std::mem::take(table));
+    let result = set_path(&mut root, &parts, parse_value(raw.trim()));
+    if let toml::Value::Table(t) = root {
+        *table = t;
+    }
+    result
+}
+
+fn set_path(node: &mut toml::Value, parts: &[&str], value: toml::Value) -> std::result::Result<(), String> {
+    let mut node = node;
+    for (i, part) in parts.iter().enumerate() {
+        let last = i + 1 == parts.len();
+        let here = parts[..i].join(".");
+        node = match node {
+            toml::Value::Table(t) => {
+                if last {
+                    t.insert((*part).to_string(), value);
+                    return Ok(());
+                }
+                t.entry((*part).to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new()))
+            }
+            toml::Value::Array(a) => {
+                let idx: usize =
+                    part.parse().map_err(|_| format!("`{here}` is an array: address its elements by index"))?;
+                let len = a.len();
+                let slot = a
+                    .get_mut(idx)
+                    .ok_or_else(|| format!("index {idx} is out of range (`{here}` has {len} elements)"))?;
+                if last {
+                    *slot = value;
+                    return Ok(());
+                }
+                slot
+            }
+            _ => return Err(format!("`{here}` is a value, not a table")),
+        };
+    }
+    Err("empty key".into())
+}
+
+fn parse_value(raw: &str) -> toml::Value {
+    let doc = format!("v = {raw}");
+    match doc.parse::<toml::Table>() {
+        Ok(mut t) => t.remove("v").unwrap_or_else(|| toml::Value::String(raw.to_string())),
+        Err(_) => toml::Value::String(raw.trim_matches('"').to_string()),
+    }
+}
+
+/// Collects the checks of one file; the first failure becomes the error.
+struct Checker<'a> {
+    file: &'a str,
+}
+
+impl Checker<'_> {
+    fn fail(&self, key: &str, reason: impl Into<String>) -> Error {
+        Error::config(self.file, key, reason)
+    }
+
+    /// `value` must be finite and within `[lo, hi]` (bounds inclusive).
+    fn range(&self, key: &str, value: f64, lo: f64, hi: f64) -> Result<()> {
+        if !value.is_finite() {
+            return Err(self.fail(key, format!("must be a finite number, got {value}")));
+        }
+        if value < lo || value > hi {
+            return Err(self.fail(key, format!("must be within [{lo}, {hi}], got {value}")));
+        }
+        Ok(())
+    }
+
+    /// `value` must be finite and strictly positive, at most `hi`.
+    fn positive(&self, key: &str, value: f64, hi: f64) -> Result<()> {
+        self.range(key, value, 0.0, hi)?;
+        if value == 0.0 {
+            return Err(self.fail(key, "must be greater than 0"));
+        }
+        Ok(())
+    }
+
+    /// A fraction in (0, 1].
+    fn efficiency(&self, key: &str, value: f64) -> Result<()> {
+        self.positive(key, value, 1.0)
+    }
+}
+
+impl ScenarioConfig {
+    /// Checks every field: finite, in range, consistent. `file` names the source in errors.
+    pub fn validate(&self, file: &str) -> Result<()> {
+        let c = Checker { file };
+        self.validate_instrument(&c)?;
+        self.validate_geometry(&c)?;
+        self.validate_atmosphere(&c)?;
+        c.range("background.radiance", self.background.radiance, 0.0, 1e25)?;
+        Ok(())
+    }
+
+    fn validate_instrument(&self, c: &Checker) -> Result<()> {
+        let i = &self.instrument;
+        c.range("instrument.wavelength_nm", i.wavelength_nm, 200.0, 4000.0)?;
+        c.positive("instrument.pulse_energy_j", i.pulse_energy_j, 1e3)?;
+        c.positive("instrument.rep_rate_hz", i.rep_rate_hz, 1e7)?;
+        c.positive("instrument.telescope_area_m2", i.telescope_area_m2, 1e3)?;
+        c.efficiency("instrument.optical_efficiency", i.optical_efficiency)?;
+        c.efficiency("instrument.receiver_efficiency", i.receiver_efficiency)?;
+        c.efficiency("instrument.filter_transmission", i.filter_transmission)?;
+        c.efficiency("instrument.quantum_efficiency", i.quantum_efficiency)?;
+        c.positive("instrument.fov_rad", i.fov_rad, 0.1)?;
+        c.positive("instrument.filter_width_nm", i.filter_width_nm, 100.0)?;
+        c.range("instrument.dark_count_rate_hz", i.dark_count_rate_hz, 0.0, 1e9)?;
+        c.range("instrument.bin_width_s", i.bin_width_s, 1e-10, 1e-3)?;
+        match &i.overlap {
+            None => {}
+            Some(OverlapConfig::FullRange { full_overlap_m }) => {
+                c.positive("instrument.overlap.full_overlap_m", *full_overlap_m, 1e6)?;
+            }
+            Some(OverlapConfig::Geometric { beam_radius_m, beam_divergence_rad, axis_offset_m }) => {
+                c.positive("instrument.overlap.beam_radius_m", *beam_radius_m, 10.0)?;
+                c.range("instrument.overlap.beam_divergence_rad", *beam_divergence_rad, 0.0, 0.1)?;
+                c.range("instrument.overlap.axis_offset_m", *axis_offset_m, 0.0, 100.0)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn validate_geometry(&self, c: &Checker) -> Result<()> {
+        let p = &self.platform;
+        let a = &self.acquisition;
+        c.range("platform.off_nadir_deg", p.off_nadir_deg, 0.0, 85.0)?;
+        c.range("acquisition.accumulation_time_s", a.accumulation_time_s, 0.0, 1e7)?;
+        let shots = a.accumulation_time_s * self.instrument.rep_rate_hz;
+        if shots.round() < 1.0 {
+            return Err(c.fail(
+                "acquisition.accumulation_time_s",
+                format!("accumulates {shots} shots at instrument.rep_rate_hz; a profile needs at least one"),
+            ));
+        }
+        c.range("acquisition.top_altitude_km", a.top_altitude_km, -10.0, 1e5)?;
+        c.range("acquisition.bottom_altitude_km", a.bottom_altitude_km, -10.0, 1e5)?;
+        if a.bottom_altitude_km >= a.top_altitude_km {
+            return Err(c.fail(
+                "acquisition.bottom_altitude_km",
+                format!("must be below acquisition.top_altitude_km ({} km)", a.top_altitude_km),
+            ));
+        }
+        if a.profiles == 0 {
+            return Err(c.fail("acquisition.profiles", "must be at least 1"));
+        }
+        match p.kind {
+            PlatformKind::Spaceborne => {
+                c.positive("platform.altitude_km", p.altitude_km, 1e5)?;
+                if a.top_altitude_km >= p.altitude_km {
+                    return Err(c.fail(
+                        "acquisition.top_altitude_km",
+                        format!("the window must lie below the platform ({} km)", p.altitude_km),
+                    ));
+                }
+            }
+            PlatformKind::Ground => {
+                c.range("platform.altitude_km", p.altitude_km, -0.5, 9.0)?;
+                if a.bottom_altitude_km < p.altitude_km {
+                    return Err(c.fail(
+                        "acquisition.bottom_altitude_km",
+                        format!("a ground lidar sees nothing below its station ({} km)", p.altitude_km),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn validate_atmosphere(&self, c: &Checker) -> Result<()> {
+        let m = &self.atmosphere.molecular;
+        if let MolecularModel::Named(name) = &m.model
+            && name != "us76"
+            && name != "none"
+        {
+            return Err(c.fail(
+                "atmosphere.molecular.model",
+                format!("unknown model `{name}`: expected \"us76\", \"none\" or {{ file = \"...\" }}"),
+            ));
+        }
+        if let Some(rho) = m.depolarization {
+            c.range("atmosphere.molecular.depolarization", rho, 0.0, 0.2)?;
+        }
+        c.range("atmosphere.molecular.grid_m", m.grid_m, 0.1, 1000.0)?;
+        if let Some(a) = &self.atmosphere.aerosol {
+            c.positive("atmosphere.aerosol.visibility_km", a.visibility_km, 1e4)?;
+            c.range("atmosphere.aerosol.lidar_ratio_sr", a.lidar_ratio_sr, 1.0, 1e4)?;
+            if let Some(e) = a.surface_extinction_per_km {
+                c.range("atmosphere.aerosol.surface_extinction_per_km", e, 0.0, 1e3)?;
+            }
+            if a.extinction_from == Some(ExtinctionSource::SurfaceExtinction) && a.surface_extinction_per_km.is_none() {
+                return Err(c.fail(
+                    "atmosphere.aerosol.extinction_from",
+                    "is \"surface_extinction\" but atmosphere.aerosol.surface_extinction_per_km is not set",
+                ));
+            }
+            c.range("atmosphere.aerosol.reference_wavelength_nm", a.reference_wavelength_nm, 200.0, 4000.0)?;
+            if let Some(x) = a.angstrom_exponent {
+                c.range("atmosphere.aerosol.angstrom_exponent", x, -1.0, 4.0)?;
+            }
+            c.range("atmosphere.aerosol.depolarization", a.depolarization, 0.0, 1.0)?;
+        }
+        for (n, l) in self.atmosphere.layers.iter().enumerate() {
+            let key = |k: &str| format!("atmosphere.layers[{n}].{k}");
+            c.range(&key("base_km"), l.base_km, -1.0, 100.0)?;
+            c.range(&key("top_km"), l.top_km, -1.0, 100.0)?;
+            if l.top_km <= l.base_km {
+                return Err(c.fail(&key("top_km"), format!("must be above base_km ({} km)", l.base_km)));
+            }
+            c.range(&key("extinction_per_km"), l.extinction_per_km, 0.0, 1e4)?;
+            c.range(&key("lidar_ratio_sr"), l.lidar_ratio_sr, 1.0, 1e4)?;
+            c.range(&key("depolarization"), l.depolarization, 0.0, 1.0)?;
+            c.efficiency(&key("multiple_scattering"), l.multiple_scattering)?;
+        }
+        Ok(())
+    }
+}

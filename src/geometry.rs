@@ -1,0 +1,294 @@
+//! Viewing geometry (model.md §3): range ↔ altitude, the range-bin grid, the overlap
+//! function η(r) and the ground-track speed.
+//!
+//! Flat-Earth geometry as in model.md: space-borne `r = (H − z)/cos φ` (φ off nadir),
+//! ground-based `r = (z − z0)/cos φ` (φ from zenith, z0 the station height).
+
+use crate::config::{OverlapConfig, PlatformKind, ScenarioConfig};
+use crate::constants::{EARTH_GM_M3_PER_S2, EARTH_RADIUS_M, SPEED_OF_LIGHT_M_PER_S};
+use crate::error::{Error, Result};
+
+/// Largest number of range bins a scenario may ask for.
+pub const MAX_BINS: usize = 10_000_000;
+
+/// Range width of a time bin, `ΔR = c·Δt/2` (300 m for 2 µs).
+pub fn bin_range_m(bin_width_s: f64) -> f64 {
+    SPEED_OF_LIGHT_M_PER_S * bin_width_s / 2.0
+}
+
+/// Ground-track speed of a circular orbit at `altitude_m`,
+/// `v_g = R_E/(R_E+H) · sqrt(G·M_E/(R_E+H))` (model.md §3): ≈ 6.9 km/s at 600 km.
+pub fn ground_track_speed_m_per_s(altitude_m: f64) -> f64 {
+    let radius = EARTH_RADIUS_M + altitude_m;
+    EARTH_RADIUS_M / radius * (EARTH_GM_M3_PER_S2 / radius).sqrt()
+}
+
+/// Maximum repetition rate with one pulse in flight at a time, `c/(2H)` (model.md §5).
+pub fn max_rep_rate_hz(range_m: f64) -> f64 {
+    SPEED_OF_LIGHT_M_PER_S / (2.0 * range_m)
+}
+
+/// The beam's path and the range-bin grid.
+#[derive(Debug, Clone)]
+pub struct Geometry {
+    /// Space-borne (looking down) or ground (looking up).
+    pub kind: PlatformKind,
+    /// Platform (space-borne) or station (ground) altitude, m.
+    pub platform_altitude_m: f64,
+    /// cos φ of the beam angle from nadir (space-borne) or zenith (ground).
+    pub cos_angle: f64,
+    /// Range width of one bin, m.
+    pub bin_range_m: f64,
+    /// Range at the start of bin 0, m.
+    pub first_bin_range_m: f64,
+    /// Number of bins.
+    pub n_bins: usize,
+}
+
+impl Geometry {
+    /// Builds the bin grid of a validated config: bin 0 starts at the window's top
+    /// (space-borne) or bottom (ground); bins cover the window, the last one may overhang it.
+    pub fn from_config(cfg: &ScenarioConfig, file: &str) -> Result<Self> {
+        let p = &cfg.platform;
+        let a = &cfg.acquisition;
+        let cos_angle = p.off_nadir_deg.to_radians().cos();
+        let bin_range_m = bin_range_m(cfg.instrument.bin_width_s);
+        let platform_altitude_m = p.altitude_km * 1e3;
+        let (top_m, bottom_m) = (a.top_altitude_km * 1e3, a.bottom_altitude_km * 1e3);
+        let n = ((top_m - bottom_m) / (bin_range_m * cos_angle) - 1e-9).ceil();
+        if n > MAX_BINS as f64 {
+            return Err(Error::config(
+                file,
+                "instrument.bin_width_s",
+                format!("the window needs {n} bins, more than the {MAX_BINS} allowed"),
+            ));
+        }
+        let first_bin_range_m = match p.kind {
+            PlatformKind::Spaceborne => (platform_altitude_m - top_m) / cos_angle,
+            PlatformKind::Ground => (bottom_m - platform_altitude_m) / cos_angle,
+        };
+        Ok(Geometry {
+            kind: p.kind,
+            platform_altitude_m,
+            cos_angle,
+            bin_range_m,
+            first_bin_range_m,
+            n_bins: (n as usize).max(1),
+        })
+    }
+
+    /// Altitude of the beam at range `r_m`.
+    pub fn altitude_at_range(&self, r_m: f64) -> f64 {
+        match self.kind {
+            PlatformKind::Spaceborne => self.platform_altitude_m - r_m * self.cos_angle,
+            PlatformKind::Ground => self.platform_altitude_m + r_m * self.cos_angle,
+        }
+    }
+
+    /// Range at which the beam reaches altitude `z_m` (may be negative when the beam never does).
+    pub fn range_at_altitude(&self, z_m: f64) -> f64 {
+        match self.kind {
+            PlatformKind::Spaceborne => (self.platform_altitude_m - z_m) / self.cos_angle,
+            PlatformKind::Ground => (z_m - self.platform_altitude_m) / self.cos_angle,
+        }
+    }
+
+    /// Range interval `[start, end)` of bin `i`, m.
+    pub fn bin_range_bounds(&self, i: usize) -> (f64, f64) {
+        let start = self.first_bin_range_m + i as f64 * self.bin_range_m;
+        (start, start + self.bin_range_m)
+    }
+
+    /// Bin-centre range of bin `i`, m.
+    pub fn bin_centre_range_m(&self, i: usize) -> f64 {
+        self.first_bin_range_m + (i as f64 + 0.5) * self.bin_range_m
+    }
+
+    /// Bin-centre altitude of bin `i`, m.
+    pub fn bin_centre_altitude_m(&self, i: usize) -> f64 {
+        self.altitude_at_range(self.bin_centre_range_m(i))
+    }
+
+    /// Range from the instrument to the end of the last bin, m.
+    pub fn max_range_m(&self) -> f64 {
+        self.bin_range_bounds(self.n_bins - 1).1
+    }
+}
+
+/// The overlap function η(r) of model.md §3: the fraction of the laser spot seen by the receiver.
+#[derive(Debug, Clone)]
+pub enum Overlap {
+    /// η = 1 everywhere (default; always so for space-borne ranges).
+    Full,
+    /// η = 0 below `full_overlap_m`, 1 beyond.
+    Step {
+        /// Range of complete overlap, m.
+        full_overlap_m: f64,
+    },
+    /// Biaxial geometric overlap: the fraction of the laser spot (radius `w0 + r·θL/2`)
+    /// inside the field-of-view circle (radius `R_tel + r·θ/2`) whose centre is
+    /// `axis_offset_m` away (parallel axes), after Measures (1984), *Laser Remote
+    /// Sensing*, §7.5 (uniform spot, circle–circle intersection).
+    Geometric {
+        /// Laser radius at the exit, m.
+        beam_radius_m: f64,
+        /// Laser half divergence, rad.
+        beam_half_angle_rad: f64,
+        /// Telescope radius, m.
+        telescope_radius_m: f64,
+        /// Receiver half field of view, rad.
+        fov_half_angle_rad: f64,
+        /// Axis separation, m.
+        axis_offset_m: f64,
+    },
+}
+
+impl Overlap {
+    /// From the instrument config (`telescope_area_m2` gives the telescope radius).
+    pub fn from_config(cfg: &ScenarioConfig) -> Self {
+        let i = &cfg.instrument;
+        match &i.overlap {
+            None => Overlap::Full,
+            Some(OverlapConfig::FullRange { full_overlap_m }) => Overlap::Step { full_overlap_m: *full_overlap_m },
+            Some(OverlapConfig::Geometric { beam_radius_m, beam_divergence_rad, axis_offset_m }) => Overlap::Geometric {
+                beam_radius_m: *beam_radius_m,
+                beam_half_angle_rad: beam_divergence_rad / 2.0,
+                telescope_radius_m: (i.telescope_area_m2 / std::f64::consts::PI).sqrt(),
+                fov_half_angle_rad: i.fov_rad / 2.0,
+                axis_offset_m: *axis_offset_m,
+            },
+        }
+    }
+
+    /// η(r) in [0, 1].
+    pub fn eta(&self, r_m: f64) -> f64 {
+        match *self {
+            Overlap::Full => 1.0,
+            Overlap::Step { full_overlap_m } => {
+                if r_m >= full_overlap_m {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+            Overlap::Geometric {
+                beam_radius_m,
+                beam_half_angle_rad,
+                telescope_radius_m,
+                fov_half_angle_rad,
+                axis_offset_m,
+            } => {
+                let r_laser = beam_radius_m + r_m.max(0.0) * beam_half_angle_rad;
+                let r_fov = telescope_radius_m + r_m.max(0.0) * fov_half_angle_rad;
+                circle_overlap_area(r_laser, r_fov, axis_offset_m) / (std::f64::consts::PI * r_laser * r_laser)
+            }
+        }
+    }
+
+    /// Ranges where η(r) has a kink or a step; the bin integral splits there.
+    pub fn breakpoints_m(&self) -> Vec<f64> {
+        match *self {
+            Overlap::Full => vec![],
+            Overlap::Step { full_overlap_m } => vec![full_overlap_m],
+            Overlap::Geometric {
+                beam_radius_m,
+                beam_half_angle_rad,
+                telescope_radius_m,
+                fov_half_angle_rad,
+                axis_offset_m,
+            } => {
+                let mut out = vec![];
+                // circles start to touch: d = R_L + R_T
+                let grow = beam_half_angle_rad + fov_half_angle_rad;
+                if grow > 0.0 {
+                    out.push((axis_offset_m - beam_radius_m - telescope_radius_m) / grow);
+                }
+                // spot fully inside the field of view: d + R_L = R_T
+                let gain = fov_half_angle_rad - beam_half_angle_rad;
+                if gain != 0.0 {
+                    out.push((axis_offset_m + beam_radius_m - telescope_radius_m) / gain);
+                }
+                // field of view fully inside the spot: d + R_T = R_L
+                if gain != 0.0 {
+                    out.push((telescope_radius_m + axis_offset_m - beam_radius_m) / -gain);
+                }
+                out.retain(|r| r.is_finite() && *r > 0.0);
+                out
+            }
+        }
+    }
+
+    /// True when η(r) > 0 for r → 0⁺ (the 1/r² divergence is then not removed).
+    pub fn sees_zero_range(&self) -> bool {
+        self.eta(0.0) > 0.0 || self.eta(1e-9) > 0.0
+    }
+}
+
+/// Area of the intersection of two circles of radii `a`, `b` whose centres are `d` apart.
+pub fn circle_overlap_area(a: f64, b: f64, d: f64) -> f64 {
+    use std::f64::consts::PI;
+    if d >= a + b {
+        return 0.0;
+    }
+    if d <= (a - b).abs() {
+        let m = a.min(b);
+        return PI * m * m;
+    }
+    let alpha = ((d * d + a * a - b * b) / (2.0 * d * a)).clamp(-1.0, 1.0).acos();
+    let beta = ((d * d + b * b - a * a) / (2.0 * d * b)).clamp(-1.0, 1.0).acos();
+    let kite = 0.5 * ((-d + a + b) * (d + a - b) * (d - a + b) * (d + a + b)).max(0.0).sqrt();
+    a * a * alpha + b * b * beta - kite
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bin_width_2us_is_300m() {
+        assert!((bin_range_m(2e-6) - 299.792458).abs() < 1e-9);
+    }
+
+    #[test]
+    fn ground_track_speed_at_600km_is_about_6_9_km_s() {
+        let v = ground_track_speed_m_per_s(600e3);
+        assert!((v - 6.9e3).abs() < 0.1e3, "{v}");
+    }
+
+    #[test]
+    fn max_rep_rate_at_600km_is_250hz() {
+        assert!((max_rep_rate_hz(600e3) - 249.8).abs() < 0.1);
+    }
+
+    #[test]
+    fn circle_overlap_limits() {
+        use std::f64::consts::PI;
+        assert_eq!(circle_overlap_area(1.0, 1.0, 2.5), 0.0);
+        assert!((circle_overlap_area(1.0, 3.0, 0.5) - PI).abs() < 1e-12);
+        // two unit circles one radius apart: 2π/3 − √3/2
+        let lens = circle_overlap_area(1.0, 1.0, 1.0);
+        assert!((lens - (2.0 * PI / 3.0 - 3f64.sqrt() / 2.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn geometric_overlap_rises_from_zero_to_one() {
+        let o = Overlap::Geometric {
+            beam_radius_m: 0.01,
+            beam_half_angle_rad: 0.1e-3,
+            telescope_radius_m: 0.1,
+            fov_half_angle_rad: 0.5e-3,
+            axis_offset_m: 0.3,
+        };
+        assert_eq!(o.eta(1.0), 0.0);
+        assert!(!o.sees_zero_range());
+        let bp = o.breakpoints_m();
+        assert_eq!(bp.len(), 2);
+        assert!((o.eta(bp[1] + 1.0) - 1.0).abs() < 1e-12);
+        let mut last = 0.0;
+        for k in 0..2000 {
+            let e = o.eta(k as f64);
+            assert!(e >= last - 1e-12 && e <= 1.0 + 1e-12);
+            last = e;
+        }
+    }
+}

@@ -1,0 +1,88 @@
+//! The instrument: the signal constant of Eq. 2, the sky background of Eq. 3 and the
+//! dark counts, all as expected counts per shot per bin (model.md §1).
+
+use crate::config::{BackgroundEfficiency, Channel, ScenarioConfig};
+use crate::constants::{PLANCK_J_S, SPEED_OF_LIGHT_M_PER_S};
+
+/// Instrument figures derived from a validated config.
+#[derive(Debug, Clone)]
+pub struct Instrument {
+    /// Laser wavelength λ0, nm.
+    pub wavelength_nm: f64,
+    /// Time bin width Δt, s.
+    pub bin_width_s: f64,
+    /// Pulse repetition frequency fL, Hz.
+    pub rep_rate_hz: f64,
+    /// Receiver channel.
+    pub channel: Channel,
+    /// `C = K·E0·(λ0/(h·c))·A·TR·TF·Qλ` (Eq. 2 without the atmosphere), counts·m³·sr per
+    /// shot: the signal of a bin is `C·∫ η β T²/r² dr`.
+    pub signal_constant: f64,
+    /// Expected sky-background counts per shot per bin, `λ_bkg` (Eq. 3).
+    pub background_per_bin: f64,
+    /// Expected dark counts per shot per bin, `λ_dc = R_dc·Δt`.
+    pub dark_per_bin: f64,
+}
+
+/// Photons per joule at `wavelength_nm`: `λ0/(h·c)`.
+pub fn photons_per_joule(wavelength_nm: f64) -> f64 {
+    wavelength_nm * 1e-9 / (PLANCK_J_S * SPEED_OF_LIGHT_M_PER_S)
+}
+
+/// Receiver solid angle `Ω = (π/4)·θ²` for a full field-of-view angle θ (rad), sr.
+pub fn solid_angle_sr(fov_rad: f64) -> f64 {
+    std::f64::consts::FRAC_PI_4 * fov_rad * fov_rad
+}
+
+impl Instrument {
+    /// Derives the Eq. 2–3 figures from `cfg`.
+    pub fn from_config(cfg: &ScenarioConfig) -> Self {
+        let i = &cfg.instrument;
+        let signal_constant = i.optical_efficiency
+            * i.pulse_energy_j
+            * photons_per_joule(i.wavelength_nm)
+            * i.telescope_area_m2
+            * i.receiver_efficiency
+            * i.filter_transmission
+            * i.quantum_efficiency;
+        let efficiency = match cfg.background.efficiency {
+            BackgroundEfficiency::Receiver => i.receiver_efficiency * i.quantum_efficiency,
+            BackgroundEfficiency::Paper => 1.0,
+        };
+        // Sky light is unpolarized: a polarization channel receives half of it.
+        let polarization_share = if i.channel == Channel::Total { 1.0 } else { 0.5 };
+        // Eq. 3: N_bkg = Lλ·A·Ω·Δλ·TF (photons/s), then ·Δt·ε_bkg per bin.
+        let background_rate_hz =
+            cfg.background.radiance * i.telescope_area_m2 * solid_angle_sr(i.fov_rad) * i.filter_width_nm * i.filter_transmission;
+        Instrument {
+            wavelength_nm: i.wavelength_nm,
+            bin_width_s: i.bin_width_s,
+            rep_rate_hz: i.rep_rate_hz,
+            channel: i.channel,
+            signal_constant,
+            background_per_bin: background_rate_hz * i.bin_width_s * efficiency * polarization_share,
+            dark_per_bin: i.dark_count_rate_hz * i.bin_width_s,
+        }
+    }
+
+    /// Shots accumulated in `accumulation_time_s`: `M = round(fL·TC)`.
+    pub fn shots_per_profile(&self, accumulation_time_s: f64) -> u64 {
+        (self.rep_rate_hz * accumulation_time_s).round() as u64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn photons_per_joule_at_532nm() {
+        // E_photon = hc/λ = 3.734e-19 J at 532 nm
+        assert!((photons_per_joule(532.0) - 2.678e18).abs() / 2.678e18 < 1e-3);
+    }
+
+    #[test]
+    fn solid_angle_of_100_microrad() {
+        assert!((solid_angle_sr(100e-6) - 7.853_981_6e-9).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,17 @@
+//! lidarsim: Monte Carlo simulation of photon-counting backscatter lidar signals.
+//!
+//! The physics follows Fochesatto et al. (2004), Adv. Space Res. 34, 2227–2231,
+//! as restated and completed in `docs/model.md`.
+
+pub mod atmosphere;
+pub mod commands;
+pub mod config;
+pub mod constants;
+pub mod error;
+pub mod geometry;
+pub mod instrument;
+pub mod output;
+pub mod scenario;
+pub mod sampling;
+pub mod signal;
+pub mod snr;

@@ -1,0 +1,1 @@
+//! Photon-count samplers (issue 3).

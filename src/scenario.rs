@@ -1,0 +1,151 @@
+//! A scenario ready to compute: the config turned into instrument, geometry,
+//! atmosphere and beam path, and its expected per-bin counts (the `expect` model).
+
+use std::path::Path;
+
+use crate::atmosphere::Atmosphere;
+use crate::config::{self, LoadedConfig};
+use crate::error::{Error, Result};
+use crate::geometry::{Geometry, Overlap};
+use crate::instrument::Instrument;
+use crate::signal::BeamPath;
+use crate::snr;
+
+/// Everything the deterministic model needs, built from one validated config.
+#[derive(Debug, Clone)]
+pub struct Scenario {
+    /// The configuration it came from.
+    pub loaded: LoadedConfig,
+    /// Eq. 2–3 instrument figures.
+    pub instrument: Instrument,
+    /// Bins and beam geometry.
+    pub geometry: Geometry,
+    /// The atmosphere.
+    pub atmosphere: Atmosphere,
+    /// The atmosphere laid along the beam.
+    pub path: BeamPath,
+}
+
+/// Expected counts per shot per bin and the atmosphere's truth at bin centres.
+#[derive(Debug, Clone, Default)]
+pub struct ExpectedProfile {
+    /// Bin-centre altitude, m.
+    pub altitude_m: Vec<f64>,
+    /// Bin-centre range, m.
+    pub range_m: Vec<f64>,
+    /// Molecular backscatter at the bin centre, m⁻¹ sr⁻¹.
+    pub beta_mol: Vec<f64>,
+    /// Aerosol backscatter at the bin centre, m⁻¹ sr⁻¹.
+    pub beta_aer: Vec<f64>,
+    /// Cloud backscatter at the bin centre, m⁻¹ sr⁻¹.
+    pub beta_cld: Vec<f64>,
+    /// Total extinction at the bin centre, m⁻¹.
+    pub alpha_total: Vec<f64>,
+    /// Two-way transmission to the bin centre (multiple-scattering factors applied).
+    pub t2: Vec<f64>,
+    /// Expected signal counts per shot (exact bin integral of Eq. 2).
+    pub signal: Vec<f64>,
+    /// Expected background counts per shot per bin (Eq. 3).
+    pub background: f64,
+    /// Expected dark counts per shot per bin.
+    pub dark: f64,
+    /// Signal-free bins used to estimate the background (0 = none available).
+    pub background_bins: usize,
+}
+
+impl ExpectedProfile {
+    /// Number of bins.
+    pub fn n_bins(&self) -> usize {
+        self.signal.len()
+    }
+
+    /// Expected total counts per shot in each bin, `λ_i = λ_sig,i + λ_bkg + λ_dc` (Eq. 1).
+    pub fn total_per_shot(&self) -> Vec<f64> {
+        self.signal.iter().map(|s| s + self.background + self.dark).collect()
+    }
+
+    /// Eq. 4 S/N of each bin after `shots` shots.
+    pub fn snr_eq4(&self, shots: f64) -> Vec<f64> {
+        self.signal.iter().map(|&s| snr::eq4(s, self.background, self.dark, shots)).collect()
+    }
+
+    /// S/N with the background estimated from `background_bins` bins; `None` when there are none.
+    pub fn snr_estimated_background(&self, shots: f64) -> Option<Vec<f64>> {
+        (self.background_bins > 0).then(|| {
+            self.signal
+                .iter()
+                .map(|&s| snr::with_estimated_background(s, self.background, self.dark, shots, self.background_bins))
+                .collect()
+        })
+    }
+}
+
+impl Scenario {
+    /// Loads `path` with `overrides` and builds the scenario.
+    pub fn load(path: &Path, overrides: &[String]) -> Result<Self> {
+        Self::from_loaded(config::load(path, overrides)?)
+    }
+
+    /// Builds the scenario of a loaded config.
+    pub fn from_loaded(loaded: LoadedConfig) -> Result<Self> {
+        let cfg = &loaded.config;
+        let file = loaded.file_label();
+        let instrument = Instrument::from_config(cfg);
+        let geometry = Geometry::from_config(cfg, &file)?;
+        let atmosphere = Atmosphere::from_config(&loaded)?;
+        let overlap = Overlap::from_config(cfg);
+        if overlap.sees_zero_range() && geometry.first_bin_range_m <= 0.0 {
+            return Err(Error::config(
+                &file,
+                "acquisition.bottom_altitude_km",
+                "the first bin starts at the instrument (range 0) where 1/r² diverges; raise the window \
+                 or set instrument.overlap (e.g. { model = \"full_range\", full_overlap_m = 300 })",
+            ));
+        }
+        let path = BeamPath::new(&atmosphere, &geometry, overlap);
+        Ok(Scenario { loaded, instrument, geometry, atmosphere, path })
+    }
+
+    /// Accumulation time TC of one profile, s.
+    pub fn accumulation_time_s(&self) -> f64 {
+        self.loaded.config.acquisition.accumulation_time_s
+    }
+
+    /// Shots per profile `M = round(fL·TC)`.
+    pub fn shots_per_profile(&self) -> u64 {
+        self.instrument.shots_per_profile(self.accumulation_time_s())
+    }
+
+    /// The deterministic model: per-bin expectations and truth (interface.md `expect`).
+    pub fn expected(&self) -> Result<ExpectedProfile> {
+        let g = &self.geometry;
+        let n = g.n_bins;
+        let mut e = ExpectedProfile {
+            background: self.instrument.background_per_bin,
+            dark: self.instrument.dark_per_bin,
+            ..Default::default()
+        };
+        for i in 0..n {
+            let (ra, rb) = g.bin_range_bounds(i);
+            let r = g.bin_centre_range_m(i);
+            let z = g.altitude_at_range(r);
+            let o = self.atmosphere.optics_at(z);
+            let signal = self.instrument.signal_constant * self.path.bin_integral(ra, rb)?;
+            if !signal.is_finite() {
+                return Err(Error::Unsupported(format!("bin {i} (altitude {z:.0} m): the signal is not finite")));
+            }
+            e.altitude_m.push(z);
+            e.range_m.push(r);
+            e.beta_mol.push(o.beta_mol);
+            e.beta_aer.push(o.beta_aer);
+            e.beta_cld.push(o.beta_cld);
+            e.alpha_total.push(o.alpha_total);
+            e.t2.push(self.path.two_way_transmission(r));
+            e.signal.push(signal);
+        }
+        let top = self.atmosphere.top_m();
+        let signal_free = (0..n).filter(|&i| g.altitude_at_range(g.bin_range_bounds(i).0).min(g.altitude_at_range(g.bin_range_bounds(i).1)) >= top).count();
+        e.background_bins = self.loaded.config.acquisition.background_bins.unwrap_or(signal_free);
+        Ok(e)
+    }
+}
