@@ -103,6 +103,8 @@ impl Channel {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(tag = "model", rename_all = "snake_case", deny_unknown_fields)]
 pub enum OverlapConfig {
+    /// η = 1 everywhere (the same as no `overlap` key).
+    None,
     /// η = 0 below `full_overlap_m`, 1 beyond.
     FullRange {
         /// Range where overlap becomes complete, m.
@@ -186,7 +188,8 @@ pub struct MolecularConfig {
     /// Bucholtz depolarization ρn override; absent = Bucholtz's value at the wavelength.
     #[serde(default)]
     pub depolarization: Option<f64>,
-    /// Vertical resolution of the piecewise-constant representation, m.
+    /// Vertical resolution of the piecewise-constant representation, m (at most a
+    /// quarter of a bin's altitude extent is used).
     #[serde(default = "default_grid_m")]
     pub grid_m: f64,
 }
@@ -522,7 +525,7 @@ impl ScenarioConfig {
         c.range("instrument.dark_count_rate_hz", i.dark_count_rate_hz, 0.0, 1e9)?;
         c.range("instrument.bin_width_s", i.bin_width_s, 1e-10, 1e-3)?;
         match &i.overlap {
-            None => {}
+            None | Some(OverlapConfig::None) => {}
             Some(OverlapConfig::FullRange { full_overlap_m }) => {
                 c.positive("instrument.overlap.full_overlap_m", *full_overlap_m, 1e6)?;
             }

@@ -148,7 +148,7 @@ impl Overlap {
     pub fn from_config(cfg: &ScenarioConfig) -> Self {
         let i = &cfg.instrument;
         match &i.overlap {
-            None => Overlap::Full,
+            None | Some(OverlapConfig::None) => Overlap::Full,
             Some(OverlapConfig::FullRange { full_overlap_m }) => Overlap::Step { full_overlap_m: *full_overlap_m },
             Some(OverlapConfig::Geometric { beam_radius_m, beam_divergence_rad, axis_offset_m }) => Overlap::Geometric {
                 beam_radius_m: *beam_radius_m,

@@ -92,7 +92,9 @@ impl Scenario {
         let file = loaded.file_label();
         let instrument = Instrument::from_config(cfg);
         let geometry = Geometry::from_config(cfg, &file)?;
-        let atmosphere = Atmosphere::from_config(&loaded)?;
+        let mut atmosphere = Atmosphere::from_config(&loaded)?;
+        // at least four slabs per bin, so that the piecewise representation resolves every bin
+        atmosphere.grid_m = atmosphere.grid_m.min(geometry.bin_range_m * geometry.cos_angle / 4.0);
         let overlap = Overlap::from_config(cfg);
         if overlap.sees_zero_range() && geometry.first_bin_range_m <= 0.0 {
             return Err(Error::config(

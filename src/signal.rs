@@ -27,6 +27,8 @@ use crate::geometry::{Geometry, Overlap};
 const NODES: usize = 6;
 /// Largest piece length relative to its start range.
 const MAX_PIECE_FRACTION: f64 = 0.1;
+/// Smallest piece next to an overlap kink, m.
+const GRADED_MIN_PIECE_M: f64 = 1e-4;
 
 /// One stretch of the beam with constant optical properties.
 #[derive(Debug, Clone, Copy)]
@@ -99,6 +101,11 @@ impl BeamPath {
         &self.segments
     }
 
+    /// The overlap function η(r).
+    pub fn overlap(&self) -> &Overlap {
+        &self.overlap
+    }
+
     /// One-way attenuating optical depth from the instrument to range `r_m`.
     pub fn optical_depth(&self, r_m: f64) -> f64 {
         let idx = self.segments.partition_point(|s| s.r_start <= r_m);
@@ -155,13 +162,20 @@ impl BeamPath {
         total
     }
 
-    /// `∫_a^b η(r)/r² · e^{−k(r−a)} dr` where η is smooth: pieces of length ≤ 10 % of
-    /// their start range, product integration on each.
+    /// `∫_a^b η(r)/r² · e^{−k(r−a)} dr` where η is smooth inside (a, b): pieces of length
+    /// ≤ 10 % of their start range, product integration on each. With an overlap function
+    /// the pieces also shrink geometrically towards a and b, where η may have a
+    /// non-polynomial kink (circles starting to touch: η ∝ (r − r₀)^{3/2}).
     fn smooth_range_integral(&self, a: f64, b: f64, k: f64) -> f64 {
+        let graded = !matches!(self.overlap, Overlap::Full);
         let mut total = 0.0;
         let mut s = a;
         while s < b {
-            let w = (MAX_PIECE_FRACTION * s).min(b - s);
+            let mut w = (MAX_PIECE_FRACTION * s).min(b - s);
+            if graded {
+                let to_edge = (s - a).min(b - s);
+                w = w.min(GRADED_MIN_PIECE_M.max(0.5 * to_edge)).min(b - s);
+            }
             let decay = (-k * (s - a)).exp();
             if decay == 0.0 {
                 break;
