@@ -18,7 +18,10 @@ fn to_stdout(fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result
     let stdout = std::io::stdout();
     let mut lock = stdout.lock();
     match fill(&mut lock).and_then(|_| lock.flush()) {
-        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(Error::Io { path: "<stdout>".into(), source: e }),
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(Error::Io {
+            path: "<stdout>".into(),
+            source: e,
+        }),
         _ => Ok(()),
     }
 }
@@ -43,7 +46,12 @@ pub fn build_snr_map(sc: &Scenario, e: &ExpectedProfile) -> snr_map::SnrMap {
     let snr = e
         .signal
         .iter()
-        .map(|&s| times.iter().map(|tc| snr::eq4(s, e.background, e.dark, i.rep_rate_hz * tc)).collect())
+        .map(|&s| {
+            times
+                .iter()
+                .map(|tc| snr::eq4(s, e.background, e.dark, i.rep_rate_hz * tc))
+                .collect()
+        })
         .collect();
     snr_map::SnrMap {
         altitude_km: e.altitude_m.iter().map(|z| z / 1e3).collect(),

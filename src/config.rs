@@ -370,7 +370,10 @@ impl LoadedConfig {
 
 /// Reads `path`, applies `overrides` (`KEY=VALUE`, dotted keys), deserializes and validates.
 pub fn load(path: &Path, overrides: &[String]) -> Result<LoadedConfig> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
     load_str(&text, path, overrides)
 }
 
@@ -382,24 +385,43 @@ pub fn load_str(text: &str, path: &Path, overrides: &[String]) -> Result<LoadedC
         Error::config(&file, key, format!("malformed TOML: {}", e.message()))
     })?;
     for item in overrides {
-        apply_override(&mut table, item).map_err(|reason| Error::config(&file, key_of(item), reason))?;
+        apply_override(&mut table, item)
+            .map_err(|reason| Error::config(&file, key_of(item), reason))?;
     }
     let resolved_toml = toml::to_string(&table).unwrap_or_default();
     let de = toml::Value::Table(table);
     let config: ScenarioConfig = serde_path_to_error::deserialize(de).map_err(|e| {
         let key = e.path().to_string();
-        Error::config(&file, if key == "." { "(top level)".into() } else { key }, e.into_inner().to_string())
+        Error::config(
+            &file,
+            if key == "." {
+                "(top level)".into()
+            } else {
+                key
+            },
+            e.into_inner().to_string(),
+        )
     })?;
     config.validate(&file)?;
-    Ok(LoadedConfig { config, path: path.to_path_buf(), resolved_toml })
+    Ok(LoadedConfig {
+        config,
+        path: path.to_path_buf(),
+        resolved_toml,
+    })
 }
 
 fn line_of(text: &str, offset: usize) -> String {
-    format!("(line {})", text[..offset.min(text.len())].matches('\n').count() + 1)
+    format!(
+        "(line {})",
+        text[..offset.min(text.len())].matches('\n').count() + 1
+    )
 }
 
 fn key_of(item: &str) -> String {
-    item.split_once('=').map(|(k, _)| k.trim()).unwrap_or(item).to_string()
+    item.split_once('=')
+        .map(|(k, _)| k.trim())
+        .unwrap_or(item)
+        .to_string()
 }
 
 /// Applies one `KEY=VALUE` override to `table`. The value is read as a TOML value
@@ -423,7 +445,11 @@ pub fn apply_override(table: &mut toml::Table, item: &str) -> std::result::Resul
     result
 }
 
-fn set_path(node: &mut toml::Value, parts: &[&str], value: toml::Value) -> std::result::Result<(), String> {
+fn set_path(
+    node: &mut toml::Value,
+    parts: &[&str],
+    value: toml::Value,
+) -> std::result::Result<(), String> {
     let mut node = node;
     for (i, part) in parts.iter().enumerate() {
         let last = i + 1 == parts.len();
@@ -434,15 +460,17 @@ fn set_path(node: &mut toml::Value, parts: &[&str], value: toml::Value) -> std::
                     t.insert((*part).to_string(), value);
                     return Ok(());
                 }
-                t.entry((*part).to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new()))
+                t.entry((*part).to_string())
+                    .or_insert_with(|| toml::Value::Table(toml::Table::new()))
             }
             toml::Value::Array(a) => {
-                let idx: usize =
-                    part.parse().map_err(|_| format!("`{here}` is an array: address its elements by index"))?;
+                let idx: usize = part
+                    .parse()
+                    .map_err(|_| format!("`{here}` is an array: address its elements by index"))?;
                 let len = a.len();
-                let slot = a
-                    .get_mut(idx)
-                    .ok_or_else(|| format!("index {idx} is out of range (`{here}` has {len} elements)"))?;
+                let slot = a.get_mut(idx).ok_or_else(|| {
+                    format!("index {idx} is out of range (`{here}` has {len} elements)")
+                })?;
                 if last {
                     *slot = value;
                     return Ok(());
@@ -458,7 +486,9 @@ fn set_path(node: &mut toml::Value, parts: &[&str], value: toml::Value) -> std::
 fn parse_value(raw: &str) -> toml::Value {
     let doc = format!("v = {raw}");
     match doc.parse::<toml::Table>() {
-        Ok(mut t) => t.remove("v").unwrap_or_else(|| toml::Value::String(raw.to_string())),
+        Ok(mut t) => t
+            .remove("v")
+            .unwrap_or_else(|| toml::Value::String(raw.to_string())),
         Err(_) => toml::Value::String(raw.trim_matches('"').to_string()),
     }
 }
@@ -522,17 +552,36 @@ impl ScenarioConfig {
         c.efficiency("instrument.quantum_efficiency", i.quantum_efficiency)?;
         c.positive("instrument.fov_rad", i.fov_rad, 0.1)?;
         c.positive("instrument.filter_width_nm", i.filter_width_nm, 100.0)?;
-        c.range("instrument.dark_count_rate_hz", i.dark_count_rate_hz, 0.0, 1e9)?;
+        c.range(
+            "instrument.dark_count_rate_hz",
+            i.dark_count_rate_hz,
+            0.0,
+            1e9,
+        )?;
         c.range("instrument.bin_width_s", i.bin_width_s, 1e-10, 1e-3)?;
         match &i.overlap {
             None | Some(OverlapConfig::None) => {}
             Some(OverlapConfig::FullRange { full_overlap_m }) => {
                 c.positive("instrument.overlap.full_overlap_m", *full_overlap_m, 1e6)?;
             }
-            Some(OverlapConfig::Geometric { beam_radius_m, beam_divergence_rad, axis_offset_m }) => {
+            Some(OverlapConfig::Geometric {
+                beam_radius_m,
+                beam_divergence_rad,
+                axis_offset_m,
+            }) => {
                 c.positive("instrument.overlap.beam_radius_m", *beam_radius_m, 10.0)?;
-                c.range("instrument.overlap.beam_divergence_rad", *beam_divergence_rad, 0.0, 0.1)?;
-                c.range("instrument.overlap.axis_offset_m", *axis_offset_m, 0.0, 100.0)?;
+                c.range(
+                    "instrument.overlap.beam_divergence_rad",
+                    *beam_divergence_rad,
+                    0.0,
+                    0.1,
+                )?;
+                c.range(
+                    "instrument.overlap.axis_offset_m",
+                    *axis_offset_m,
+                    0.0,
+                    100.0,
+                )?;
             }
         }
         Ok(())
@@ -542,7 +591,12 @@ impl ScenarioConfig {
         let p = &self.platform;
         let a = &self.acquisition;
         c.range("platform.off_nadir_deg", p.off_nadir_deg, 0.0, 85.0)?;
-        c.range("acquisition.accumulation_time_s", a.accumulation_time_s, 0.0, 1e7)?;
+        c.range(
+            "acquisition.accumulation_time_s",
+            a.accumulation_time_s,
+            0.0,
+            1e7,
+        )?;
         let shots = a.accumulation_time_s * self.instrument.rep_rate_hz;
         if shots.round() < 1.0 {
             return Err(c.fail(
@@ -551,11 +605,19 @@ impl ScenarioConfig {
             ));
         }
         c.range("acquisition.top_altitude_km", a.top_altitude_km, -10.0, 1e5)?;
-        c.range("acquisition.bottom_altitude_km", a.bottom_altitude_km, -10.0, 1e5)?;
+        c.range(
+            "acquisition.bottom_altitude_km",
+            a.bottom_altitude_km,
+            -10.0,
+            1e5,
+        )?;
         if a.bottom_altitude_km >= a.top_altitude_km {
             return Err(c.fail(
                 "acquisition.bottom_altitude_km",
-                format!("must be below acquisition.top_altitude_km ({} km)", a.top_altitude_km),
+                format!(
+                    "must be below acquisition.top_altitude_km ({} km)",
+                    a.top_altitude_km
+                ),
             ));
         }
         if a.profiles == 0 {
@@ -567,7 +629,10 @@ impl ScenarioConfig {
                 if a.top_altitude_km >= p.altitude_km {
                     return Err(c.fail(
                         "acquisition.top_altitude_km",
-                        format!("the window must lie below the platform ({} km)", p.altitude_km),
+                        format!(
+                            "the window must lie below the platform ({} km)",
+                            p.altitude_km
+                        ),
                     ));
                 }
             }
@@ -576,7 +641,10 @@ impl ScenarioConfig {
                 if a.bottom_altitude_km < p.altitude_km {
                     return Err(c.fail(
                         "acquisition.bottom_altitude_km",
-                        format!("a ground lidar sees nothing below its station ({} km)", p.altitude_km),
+                        format!(
+                            "a ground lidar sees nothing below its station ({} km)",
+                            p.altitude_km
+                        ),
                     ));
                 }
             }
@@ -592,7 +660,9 @@ impl ScenarioConfig {
         {
             return Err(c.fail(
                 "atmosphere.molecular.model",
-                format!("unknown model `{name}`: expected \"us76\", \"none\" or {{ file = \"...\" }}"),
+                format!(
+                    "unknown model `{name}`: expected \"us76\", \"none\" or {{ file = \"...\" }}"
+                ),
             ));
         }
         if let Some(rho) = m.depolarization {
@@ -601,28 +671,48 @@ impl ScenarioConfig {
         c.range("atmosphere.molecular.grid_m", m.grid_m, 0.1, 1000.0)?;
         if let Some(a) = &self.atmosphere.aerosol {
             c.positive("atmosphere.aerosol.visibility_km", a.visibility_km, 1e4)?;
-            c.range("atmosphere.aerosol.lidar_ratio_sr", a.lidar_ratio_sr, 1.0, 1e4)?;
+            c.range(
+                "atmosphere.aerosol.lidar_ratio_sr",
+                a.lidar_ratio_sr,
+                1.0,
+                1e4,
+            )?;
             if let Some(e) = a.surface_extinction_per_km {
                 c.range("atmosphere.aerosol.surface_extinction_per_km", e, 0.0, 1e3)?;
             }
-            if a.extinction_from == Some(ExtinctionSource::SurfaceExtinction) && a.surface_extinction_per_km.is_none() {
+            if a.extinction_from == Some(ExtinctionSource::SurfaceExtinction)
+                && a.surface_extinction_per_km.is_none()
+            {
                 return Err(c.fail(
                     "atmosphere.aerosol.extinction_from",
                     "is \"surface_extinction\" but atmosphere.aerosol.surface_extinction_per_km is not set",
                 ));
             }
-            c.range("atmosphere.aerosol.reference_wavelength_nm", a.reference_wavelength_nm, 200.0, 4000.0)?;
+            c.range(
+                "atmosphere.aerosol.reference_wavelength_nm",
+                a.reference_wavelength_nm,
+                200.0,
+                4000.0,
+            )?;
             if let Some(x) = a.angstrom_exponent {
                 c.range("atmosphere.aerosol.angstrom_exponent", x, -1.0, 4.0)?;
             }
-            c.range("atmosphere.aerosol.depolarization", a.depolarization, 0.0, 1.0)?;
+            c.range(
+                "atmosphere.aerosol.depolarization",
+                a.depolarization,
+                0.0,
+                1.0,
+            )?;
         }
         for (n, l) in self.atmosphere.layers.iter().enumerate() {
             let key = |k: &str| format!("atmosphere.layers[{n}].{k}");
             c.range(&key("base_km"), l.base_km, -1.0, 100.0)?;
             c.range(&key("top_km"), l.top_km, -1.0, 100.0)?;
             if l.top_km <= l.base_km {
-                return Err(c.fail(&key("top_km"), format!("must be above base_km ({} km)", l.base_km)));
+                return Err(c.fail(
+                    &key("top_km"),
+                    format!("must be above base_km ({} km)", l.base_km),
+                ));
             }
             c.range(&key("extinction_per_km"), l.extinction_per_km, 0.0, 1e4)?;
             c.range(&key("lidar_ratio_sr"), l.lidar_ratio_sr, 1.0, 1e4)?;

@@ -42,12 +42,23 @@ pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
     /// A configuration error for `key` in `file`.
-    pub fn config(file: impl Into<String>, key: impl Into<String>, reason: impl Into<String>) -> Self {
-        Error::Config { file: file.into(), key: key.into(), reason: reason.into() }
+    pub fn config(
+        file: impl Into<String>,
+        key: impl Into<String>,
+        reason: impl Into<String>,
+    ) -> Self {
+        Error::Config {
+            file: file.into(),
+            key: key.into(),
+            reason: reason.into(),
+        }
     }
 
     /// An output error for `path`.
     pub fn output(path: impl Into<PathBuf>, reason: impl std::fmt::Display) -> Self {
-        Error::Output { path: path.into(), reason: reason.to_string() }
+        Error::Output {
+            path: path.into(),
+            reason: reason.to_string(),
+        }
     }
 }

@@ -149,8 +149,14 @@ impl Overlap {
         let i = &cfg.instrument;
         match &i.overlap {
             None | Some(OverlapConfig::None) => Overlap::Full,
-            Some(OverlapConfig::FullRange { full_overlap_m }) => Overlap::Step { full_overlap_m: *full_overlap_m },
-            Some(OverlapConfig::Geometric { beam_radius_m, beam_divergence_rad, axis_offset_m }) => Overlap::Geometric {
+            Some(OverlapConfig::FullRange { full_overlap_m }) => Overlap::Step {
+                full_overlap_m: *full_overlap_m,
+            },
+            Some(OverlapConfig::Geometric {
+                beam_radius_m,
+                beam_divergence_rad,
+                axis_offset_m,
+            }) => Overlap::Geometric {
                 beam_radius_m: *beam_radius_m,
                 beam_half_angle_rad: beam_divergence_rad / 2.0,
                 telescope_radius_m: (i.telescope_area_m2 / std::f64::consts::PI).sqrt(),
@@ -180,7 +186,8 @@ impl Overlap {
             } => {
                 let r_laser = beam_radius_m + r_m.max(0.0) * beam_half_angle_rad;
                 let r_fov = telescope_radius_m + r_m.max(0.0) * fov_half_angle_rad;
-                circle_overlap_area(r_laser, r_fov, axis_offset_m) / (std::f64::consts::PI * r_laser * r_laser)
+                circle_overlap_area(r_laser, r_fov, axis_offset_m)
+                    / (std::f64::consts::PI * r_laser * r_laser)
             }
         }
     }
@@ -234,9 +241,16 @@ pub fn circle_overlap_area(a: f64, b: f64, d: f64) -> f64 {
         let m = a.min(b);
         return PI * m * m;
     }
-    let alpha = ((d * d + a * a - b * b) / (2.0 * d * a)).clamp(-1.0, 1.0).acos();
-    let beta = ((d * d + b * b - a * a) / (2.0 * d * b)).clamp(-1.0, 1.0).acos();
-    let kite = 0.5 * ((-d + a + b) * (d + a - b) * (d - a + b) * (d + a + b)).max(0.0).sqrt();
+    let alpha = ((d * d + a * a - b * b) / (2.0 * d * a))
+        .clamp(-1.0, 1.0)
+        .acos();
+    let beta = ((d * d + b * b - a * a) / (2.0 * d * b))
+        .clamp(-1.0, 1.0)
+        .acos();
+    let kite = 0.5
+        * ((-d + a + b) * (d + a - b) * (d - a + b) * (d + a + b))
+            .max(0.0)
+            .sqrt();
     a * a * alpha + b * b * beta - kite
 }
 

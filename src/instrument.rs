@@ -50,17 +50,27 @@ impl Instrument {
             BackgroundEfficiency::Paper => 1.0,
         };
         // Sky light is unpolarized: a polarization channel receives half of it.
-        let polarization_share = if i.channel == Channel::Total { 1.0 } else { 0.5 };
+        let polarization_share = if i.channel == Channel::Total {
+            1.0
+        } else {
+            0.5
+        };
         // Eq. 3: N_bkg = Lλ·A·Ω·Δλ·TF (photons/s), then ·Δt·ε_bkg per bin.
-        let background_rate_hz =
-            cfg.background.radiance * i.telescope_area_m2 * solid_angle_sr(i.fov_rad) * i.filter_width_nm * i.filter_transmission;
+        let background_rate_hz = cfg.background.radiance
+            * i.telescope_area_m2
+            * solid_angle_sr(i.fov_rad)
+            * i.filter_width_nm
+            * i.filter_transmission;
         Instrument {
             wavelength_nm: i.wavelength_nm,
             bin_width_s: i.bin_width_s,
             rep_rate_hz: i.rep_rate_hz,
             channel: i.channel,
             signal_constant,
-            background_per_bin: background_rate_hz * i.bin_width_s * efficiency * polarization_share,
+            background_per_bin: background_rate_hz
+                * i.bin_width_s
+                * efficiency
+                * polarization_share,
             dark_per_bin: i.dark_count_rate_hz * i.bin_width_s,
         }
     }

@@ -11,7 +11,7 @@ pub mod error;
 pub mod geometry;
 pub mod instrument;
 pub mod output;
-pub mod scenario;
 pub mod sampling;
+pub mod scenario;
 pub mod signal;
 pub mod snr;

@@ -45,8 +45,15 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
-        Command::Expect { config, set, csv } => lidarsim::commands::expect(config, set, csv.as_deref()),
-        Command::SnrMap { config, set, png, csv } => lidarsim::commands::snr_map(config, set, png, csv.as_deref()),
+        Command::Expect { config, set, csv } => {
+            lidarsim::commands::expect(config, set, csv.as_deref())
+        }
+        Command::SnrMap {
+            config,
+            set,
+            png,
+            csv,
+        } => lidarsim::commands::snr_map(config, set, png, csv.as_deref()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

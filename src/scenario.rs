@@ -61,12 +61,18 @@ impl ExpectedProfile {
 
     /// Expected total counts per shot in each bin, `λ_i = λ_sig,i + λ_bkg + λ_dc` (Eq. 1).
     pub fn total_per_shot(&self) -> Vec<f64> {
-        self.signal.iter().map(|s| s + self.background + self.dark).collect()
+        self.signal
+            .iter()
+            .map(|s| s + self.background + self.dark)
+            .collect()
     }
 
     /// Eq. 4 S/N of each bin after `shots` shots.
     pub fn snr_eq4(&self, shots: f64) -> Vec<f64> {
-        self.signal.iter().map(|&s| snr::eq4(s, self.background, self.dark, shots)).collect()
+        self.signal
+            .iter()
+            .map(|&s| snr::eq4(s, self.background, self.dark, shots))
+            .collect()
     }
 
     /// S/N with the background estimated from `background_bins` bins; `None` when there are none.
@@ -74,7 +80,15 @@ impl ExpectedProfile {
         (self.background_bins > 0).then(|| {
             self.signal
                 .iter()
-                .map(|&s| snr::with_estimated_background(s, self.background, self.dark, shots, self.background_bins))
+                .map(|&s| {
+                    snr::with_estimated_background(
+                        s,
+                        self.background,
+                        self.dark,
+                        shots,
+                        self.background_bins,
+                    )
+                })
                 .collect()
         })
     }
@@ -94,7 +108,9 @@ impl Scenario {
         let geometry = Geometry::from_config(cfg, &file)?;
         let mut atmosphere = Atmosphere::from_config(&loaded)?;
         // at least four slabs per bin, so that the piecewise representation resolves every bin
-        atmosphere.grid_m = atmosphere.grid_m.min(geometry.bin_range_m * geometry.cos_angle / 4.0);
+        atmosphere.grid_m = atmosphere
+            .grid_m
+            .min(geometry.bin_range_m * geometry.cos_angle / 4.0);
         let overlap = Overlap::from_config(cfg);
         if overlap.sees_zero_range() && geometry.first_bin_range_m <= 0.0 {
             return Err(Error::config(
@@ -105,7 +121,13 @@ impl Scenario {
             ));
         }
         let path = BeamPath::new(&atmosphere, &geometry, overlap);
-        Ok(Scenario { loaded, instrument, geometry, atmosphere, path })
+        Ok(Scenario {
+            loaded,
+            instrument,
+            geometry,
+            atmosphere,
+            path,
+        })
     }
 
     /// Accumulation time TC of one profile, s.
@@ -115,7 +137,8 @@ impl Scenario {
 
     /// Shots per profile `M = round(fL·TC)`.
     pub fn shots_per_profile(&self) -> u64 {
-        self.instrument.shots_per_profile(self.accumulation_time_s())
+        self.instrument
+            .shots_per_profile(self.accumulation_time_s())
     }
 
     /// The deterministic model: per-bin expectations and truth (interface.md `expect`).
@@ -134,7 +157,9 @@ impl Scenario {
             let o = self.atmosphere.optics_at(z);
             let signal = self.instrument.signal_constant * self.path.bin_integral(ra, rb)?;
             if !signal.is_finite() {
-                return Err(Error::Unsupported(format!("bin {i} (altitude {z:.0} m): the signal is not finite")));
+                return Err(Error::Unsupported(format!(
+                    "bin {i} (altitude {z:.0} m): the signal is not finite"
+                )));
             }
             e.altitude_m.push(z);
             e.range_m.push(r);
@@ -146,8 +171,19 @@ impl Scenario {
             e.signal.push(signal);
         }
         let top = self.atmosphere.top_m();
-        let signal_free = (0..n).filter(|&i| g.altitude_at_range(g.bin_range_bounds(i).0).min(g.altitude_at_range(g.bin_range_bounds(i).1)) >= top).count();
-        e.background_bins = self.loaded.config.acquisition.background_bins.unwrap_or(signal_free);
+        let signal_free = (0..n)
+            .filter(|&i| {
+                g.altitude_at_range(g.bin_range_bounds(i).0)
+                    .min(g.altitude_at_range(g.bin_range_bounds(i).1))
+                    >= top
+            })
+            .count();
+        e.background_bins = self
+            .loaded
+            .config
+            .acquisition
+            .background_bins
+            .unwrap_or(signal_free);
         Ok(e)
     }
 }

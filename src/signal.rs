@@ -61,7 +61,10 @@ impl BeamPath {
         let z_far = geometry.altitude_at_range(r_max);
         let (z_lo, z_hi) = match geometry.kind {
             // The beam stops at the surface.
-            PlatformKind::Spaceborne => (z_far.max(0.0), geometry.platform_altitude_m.min(atmosphere.top_m())),
+            PlatformKind::Spaceborne => (
+                z_far.max(0.0),
+                geometry.platform_altitude_m.min(atmosphere.top_m()),
+            ),
             PlatformKind::Ground => (geometry.platform_altitude_m, z_far.min(atmosphere.top_m())),
         };
         let mut segments: Vec<Segment> = if z_hi > z_lo {
@@ -69,7 +72,10 @@ impl BeamPath {
                 .slabs(z_lo, z_hi)
                 .into_iter()
                 .map(|s| {
-                    let (ra, rb) = (geometry.range_at_altitude(s.z_lo), geometry.range_at_altitude(s.z_hi));
+                    let (ra, rb) = (
+                        geometry.range_at_altitude(s.z_lo),
+                        geometry.range_at_altitude(s.z_hi),
+                    );
                     Segment {
                         r_start: ra.min(rb),
                         r_end: ra.max(rb),
@@ -91,9 +97,17 @@ impl BeamPath {
         let zero_overlap_until_m = if overlap.sees_zero_range() {
             0.0
         } else {
-            overlap.breakpoints_m().into_iter().fold(f64::INFINITY, f64::min).min(r_max)
+            overlap
+                .breakpoints_m()
+                .into_iter()
+                .fold(f64::INFINITY, f64::min)
+                .min(r_max)
         };
-        BeamPath { segments, overlap, zero_overlap_until_m }
+        BeamPath {
+            segments,
+            overlap,
+            zero_overlap_until_m,
+        }
     }
 
     /// The segments, ordered by range.
@@ -134,7 +148,10 @@ impl BeamPath {
         }
         let first = self.segments.partition_point(|s| s.r_end <= r_a);
         let mut total = 0.0;
-        for s in self.segments[first..].iter().take_while(|s| s.r_start < r_b) {
+        for s in self.segments[first..]
+            .iter()
+            .take_while(|s| s.r_start < r_b)
+        {
             let (a, b) = (s.r_start.max(r_a), s.r_end.min(r_b));
             if b <= a || s.beta == 0.0 {
                 continue;
@@ -150,7 +167,12 @@ impl BeamPath {
 
     /// `∫_a^b η(r)/r² · e^{−k(r−a)} dr`, splitting at the overlap's kinks.
     fn attenuated_range_integral(&self, a: f64, b: f64, k: f64) -> f64 {
-        let mut cuts: Vec<f64> = self.overlap.breakpoints_m().into_iter().filter(|r| *r > a && *r < b).collect();
+        let mut cuts: Vec<f64> = self
+            .overlap
+            .breakpoints_m()
+            .into_iter()
+            .filter(|r| *r > a && *r < b)
+            .collect();
         cuts.sort_by(f64::total_cmp);
         cuts.push(b);
         let mut total = 0.0;
@@ -184,7 +206,13 @@ impl BeamPath {
                 let r = s + w * chebyshev_nodes()[m];
                 self.overlap.eta(r) / (r * r)
             });
-            total += decay * w * product_weights(k * w).iter().zip(g).map(|(wt, gv)| wt * gv).sum::<f64>();
+            total += decay
+                * w
+                * product_weights(k * w)
+                    .iter()
+                    .zip(g)
+                    .map(|(wt, gv)| wt * gv)
+                    .sum::<f64>();
             s += w;
         }
         total
@@ -195,7 +223,9 @@ impl BeamPath {
 fn chebyshev_nodes() -> &'static [f64; NODES] {
     static NODES_01: OnceLock<[f64; NODES]> = OnceLock::new();
     NODES_01.get_or_init(|| {
-        std::array::from_fn(|m| 0.5 * (1.0 - ((2 * m + 1) as f64 * std::f64::consts::PI / (2 * NODES) as f64).cos()))
+        std::array::from_fn(|m| {
+            0.5 * (1.0 - ((2 * m + 1) as f64 * std::f64::consts::PI / (2 * NODES) as f64).cos())
+        })
     })
 }
 
@@ -214,7 +244,9 @@ fn inverse_vandermonde() -> &'static [[f64; NODES]; NODES] {
             row[NODES + r] = 1.0;
         }
         for col in 0..NODES {
-            let piv = (col..NODES).max_by(|&i, &j| m[i][col].abs().total_cmp(&m[j][col].abs())).unwrap_or(col);
+            let piv = (col..NODES)
+                .max_by(|&i, &j| m[i][col].abs().total_cmp(&m[j][col].abs()))
+                .unwrap_or(col);
             m.swap(col, piv);
             let p = m[col][col];
             m[col].iter_mut().for_each(|v| *v /= p);
@@ -222,7 +254,9 @@ fn inverse_vandermonde() -> &'static [[f64; NODES]; NODES] {
                 if r != col {
                     let f = m[r][col];
                     let pivot_row = m[col];
-                    m[r].iter_mut().zip(pivot_row).for_each(|(v, pv)| *v -= f * pv);
+                    m[r].iter_mut()
+                        .zip(pivot_row)
+                        .for_each(|(v, pv)| *v -= f * pv);
                 }
             }
         }
@@ -289,7 +323,10 @@ mod tests {
             let mu = exponential_moments(t);
             for (j, m) in mu.iter().enumerate() {
                 let b = brute_moment(j, t);
-                assert!((m - b).abs() <= 1e-8 * b.abs().max(1e-300), "t={t} j={j}: {m} vs {b}");
+                assert!(
+                    (m - b).abs() <= 1e-8 * b.abs().max(1e-300),
+                    "t={t} j={j}: {m} vs {b}"
+                );
             }
         }
     }
@@ -306,7 +343,11 @@ mod tests {
         // Σ W_m(0) y_m^p = 1/(p+1) for p ≤ 5
         let w = product_weights(0.0);
         for p in 0..NODES {
-            let s: f64 = w.iter().zip(chebyshev_nodes()).map(|(wi, y)| wi * y.powi(p as i32)).sum();
+            let s: f64 = w
+                .iter()
+                .zip(chebyshev_nodes())
+                .map(|(wi, y)| wi * y.powi(p as i32))
+                .sum();
             assert!((s - 1.0 / (p + 1) as f64).abs() < 1e-12, "p={p}: {s}");
         }
     }

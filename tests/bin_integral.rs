@@ -10,7 +10,11 @@ fn assert_close(a: &[f64], b: &[f64], rel: f64, floor: f64, what: &str) {
         if x.abs().max(y.abs()) < floor {
             continue;
         }
-        assert!((x - y).abs() <= rel * y.abs(), "{what}: bin {i}: {x} vs {y} (rel {})", (x - y).abs() / y.abs());
+        assert!(
+            (x - y).abs() <= rel * y.abs(),
+            "{what}: bin {i}: {x} vs {y} (rel {})",
+            (x - y).abs() / y.abs()
+        );
     }
 }
 
@@ -31,13 +35,21 @@ fn cloud_edges_inside_bins_are_integrated_exactly() {
     // a cloud whose edges fall mid-bin: 10.1234–10.4567 km, optically thick
     let sc = scenario(
         "paper/scenario1.toml",
-        &["atmosphere.layers.0.base_km=10.1234", "atmosphere.layers.0.top_km=10.4567", "atmosphere.layers.0.extinction_per_km=5"],
+        &[
+            "atmosphere.layers.0.base_km=10.1234",
+            "atmosphere.layers.0.top_km=10.4567",
+            "atmosphere.layers.0.extinction_per_km=5",
+        ],
     );
     let e = sc.expected().unwrap();
     let brute = brute_force_signal(&sc, 0.01);
     assert_close(&e.signal, &brute, 1e-4, 1e-12, "cut cloud");
     // a midpoint sample would miss most of the cut bin: the exact integral differs from it
-    let i = e.altitude_m.iter().position(|z| (z - 10_400.0).abs() < 150.0).unwrap();
+    let i = e
+        .altitude_m
+        .iter()
+        .position(|z| (z - 10_400.0).abs() < 150.0)
+        .unwrap();
     assert!(e.beta_cld[i] > 0.0 || e.beta_cld[i + 1] > 0.0 || e.beta_cld[i - 1] > 0.0);
 }
 
@@ -64,7 +76,11 @@ fn clear_vacuum_slab_has_the_closed_form() {
             continue;
         }
         let exact = sc.instrument.signal_constant * beta * (1.0 / a - 1.0 / b);
-        assert!((e.signal[i] - exact).abs() <= 1e-9 * exact, "bin {i}: {} vs {exact}", e.signal[i]);
+        assert!(
+            (e.signal[i] - exact).abs() <= 1e-9 * exact,
+            "bin {i}: {} vs {exact}",
+            e.signal[i]
+        );
     }
 }
 
@@ -72,27 +88,49 @@ fn clear_vacuum_slab_has_the_closed_form() {
 fn optical_depth_500_cloud_gives_finite_signal_and_zero_below() {
     // a 1 km cloud with α = 500 km⁻¹ (τ = 500) whose top is the start of bin 96
     let probe = scenario("paper/scenario1.toml", &[]);
-    let top_m = probe.geometry.altitude_at_range(probe.geometry.bin_range_bounds(96).0);
+    let top_m = probe
+        .geometry
+        .altitude_at_range(probe.geometry.bin_range_bounds(96).0);
     let top = format!("atmosphere.layers.0.top_km={}", top_m / 1e3);
     let base = format!("atmosphere.layers.0.base_km={}", top_m / 1e3 - 1.0);
-    let sc = scenario("paper/scenario1.toml", &["atmosphere.layers.0.extinction_per_km=500", &top, &base]);
+    let sc = scenario(
+        "paper/scenario1.toml",
+        &["atmosphere.layers.0.extinction_per_km=500", &top, &base],
+    );
     let e = sc.expected().unwrap();
-    assert!(e.signal.iter().chain(&e.t2).all(|v| v.is_finite() && *v >= 0.0));
-    assert!(e.signal[97..].iter().all(|s| *s < 1e-100), "no light below τ = 500");
+    assert!(
+        e.signal
+            .iter()
+            .chain(&e.t2)
+            .all(|v| v.is_finite() && *v >= 0.0)
+    );
+    assert!(
+        e.signal[97..].iter().all(|s| *s < 1e-100),
+        "no light below τ = 500"
+    );
     // bin 96 lies inside the cloud: ∫ β T²(top) e^{−2α_tot x}/r² dx = β T²(top)/(2 α_tot r²)
     // up to 1/r² varying over the 1 mm decay length (relative 2/(2α r) ≈ 3e-6)
     let r_top = sc.geometry.bin_range_bounds(96).0;
     let o = sc.atmosphere.optics_at(top_m - 0.5);
-    let expected = sc.instrument.signal_constant * o.beta_channel * sc.path.two_way_transmission(r_top)
-        / (2.0 * o.alpha_effective * r_top * r_top);
-    assert!((e.signal[96] - expected).abs() < 1e-5 * expected, "{} vs {expected}", e.signal[96]);
+    let expected =
+        sc.instrument.signal_constant * o.beta_channel * sc.path.two_way_transmission(r_top)
+            / (2.0 * o.alpha_effective * r_top * r_top);
+    assert!(
+        (e.signal[96] - expected).abs() < 1e-5 * expected,
+        "{} vs {expected}",
+        e.signal[96]
+    );
 }
 
 #[test]
 fn one_metre_layer_is_resolved() {
     let sc = scenario(
         "paper/scenario1.toml",
-        &["atmosphere.layers.0.base_km=10.0", "atmosphere.layers.0.top_km=10.001", "atmosphere.layers.0.extinction_per_km=50"],
+        &[
+            "atmosphere.layers.0.base_km=10.0",
+            "atmosphere.layers.0.top_km=10.001",
+            "atmosphere.layers.0.extinction_per_km=50",
+        ],
     );
     let e = sc.expected().unwrap();
     let brute = brute_force_signal(&sc, 0.01);
@@ -102,7 +140,13 @@ fn one_metre_layer_is_resolved() {
 #[test]
 fn other_wavelengths_scale_like_rayleigh() {
     let at = |wl: &str| {
-        let sc = scenario("paper/scenario6.toml", &[&format!("instrument.wavelength_nm={wl}"), "atmosphere.molecular.model=us76"]);
+        let sc = scenario(
+            "paper/scenario6.toml",
+            &[
+                &format!("instrument.wavelength_nm={wl}"),
+                "atmosphere.molecular.model=us76",
+            ],
+        );
         let e = sc.expected().unwrap();
         assert!(e.signal.iter().all(|s| s.is_finite() && *s >= 0.0));
         e.beta_mol[0]
@@ -115,7 +159,10 @@ fn other_wavelengths_scale_like_rayleigh() {
 
 #[test]
 fn ground_lidar_with_geometric_overlap_matches_brute_force() {
-    let sc = scenario("ground/ground_532_overlap.toml", &["acquisition.top_altitude_km=5"]);
+    let sc = scenario(
+        "ground/ground_532_overlap.toml",
+        &["acquisition.top_altitude_km=5"],
+    );
     let e = sc.expected().unwrap();
     let brute = brute_force_signal(&sc, 0.01);
     assert_close(&e.signal, &brute, 1e-3, 1e-9, "ground overlap");
@@ -127,14 +174,32 @@ fn ground_lidar_with_geometric_overlap_matches_brute_force() {
 #[test]
 fn ground_lidar_seeing_range_zero_is_a_config_error() {
     let ov: Vec<String> = vec!["instrument.overlap={model=\"none\"}".into()];
-    let err = lidarsim::scenario::Scenario::load(&common::config_path("ground/ground_532_overlap.toml"), &ov)
-        .expect_err("1/r² diverges at r = 0");
+    let err = lidarsim::scenario::Scenario::load(
+        &common::config_path("ground/ground_532_overlap.toml"),
+        &ov,
+    )
+    .expect_err("1/r² diverges at r = 0");
     let msg = err.to_string();
-    assert!(msg.contains("ground_532_overlap.toml") && msg.contains("bottom_altitude_km") && msg.contains("diverges"), "{msg}");
+    assert!(
+        msg.contains("ground_532_overlap.toml")
+            && msg.contains("bottom_altitude_km")
+            && msg.contains("diverges"),
+        "{msg}"
+    );
     // raising the window removes the divergence
     let ov2 = vec![ov[0].clone(), "acquisition.bottom_altitude_km=0.1".into()];
-    let sc = lidarsim::scenario::Scenario::load(&common::config_path("ground/ground_532_overlap.toml"), &ov2).unwrap();
-    assert!(sc.expected().unwrap().signal.iter().all(|s| s.is_finite() && *s > 0.0));
+    let sc = lidarsim::scenario::Scenario::load(
+        &common::config_path("ground/ground_532_overlap.toml"),
+        &ov2,
+    )
+    .unwrap();
+    assert!(
+        sc.expected()
+            .unwrap()
+            .signal
+            .iter()
+            .all(|s| s.is_finite() && *s > 0.0)
+    );
 }
 
 #[test]
@@ -145,8 +210,16 @@ fn extreme_off_nadir_60_degrees_follows_the_slant_path() {
     assert!(slant.signal.iter().all(|s| s.is_finite()));
     // T² to the same altitude: optical depth doubles at 60°, T²_slant = T²_nadir²
     let z = 2000.0;
-    let t2_nadir = scenario("paper/scenario6.toml", &[]).path.two_way_transmission(600_000.0 - z);
-    let t2_slant = sc.path.two_way_transmission(sc.geometry.range_at_altitude(z));
-    assert!((t2_slant - t2_nadir * t2_nadir).abs() < 1e-9, "{t2_slant} vs {}", t2_nadir * t2_nadir);
+    let t2_nadir = scenario("paper/scenario6.toml", &[])
+        .path
+        .two_way_transmission(600_000.0 - z);
+    let t2_slant = sc
+        .path
+        .two_way_transmission(sc.geometry.range_at_altitude(z));
+    assert!(
+        (t2_slant - t2_nadir * t2_nadir).abs() < 1e-9,
+        "{t2_slant} vs {}",
+        t2_nadir * t2_nadir
+    );
     assert!(slant.n_bins() > nadir.n_bins());
 }

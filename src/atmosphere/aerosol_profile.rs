@@ -62,7 +62,11 @@ pub const ELTERMAN_1968_ATTENUATION_340NM_PER_KM: [f64; 51] = [
 /// Kruse exponent q of Eq. 5 for visibility `visibility_km` (km):
 /// `0.585·V^(1/3)` below 6 km, 1.3 from 6 km up.
 pub fn kruse_exponent(visibility_km: f64) -> f64 {
-    if visibility_km < 6.0 { 0.585 * visibility_km.cbrt() } else { 1.3 }
+    if visibility_km < 6.0 {
+        0.585 * visibility_km.cbrt()
+    } else {
+        1.3
+    }
 }
 
 /// Eq. 5: near-surface aerosol extinction, m⁻¹, from the horizontal visibility
@@ -163,7 +167,10 @@ mod tests {
     fn stratospheric_maximum() {
         // A local maximum between 15 and 25 km (Elterman's is at 18 km).
         let f = |km: f64| relative_concentration(km * 1000.0);
-        let peaks: Vec<f64> = (15..=25).map(f64::from).filter(|&z| f(z) > f(z - 1.0) && f(z) > f(z + 1.0)).collect();
+        let peaks: Vec<f64> = (15..=25)
+            .map(f64::from)
+            .filter(|&z| f(z) > f(z - 1.0) && f(z) > f(z + 1.0))
+            .collect();
         assert_eq!(peaks, vec![18.0]);
     }
 

@@ -161,7 +161,9 @@ impl Atmosphere {
                 MolecularSource::Profile(MolecularProfile::from_file(&loaded.resolve_path(file))?)
             }
         };
-        let rho_n = m.depolarization.unwrap_or_else(|| rayleigh::depolarization_rho_n(wl));
+        let rho_n = m
+            .depolarization
+            .unwrap_or_else(|| rayleigh::depolarization_rho_n(wl));
         let molecules = Molecules {
             source,
             cross_section_m2: rayleigh::cross_section_m2(wl),
@@ -245,7 +247,11 @@ impl Atmosphere {
         edges.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
         edges
             .windows(2)
-            .map(|w| Slab { z_lo: w[0], z_hi: w[1], optics: self.optics_at(0.5 * (w[0] + w[1])) })
+            .map(|w| Slab {
+                z_lo: w[0],
+                z_hi: w[1],
+                optics: self.optics_at(0.5 * (w[0] + w[1])),
+            })
             .collect()
     }
 }
@@ -255,19 +261,27 @@ impl Atmosphere {
 fn background_aerosol(cfg: &ScenarioConfig) -> Option<BackgroundAerosol> {
     let a = cfg.atmosphere.aerosol.as_ref()?;
     let wl = cfg.instrument.wavelength_nm;
-    let source = a.extinction_from.unwrap_or(if a.surface_extinction_per_km.is_some() {
-        ExtinctionSource::SurfaceExtinction
-    } else {
-        ExtinctionSource::Visibility
-    });
+    let source = a
+        .extinction_from
+        .unwrap_or(if a.surface_extinction_per_km.is_some() {
+            ExtinctionSource::SurfaceExtinction
+        } else {
+            ExtinctionSource::Visibility
+        });
     let surface_extinction_per_m = match (source, a.surface_extinction_per_km) {
         (ExtinctionSource::SurfaceExtinction, Some(e)) => {
-            let q = a.angstrom_exponent.unwrap_or_else(|| aerosol_profile::kruse_exponent(a.visibility_km));
+            let q = a
+                .angstrom_exponent
+                .unwrap_or_else(|| aerosol_profile::kruse_exponent(a.visibility_km));
             e * 1e-3 * (a.reference_wavelength_nm / wl).powf(q)
         }
         _ => aerosol_profile::surface_extinction_per_m(a.visibility_km, wl),
     };
-    Some(BackgroundAerosol { surface_extinction_per_m, lidar_ratio_sr: a.lidar_ratio_sr, depolarization: a.depolarization })
+    Some(BackgroundAerosol {
+        surface_extinction_per_m,
+        lidar_ratio_sr: a.lidar_ratio_sr,
+        depolarization: a.depolarization,
+    })
 }
 
 fn layers(cfg: &ScenarioConfig) -> Vec<Layer> {

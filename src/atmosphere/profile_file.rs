@@ -32,7 +32,7 @@ use crate::constants::BOLTZMANN_J_PER_K;
 use crate::error::{Error, Result};
 
 /// Config key reported in parse errors.
-const KEY: &str = "atmosphere.molecular.file";
+const KEY: &str = "atmosphere.molecular.model";
 
 /// A tabulated molecular number-density profile.
 #[derive(Debug, Clone, PartialEq)]
@@ -52,17 +52,26 @@ enum Columns {
     NumberDensity { z: usize, n: usize },
 }
 
-const KNOWN_COLUMNS: [&str; 4] = ["altitude_km", "pressure_hpa", "temperature_k", "number_density_m3"];
+const KNOWN_COLUMNS: [&str; 4] = [
+    "altitude_km",
+    "pressure_hpa",
+    "temperature_k",
+    "number_density_m3",
+];
 
 fn fields(line: &str) -> Vec<&str> {
-    line.split(|c: char| c == ',' || c.is_whitespace()).filter(|f| !f.is_empty()).collect()
+    line.split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|f| !f.is_empty())
+        .collect()
 }
 
 fn parse_header(names: &[&str]) -> std::result::Result<Columns, String> {
     let mut index = [None; 4];
     for (col, name) in names.iter().enumerate() {
         match KNOWN_COLUMNS.iter().position(|k| k == name) {
-            Some(k) if index[k].is_some() => return Err(format!("column `{name}` appears twice in the header")),
+            Some(k) if index[k].is_some() => {
+                return Err(format!("column `{name}` appears twice in the header"));
+            }
             Some(k) => index[k] = Some(col),
             None => {
                 return Err(format!(
@@ -88,13 +97,18 @@ impl MolecularProfile {
     /// are [`Error::Config`] naming the file, the key and the line; a file that
     /// cannot be read is [`Error::Io`].
     pub fn from_file(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
         Self::parse(&text, &path.display().to_string())
     }
 
     /// Parses profile text; `source_name` names it in errors (usually the path).
     pub fn parse(text: &str, source_name: &str) -> Result<Self> {
-        let fail = |line: usize, reason: String| Error::config(source_name, KEY, format!("line {line}: {reason}"));
+        let fail = |line: usize, reason: String| {
+            Error::config(source_name, KEY, format!("line {line}: {reason}"))
+        };
         let mut columns: Option<(Columns, usize)> = None;
         let mut altitude_m = Vec::new();
         let mut number_density_m3 = Vec::new();
@@ -118,11 +132,15 @@ impl MolecularProfile {
                 continue;
             };
             if f.len() != width {
-                return Err(fail(line_no, format!("expected {width} values, found {}", f.len())));
+                return Err(fail(
+                    line_no,
+                    format!("expected {width} values, found {}", f.len()),
+                ));
             }
             let value = |col: usize, name: &str| -> Result<f64> {
-                let v: f64 =
-                    f[col].parse().map_err(|_| fail(line_no, format!("{name} `{}` is not a number", f[col])))?;
+                let v: f64 = f[col]
+                    .parse()
+                    .map_err(|_| fail(line_no, format!("{name} `{}` is not a number", f[col])))?;
                 if !v.is_finite() {
                     return Err(fail(line_no, format!("{name} `{}` is not finite", f[col])));
                 }
@@ -142,7 +160,9 @@ impl MolecularProfile {
                     let t_k = positive(t, "temperature_k")?;
                     (z_km, p_hpa * 100.0 / (BOLTZMANN_J_PER_K * t_k))
                 }
-                Columns::NumberDensity { z, n } => (value(z, "altitude_km")?, positive(n, "number_density_m3")?),
+                Columns::NumberDensity { z, n } => {
+                    (value(z, "altitude_km")?, positive(n, "number_density_m3")?)
+                }
             };
             let z_m = z_km * 1000.0;
             if let Some(&prev) = altitude_m.last()
@@ -150,7 +170,10 @@ impl MolecularProfile {
             {
                 return Err(fail(
                     line_no,
-                    format!("altitude {z_km} km is not above the previous row's {} km", prev / 1000.0),
+                    format!(
+                        "altitude {z_km} km is not above the previous row's {} km",
+                        prev / 1000.0
+                    ),
                 ));
             }
             altitude_m.push(z_m);
@@ -165,9 +188,15 @@ impl MolecularProfile {
             ));
         }
         if altitude_m.len() < 2 {
-            return Err(fail(last_line, format!("need at least 2 data rows, found {}", altitude_m.len())));
+            return Err(fail(
+                last_line,
+                format!("need at least 2 data rows, found {}", altitude_m.len()),
+            ));
         }
-        Ok(Self { altitude_m, number_density_m3 })
+        Ok(Self {
+            altitude_m,
+            number_density_m3,
+        })
     }
 
     /// Number density, m⁻³, at geometric altitude `altitude_m`: log-linear
@@ -209,7 +238,10 @@ mod tests {
     use super::*;
     use crate::atmosphere::us76;
 
-    const EXAMPLE: &str = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/atmospheres/us76_1km.txt"));
+    const EXAMPLE: &str = include_str!(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/configs/atmospheres/us76_1km.txt"
+    ));
 
     fn err(text: &str) -> String {
         match MolecularProfile::parse(text, "test.txt") {
@@ -248,10 +280,18 @@ mod tests {
         );
         for k in 0..=86 {
             let st = us76::state(k as f64 * 1000.0).unwrap();
-            s.push_str(&format!("{:>5.1}  {:>13.6e}  {:>9.3}\n", k as f64, st.pressure_pa / 100.0, st.temperature_k));
+            s.push_str(&format!(
+                "{:>5.1}  {:>13.6e}  {:>9.3}\n",
+                k as f64,
+                st.pressure_pa / 100.0,
+                st.temperature_k
+            ));
         }
         if std::env::var_os("ATMOS_WRITE_EXAMPLE").is_some() {
-            let path = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/atmospheres/us76_1km.txt");
+            let path = concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/configs/atmospheres/us76_1km.txt"
+            );
             std::fs::write(path, s).unwrap();
         } else {
             print!("{s}");
@@ -270,7 +310,10 @@ mod tests {
         // Between grid points log-linear interpolation stays within 1 % of US76.
         for k in 0..860 {
             let z = k as f64 * 100.0 + 50.0;
-            assert!(rel(p.number_density_m3(z), us76::number_density_m3(z)) < 0.01, "at {z} m");
+            assert!(
+                rel(p.number_density_m3(z), us76::number_density_m3(z)) < 0.01,
+                "at {z} m"
+            );
         }
     }
 
@@ -290,32 +333,52 @@ mod tests {
 
     #[test]
     fn pressure_temperature_form() {
-        let p =
-            MolecularProfile::parse("altitude_km pressure_hpa temperature_k\n0 1013.25 288.15\n1 898.76 281.65\n", "t")
-                .unwrap();
+        let p = MolecularProfile::parse(
+            "altitude_km pressure_hpa temperature_k\n0 1013.25 288.15\n1 898.76 281.65\n",
+            "t",
+        )
+        .unwrap();
         assert!(rel(p.number_density_m3[0], 2.5469e25) < 1e-4);
         // Negative altitudes are allowed (below sea level).
-        assert!(MolecularProfile::parse("altitude_km number_density_m3\n-0.4 2.6e25\n0 2.5e25\n", "t").is_ok());
+        assert!(
+            MolecularProfile::parse(
+                "altitude_km number_density_m3\n-0.4 2.6e25\n0 2.5e25\n",
+                "t"
+            )
+            .is_ok()
+        );
     }
 
     #[test]
     fn error_names_file_key_and_line() {
         let e = err("altitude_km number_density_m3\n0 2.5e25\n1 abc\n");
-        assert_eq!(e, "test.txt: key `atmosphere.molecular.file`: line 3: number_density_m3 `abc` is not a number");
+        assert_eq!(
+            e,
+            "test.txt: key `atmosphere.molecular.model`: line 3: number_density_m3 `abc` is not a number"
+        );
     }
 
     #[test]
     fn missing_header() {
-        assert!(err("# only comment\n0 1013 288\n1 900 281\n").contains("line 2: found numbers before the header"));
+        assert!(
+            err("# only comment\n0 1013 288\n1 900 281\n")
+                .contains("line 2: found numbers before the header")
+        );
         assert!(err("").contains("no header line"));
         assert!(err("# nothing\n\n").contains("line 2: no header line"));
     }
 
     #[test]
     fn unknown_or_incomplete_columns() {
-        assert!(err("altitude_km pressure_pa temperature_k\n").contains("line 1: unknown column `pressure_pa`"));
+        assert!(
+            err("altitude_km pressure_pa temperature_k\n")
+                .contains("line 1: unknown column `pressure_pa`")
+        );
         assert!(err("altitude_km pressure_hpa\n0 1013\n1 900\n").contains("must name either"));
-        assert!(err("altitude_km pressure_hpa temperature_k number_density_m3\n").contains("must name either"));
+        assert!(
+            err("altitude_km pressure_hpa temperature_k number_density_m3\n")
+                .contains("must name either")
+        );
         assert!(err("altitude_km altitude_km number_density_m3\n").contains("appears twice"));
     }
 
@@ -326,9 +389,13 @@ mod tests {
                 .contains("line 3: altitude_km `1km` is not a number")
         );
         assert!(
-            err("altitude_km number_density_m3\n0 2.5e25 7\n1 2e25\n").contains("line 2: expected 2 values, found 3")
+            err("altitude_km number_density_m3\n0 2.5e25 7\n1 2e25\n")
+                .contains("line 2: expected 2 values, found 3")
         );
-        assert!(err("altitude_km number_density_m3\n0\n").contains("line 2: expected 2 values, found 1"));
+        assert!(
+            err("altitude_km number_density_m3\n0\n")
+                .contains("line 2: expected 2 values, found 1")
+        );
     }
 
     #[test]
@@ -341,7 +408,10 @@ mod tests {
             err("altitude_km pressure_hpa temperature_k\n0 1013 288\n1 900 0\n")
                 .contains("line 3: temperature_k must be > 0")
         );
-        assert!(err("altitude_km number_density_m3\n0 -2.5e25\n1 2e25\n").contains("number_density_m3 must be > 0"));
+        assert!(
+            err("altitude_km number_density_m3\n0 -2.5e25\n1 2e25\n")
+                .contains("number_density_m3 must be > 0")
+        );
     }
 
     #[test]
@@ -350,7 +420,10 @@ mod tests {
             err("altitude_km number_density_m3\n0 2.5e25\n1 2.3e25\n1 2.2e25\n")
                 .contains("line 4: altitude 1 km is not above the previous row's 1 km")
         );
-        assert!(err("altitude_km number_density_m3\n0 2.5e25\n2 2.3e25\n1 2.4e25\n").contains("line 4:"));
+        assert!(
+            err("altitude_km number_density_m3\n0 2.5e25\n2 2.3e25\n1 2.4e25\n")
+                .contains("line 4:")
+        );
     }
 
     #[test]
@@ -363,13 +436,17 @@ mod tests {
             err("altitude_km number_density_m3\n0 2.5e25\nnan 2e25\n")
                 .contains("line 3: altitude_km `nan` is not finite")
         );
-        assert!(err("altitude_km pressure_hpa temperature_k\n0 inf 288\n1 900 281\n").contains("not finite"));
+        assert!(
+            err("altitude_km pressure_hpa temperature_k\n0 inf 288\n1 900 281\n")
+                .contains("not finite")
+        );
     }
 
     #[test]
     fn fewer_than_two_rows() {
         assert!(
-            err("altitude_km number_density_m3\n0 2.5e25\n").contains("line 2: need at least 2 data rows, found 1")
+            err("altitude_km number_density_m3\n0 2.5e25\n")
+                .contains("line 2: need at least 2 data rows, found 1")
         );
         assert!(err("altitude_km number_density_m3\n").contains("found 0"));
     }
@@ -380,13 +457,25 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let good = dir.join("good.txt");
         std::fs::write(&good, "altitude_km number_density_m3\n0 2.5e25\n1 2.3e25\n").unwrap();
-        assert_eq!(MolecularProfile::from_file(&good).unwrap().altitude_m.len(), 2);
+        assert_eq!(
+            MolecularProfile::from_file(&good).unwrap().altitude_m.len(),
+            2
+        );
         let bad = dir.join("bad.txt");
         std::fs::write(&bad, "altitude_km number_density_m3\n0 2.5e25\n").unwrap();
         let e = MolecularProfile::from_file(&bad).unwrap_err().to_string();
-        assert!(e.starts_with(&format!("{}: key `atmosphere.molecular.file`: line 2:", bad.display())), "{e}");
+        assert!(
+            e.starts_with(&format!(
+                "{}: key `atmosphere.molecular.model`: line 2:",
+                bad.display()
+            )),
+            "{e}"
+        );
         let missing = dir.join("missing.txt");
-        assert!(matches!(MolecularProfile::from_file(&missing), Err(Error::Io { .. })));
+        assert!(matches!(
+            MolecularProfile::from_file(&missing),
+            Err(Error::Io { .. })
+        ));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -150,7 +150,10 @@ mod tests {
         // 1064 nm: 3.125e-32 m² by both the fit and the full formula; NOT 3.17e-32.
         assert!(rel(cross_section_m2(1064.0), 3.125e-32) < 5e-4);
         for wl in [355.0, 532.0, 1064.0] {
-            assert!(rel(cross_section_m2(wl), full_formula_m2(wl)) < 1e-3, "fit vs full at {wl} nm");
+            assert!(
+                rel(cross_section_m2(wl), full_formula_m2(wl)) < 1e-3,
+                "fit vs full at {wl} nm"
+            );
         }
     }
 
@@ -159,7 +162,10 @@ mod tests {
         // The fit stays within 0.3 % of the full formula over 240–1000 nm.
         let mut wl = 240.0;
         while wl <= 1000.0 {
-            assert!(rel(cross_section_m2(wl), full_formula_m2(wl)) < 3e-3, "at {wl} nm");
+            assert!(
+                rel(cross_section_m2(wl), full_formula_m2(wl)) < 3e-3,
+                "at {wl} nm"
+            );
             wl += 5.0;
         }
     }

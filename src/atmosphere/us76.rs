@@ -51,7 +51,9 @@ const T0: f64 = 288.15;
 const GMR: f64 = G0 * M0 / R_STAR;
 
 /// Layer bases, geopotential m (Table 4).
-const LAYER_BASE_H: [f64; 7] = [0.0, 11_000.0, 20_000.0, 32_000.0, 47_000.0, 51_000.0, 71_000.0];
+const LAYER_BASE_H: [f64; 7] = [
+    0.0, 11_000.0, 20_000.0, 32_000.0, 47_000.0, 51_000.0, 71_000.0,
+];
 /// Molecular-scale temperature gradients, K per geopotential m (Table 4).
 const LAYER_LAPSE: [f64; 7] = [-6.5e-3, 0.0, 1.0e-3, 2.8e-3, 0.0, -2.8e-3, -2.0e-3];
 
@@ -59,8 +61,8 @@ const LAYER_LAPSE: [f64; 7] = [-6.5e-3, 0.0, 1.0e-3, 2.8e-3, 0.0, -2.8e-3, -2.0e
 const MW_RATIO_START_M: f64 = 80_000.0;
 const MW_RATIO_STEP_M: f64 = 500.0;
 const MW_RATIO: [f64; 13] = [
-    1.000000, 0.999996, 0.999989, 0.999971, 0.999941, 0.999909, 0.999870, 0.999829, 0.999786, 0.999741, 0.999694,
-    0.999641, 0.999579,
+    1.000000, 0.999996, 0.999989, 0.999971, 0.999941, 0.999909, 0.999870, 0.999829, 0.999786,
+    0.999741, 0.999694, 0.999641, 0.999579,
 ];
 
 /// Thermodynamic state of the standard atmosphere at one altitude.
@@ -106,7 +108,10 @@ fn molecular_temperature_and_pressure(h_m: f64) -> (f64, f64) {
         i += 1;
     }
     let dh = h_m - LAYER_BASE_H[i];
-    (t_base + LAYER_LAPSE[i] * dh, layer_pressure(i, t_base, p_base, dh))
+    (
+        t_base + LAYER_LAPSE[i] * dh,
+        layer_pressure(i, t_base, p_base, dh),
+    )
 }
 
 /// Mean-molecular-weight ratio M/M0 at geometric altitude `z_m` (Table 8, linear).
@@ -134,7 +139,11 @@ pub fn state(altitude_m: f64) -> Option<State> {
     let (t_molecular, pressure_pa) = molecular_temperature_and_pressure(h);
     let temperature_k = t_molecular * molecular_weight_ratio(altitude_m);
     let number_density_m3 = AVOGADRO_US76_PER_KMOL * pressure_pa / (R_STAR * temperature_k);
-    Some(State { pressure_pa, temperature_k, number_density_m3 })
+    Some(State {
+        pressure_pa,
+        temperature_k,
+        number_density_m3,
+    })
 }
 
 /// US76 number density (m⁻³) at geometric altitude `altitude_m`: 0 above
@@ -182,11 +191,23 @@ mod tests {
     fn matches_published_table_at_geometric_altitudes() {
         for &(z, p, t) in &TABLE_I {
             let s = state(z).unwrap();
-            assert!(rel(s.pressure_pa, p) < 1e-4, "P at {z}: {} vs {p}", s.pressure_pa);
-            assert!(rel(s.temperature_k, t) < 1e-4, "T at {z}: {} vs {t}", s.temperature_k);
+            assert!(
+                rel(s.pressure_pa, p) < 1e-4,
+                "P at {z}: {} vs {p}",
+                s.pressure_pa
+            );
+            assert!(
+                rel(s.temperature_k, t) < 1e-4,
+                "T at {z}: {} vs {t}",
+                s.temperature_k
+            );
             // N in Table I is N_A·P/(R*·T) of the tabulated P and T.
             let n = AVOGADRO_US76_PER_KMOL * p / (R_STAR * t);
-            assert!(rel(s.number_density_m3, n) < 2e-4, "N at {z}: {} vs {n}", s.number_density_m3);
+            assert!(
+                rel(s.number_density_m3, n) < 2e-4,
+                "N at {z}: {} vs {n}",
+                s.number_density_m3
+            );
         }
     }
 
@@ -215,8 +236,16 @@ mod tests {
         ];
         for &(h, p, t) in &bases {
             let s = state(geometric_altitude_m(h)).unwrap();
-            assert!(rel(s.pressure_pa, p) < 1e-4, "P at H={h}: {}", s.pressure_pa);
-            assert!(rel(s.temperature_k, t) < 1e-6, "T at H={h}: {}", s.temperature_k);
+            assert!(
+                rel(s.pressure_pa, p) < 1e-4,
+                "P at H={h}: {}",
+                s.pressure_pa
+            );
+            assert!(
+                rel(s.temperature_k, t) < 1e-6,
+                "T at H={h}: {}",
+                s.temperature_k
+            );
         }
         // Top: H = 84.852 km' ↔ Z = 86 km, T_M = 186.946 K.
         assert!((geopotential_altitude_m(86_000.0) - 84_852.05).abs() < 0.1);

@@ -27,7 +27,10 @@ pub fn write_csv(w: &mut dyn Write, e: &ExpectedProfile, shots: f64) -> io::Resu
     let snr = e.snr_eq4(shots);
     let snr_est = e.snr_estimated_background(shots);
     for i in 0..e.n_bins() {
-        let est = snr_est.as_ref().map(|v| format!("{:e}", v[i])).unwrap_or_default();
+        let est = snr_est
+            .as_ref()
+            .map(|v| format!("{:e}", v[i]))
+            .unwrap_or_default();
         writeln!(
             w,
             "{},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{}",
@@ -76,7 +79,10 @@ pub fn write_table(w: &mut dyn Write, sc: &Scenario, e: &ExpectedProfile) -> io:
     let snr = e.snr_eq4(shots);
     let est = e.snr_estimated_background(shots);
     for i in 0..e.n_bins() {
-        let est_s = est.as_ref().map(|v| format!("{:9.2}", v[i])).unwrap_or_else(|| format!("{:>9}", "-"));
+        let est_s = est
+            .as_ref()
+            .map(|v| format!("{:9.2}", v[i]))
+            .unwrap_or_else(|| format!("{:>9}", "-"));
         writeln!(
             w,
             "{:9.3} {:10.3e} {:10.4} {:10.3e} {:10.3e} {:10.2} {}",

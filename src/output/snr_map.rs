@@ -408,16 +408,14 @@ fn fmt_tc(v: f64) -> String {
     }
 }
 
-/// Nice linear tick step for `span` with about `target` intervals.
+/// The 1-2-2.5-5 × 10^k step giving the number of intervals over `span` nearest `target`.
 fn nice_step(span: f64, target: f64) -> f64 {
-    let raw = span / target;
-    let mag = 10f64.powf(raw.log10().floor());
-    for m in [1.0, 2.0, 2.5, 5.0, 10.0] {
-        if raw <= m * mag {
-            return m * mag;
-        }
-    }
-    10.0 * mag
+    let mag = 10f64.powf((span / target).log10().floor());
+    [0.5, 1.0, 2.0, 2.5, 5.0, 10.0, 20.0]
+        .map(|m| m * mag)
+        .into_iter()
+        .min_by(|a, b| ((span / a - target).abs()).total_cmp(&(span / b - target).abs()))
+        .unwrap_or(mag)
 }
 
 type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
@@ -527,6 +525,13 @@ fn render(grid: &Grid, map: &SnrMap, rgb: &mut [u8]) -> DrawResult {
         ..=(z1 / z_step + 1e-9).floor() as i64)
         .map(|k| k as f64 * z_step)
         .collect();
+    // Decimals that show every tick exactly (2.5 × 10^k needs one more).
+    let z_decimals = (0..=12)
+        .find(|&d| {
+            let scaled = z_step * 10f64.powi(d);
+            (scaled - scaled.round()).abs() < 1e-6 * scaled.max(1.0)
+        })
+        .unwrap_or(3) as usize;
     let grid_style = ShapeStyle::from(&WHITE.mix(0.35)).stroke_width(1);
     for &l in &x_major {
         let x = px(l).round() as i32;
@@ -614,11 +619,7 @@ fn render(grid: &Grid, map: &SnrMap, rgb: &mut [u8]) -> DrawResult {
     for &z in &z_ticks {
         let y = py(z).round() as i32;
         root.draw(&PathElement::new(vec![(PLOT_L - 7, y), (PLOT_L, y)], BLACK))?;
-        let text = if z_step.fract() == 0.0 {
-            format!("{z:.0}")
-        } else {
-            format!("{z}")
-        };
+        let text = format!("{z:.*}", z_decimals);
         label(
             &root,
             &text,
@@ -1103,6 +1104,15 @@ mod tests {
                 "level {level} ends at {end:?}"
             );
         }
+    }
+
+    #[test]
+    fn altitude_ticks_are_round() {
+        assert_eq!(nice_step(30.0, 7.0), 5.0);
+        assert_eq!(nice_step(39.9, 7.0), 5.0);
+        assert_eq!(nice_step(6.0, 7.0), 1.0);
+        assert_eq!(nice_step(0.9, 7.0), 0.1);
+        assert_eq!(nice_step(600.0, 7.0), 100.0);
     }
 
     #[test]

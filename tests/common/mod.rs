@@ -7,7 +7,9 @@ use lidarsim::scenario::Scenario;
 
 /// Path of a shipped config, e.g. `config_path("paper/scenario1.toml")`.
 pub fn config_path(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("configs").join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("configs")
+        .join(rel)
 }
 
 /// Loads a shipped config with overrides.
@@ -22,16 +24,22 @@ pub fn scenario(rel: &str, overrides: &[&str]) -> Scenario {
 pub fn brute_force_signal(sc: &Scenario, step_m: f64) -> Vec<f64> {
     let g = &sc.geometry;
     let entry = match g.kind {
-        lidarsim::config::PlatformKind::Spaceborne => g.range_at_altitude(sc.atmosphere.top_m()).max(0.0),
+        lidarsim::config::PlatformKind::Spaceborne => {
+            g.range_at_altitude(sc.atmosphere.top_m()).max(0.0)
+        }
         lidarsim::config::PlatformKind::Ground => 0.0,
     };
     let mut tau = 0.0;
     // optics along the beam, zero below the surface (the beam stops there)
     let optics = |r: f64| {
         let z = g.altitude_at_range(r);
-        if z >= 0.0 { sc.atmosphere.optics_at(z) } else { Default::default() }
+        if z >= 0.0 {
+            sc.atmosphere.optics_at(z)
+        } else {
+            Default::default()
+        }
     };
-    let mut integrate = |a: f64, b: f64, tau: &mut f64| -> f64 {
+    let integrate = |a: f64, b: f64, tau: &mut f64| -> f64 {
         if b <= a {
             return 0.0;
         }
@@ -42,12 +50,18 @@ pub fn brute_force_signal(sc: &Scenario, step_m: f64) -> Vec<f64> {
             let rm = a + (k as f64 + 0.5) * h;
             let o = optics(rm);
             let eta = sc.path.overlap().eta(rm);
-            sum += eta * o.beta_channel * (-2.0 * (*tau + o.alpha_effective * 0.5 * h)).exp() / (rm * rm) * h;
+            sum += eta * o.beta_channel * (-2.0 * (*tau + o.alpha_effective * 0.5 * h)).exp()
+                / (rm * rm)
+                * h;
             *tau += o.alpha_effective * h;
         }
         sc.instrument.signal_constant * sum
     };
-    integrate(entry.min(g.first_bin_range_m), g.first_bin_range_m, &mut tau);
+    integrate(
+        entry.min(g.first_bin_range_m),
+        g.first_bin_range_m,
+        &mut tau,
+    );
     (0..g.n_bins)
         .map(|i| {
             let (a, b) = g.bin_range_bounds(i);

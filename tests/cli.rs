@@ -1,0 +1,158 @@
+//! The `lidarsim` binary as users call it (interface.md).
+
+mod common;
+use std::process::Command;
+
+use common::config_path;
+
+fn lidarsim(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_lidarsim"))
+        .args(args)
+        .output()
+        .expect("runs")
+}
+
+fn scratch_dir(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("lidarsim-cli-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn expect_csv_has_the_interface_columns() {
+    let cfg = config_path("paper/scenario3.toml");
+    let out = lidarsim(&["expect", cfg.to_str().unwrap(), "--csv", "-"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    for col in [
+        "altitude_m",
+        "range_m",
+        "beta_mol",
+        "beta_aer",
+        "beta_cld",
+        "alpha_total",
+        "t2",
+        "signal",
+        "background",
+        "dark",
+        "snr",
+    ] {
+        assert!(header.contains(&col), "missing column {col}");
+    }
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 134);
+    assert!(rows.iter().flatten().all(|v| v.is_finite()));
+    // altitudes decrease from the window top for a space-borne lidar
+    assert!(rows[0][0] > rows[1][0] && (rows[0][0] - 39_850.1).abs() < 1.0);
+}
+
+#[test]
+fn set_overrides_work_on_the_command_line() {
+    let cfg = config_path("paper/scenario1.toml");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["expect", cfg.to_str().unwrap(), "--csv", "-"];
+        args.extend_from_slice(extra);
+        let out = lidarsim(&args);
+        assert!(out.status.success());
+        let text = String::from_utf8(out.stdout).unwrap();
+        text.lines()
+            .nth(1)
+            .unwrap()
+            .split(',')
+            .nth(7)
+            .unwrap()
+            .parse::<f64>()
+            .unwrap()
+    };
+    let full = run(&[]);
+    let tenth = run(&["--set", "instrument.pulse_energy_j=0.1"]);
+    assert!((tenth / full - 0.1).abs() < 1e-12);
+}
+
+#[test]
+fn bad_input_is_one_clear_line_and_exit_2() {
+    let cfg = config_path("paper/scenario1.toml");
+    let out = lidarsim(&[
+        "expect",
+        cfg.to_str().unwrap(),
+        "--set",
+        "instrument.pulse_energy_j=-1",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("scenario1.toml")
+            && err.contains("instrument.pulse_energy_j")
+            && !err.contains("panicked"),
+        "{err}"
+    );
+    let out = lidarsim(&["expect", "/no/such/file.toml"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/no/such/file.toml"));
+}
+
+#[test]
+fn unwritable_csv_leaves_nothing_behind() {
+    let cfg = config_path("paper/scenario1.toml");
+    let out = lidarsim(&[
+        "expect",
+        cfg.to_str().unwrap(),
+        "--csv",
+        "/nonexistent-dir/x.csv",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent-dir/x.csv"));
+}
+
+#[test]
+fn snr_map_writes_a_png_and_csv() {
+    let dir = scratch_dir("snrmap");
+    let png = dir.join("s1.png");
+    let csv = dir.join("s1.csv");
+    let cfg = config_path("paper/scenario1.toml");
+    let out = lidarsim(&[
+        "snr-map",
+        cfg.to_str().unwrap(),
+        "--png",
+        png.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(
+        text.lines().next(),
+        Some("altitude_m,accumulation_time_s,snr")
+    );
+    // S/N grows as sqrt(TC): 1 s and 100 s rows of the first bin differ by 10×
+    let first: Vec<f64> = text
+        .lines()
+        .skip(1)
+        .take(61)
+        .map(|l| l.split(',').nth(2).unwrap().parse().unwrap())
+        .collect();
+    assert!((first[40] / first[0] - 10.0).abs() < 1e-9);
+    // nothing left under a temporary name
+    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains("partial"))
+        .collect();
+    assert!(leftovers.is_empty());
+    std::fs::remove_dir_all(&dir).ok();
+}

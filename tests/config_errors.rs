@@ -1,0 +1,331 @@
+//! Every config error path gives a clear error naming the file, the key and the reason.
+
+mod common;
+use common::config_path;
+use lidarsim::error::Error;
+use lidarsim::scenario::Scenario;
+
+fn load(overrides: &[&str]) -> Result<Scenario, Error> {
+    let ov: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    Scenario::load(&config_path("paper/scenario1.toml"), &ov)
+}
+
+/// Asserts a config error on `key` whose reason contains `reason`.
+fn expect_config_error(overrides: &[&str], key: &str, reason: &str) {
+    match load(overrides) {
+        Err(Error::Config {
+            file,
+            key: k,
+            reason: r,
+        }) => {
+            assert!(
+                file.ends_with("scenario1.toml"),
+                "{overrides:?}: file {file}"
+            );
+            assert_eq!(k, key, "{overrides:?}: reason {r}");
+            assert!(r.contains(reason), "{overrides:?}: `{r}` lacks `{reason}`");
+        }
+        Err(other) => panic!("{overrides:?}: not a config error: {other}"),
+        Ok(_) => panic!("{overrides:?}: accepted"),
+    }
+}
+
+#[test]
+fn bad_values_name_their_key() {
+    let cases: &[(&[&str], &str, &str)] = &[
+        (
+            &["instrument.pulse_energy_j=-1"],
+            "instrument.pulse_energy_j",
+            "within",
+        ),
+        (
+            &["instrument.pulse_energy_j=0"],
+            "instrument.pulse_energy_j",
+            "greater than 0",
+        ),
+        (
+            &["instrument.pulse_energy_j=nan"],
+            "instrument.pulse_energy_j",
+            "finite",
+        ),
+        (
+            &["instrument.pulse_energy_j=inf"],
+            "instrument.pulse_energy_j",
+            "finite",
+        ),
+        (
+            &["instrument.pulse_energy_j=\"abc\""],
+            "instrument.pulse_energy_j",
+            "invalid type",
+        ),
+        (
+            &["instrument.receiver_efficiency=1.5"],
+            "instrument.receiver_efficiency",
+            "within",
+        ),
+        (
+            &["instrument.wavelength_nm=10"],
+            "instrument.wavelength_nm",
+            "within",
+        ),
+        (
+            &["instrument.bin_width_s=0"],
+            "instrument.bin_width_s",
+            "within",
+        ),
+        (
+            &["instrument.dark_count_rate_hz=-5"],
+            "instrument.dark_count_rate_hz",
+            "within",
+        ),
+        (
+            &["instrument.channel=\"diagonal\""],
+            "instrument.channel",
+            "unknown variant",
+        ),
+        (
+            &["instrument.overlap={model=\"cone\"}"],
+            "instrument.overlap.model",
+            "unknown variant",
+        ),
+        (
+            &["instrument.overlap={model=\"full_range\", full_overlap_m=-3}"],
+            "instrument.overlap.full_overlap_m",
+            "within",
+        ),
+        (
+            &["platform.kind=\"balloon\""],
+            "platform.kind",
+            "unknown variant",
+        ),
+        (
+            &["platform.off_nadir_deg=90"],
+            "platform.off_nadir_deg",
+            "within",
+        ),
+        (
+            &["platform.altitude_km=30"],
+            "acquisition.top_altitude_km",
+            "below the platform",
+        ),
+        (
+            &["acquisition.bottom_altitude_km=50"],
+            "acquisition.bottom_altitude_km",
+            "below acquisition.top_altitude_km",
+        ),
+        (
+            &["acquisition.accumulation_time_s=0.01"],
+            "acquisition.accumulation_time_s",
+            "at least one",
+        ),
+        (
+            &["acquisition.profiles=0"],
+            "acquisition.profiles",
+            "at least 1",
+        ),
+        (
+            &["acquisition.profiles=-2"],
+            "acquisition.profiles",
+            "invalid value",
+        ),
+        (
+            &[
+                "platform.altitude_km=50000",
+                "acquisition.top_altitude_km=40000",
+                "instrument.bin_width_s=1e-9",
+            ],
+            "instrument.bin_width_s",
+            "bins",
+        ),
+        (
+            &[
+                "platform.kind=ground",
+                "platform.altitude_km=1",
+                "acquisition.bottom_altitude_km=0.5",
+            ],
+            "acquisition.bottom_altitude_km",
+            "below its station",
+        ),
+        (
+            &["atmosphere.molecular.model=\"msis\""],
+            "atmosphere.molecular.model",
+            "unknown model",
+        ),
+        (
+            &["atmosphere.molecular.grid_m=0"],
+            "atmosphere.molecular.grid_m",
+            "within",
+        ),
+        (
+            &["atmosphere.aerosol.visibility_km=0"],
+            "atmosphere.aerosol.visibility_km",
+            "greater than 0",
+        ),
+        (
+            &["atmosphere.aerosol.lidar_ratio_sr=0.1"],
+            "atmosphere.aerosol.lidar_ratio_sr",
+            "within",
+        ),
+        (
+            &["atmosphere.layers.0.top_km=9"],
+            "atmosphere.layers[0].top_km",
+            "above base_km",
+        ),
+        (
+            &["atmosphere.layers.0.multiple_scattering=0"],
+            "atmosphere.layers[0].multiple_scattering",
+            "greater than 0",
+        ),
+        (
+            &["atmosphere.layers.0.multiple_scattering=1.2"],
+            "atmosphere.layers[0].multiple_scattering",
+            "within",
+        ),
+        (
+            &["atmosphere.layers.0.depolarization=-0.1"],
+            "atmosphere.layers[0].depolarization",
+            "within",
+        ),
+        (
+            &["atmosphere.layers.0.kind=\"fog\""],
+            "atmosphere.layers[0].kind",
+            "unknown variant",
+        ),
+        (&["background.radiance=-1"], "background.radiance", "within"),
+        (
+            &["background.efficiency=\"all\""],
+            "background.efficiency",
+            "unknown variant",
+        ),
+        (
+            &["simulation.method=\"fast\""],
+            "simulation.method",
+            "unknown variant",
+        ),
+    ];
+    for (ov, key, reason) in cases {
+        expect_config_error(ov, key, reason);
+    }
+}
+
+#[test]
+fn unknown_keys_are_errors() {
+    expect_config_error(
+        &["instrument.pulse_energy=1"],
+        "instrument.pulse_energy",
+        "unknown field `pulse_energy`",
+    );
+    expect_config_error(
+        &["atmosphere.layers.0.thickness_km=1"],
+        "atmosphere.layers[0].thickness_km",
+        "unknown field",
+    );
+    expect_config_error(&["colour=1"], "colour", "unknown field `colour`");
+}
+
+#[test]
+fn inconsistent_aerosol_source_is_an_error() {
+    let path = config_path("paper/scenario1.toml");
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("surface_extinction_per_km = 0.08", "");
+    let err = lidarsim::config::load_str(
+        &text,
+        &path,
+        &["atmosphere.aerosol.extinction_from=surface_extinction".into()],
+    )
+    .unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("atmosphere.aerosol.extinction_from"),
+        "{err}"
+    );
+}
+
+#[test]
+fn malformed_overrides_name_the_key() {
+    expect_config_error(
+        &["instrument.pulse_energy_j"],
+        "instrument.pulse_energy_j",
+        "KEY=VALUE",
+    );
+    expect_config_error(
+        &["atmosphere.layers.3.top_km=1"],
+        "atmosphere.layers.3.top_km",
+        "out of range",
+    );
+    expect_config_error(
+        &["atmosphere.layers.x.top_km=1"],
+        "atmosphere.layers.x.top_km",
+        "by index",
+    );
+    expect_config_error(&["name.first=1"], "name.first", "not a table");
+    expect_config_error(&["instrument..x=1"], "instrument..x", "empty key");
+}
+
+#[test]
+fn malformed_toml_names_the_line() {
+    let err = lidarsim::config::load_str(
+        "name = \"x\"\n[instrument\nfoo = 1\n",
+        std::path::Path::new("bad.toml"),
+        &[],
+    )
+    .unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        msg.starts_with("bad.toml") && msg.contains("line 2") && msg.contains("malformed TOML"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn missing_files_are_reported_with_their_path() {
+    let err = Scenario::load(std::path::Path::new("/nonexistent/x.toml"), &[]).unwrap_err();
+    assert!(err.to_string().contains("/nonexistent/x.toml"), "{err}");
+    let err = load(&["atmosphere.molecular.model={file=\"no_such_profile.txt\"}"]).unwrap_err();
+    assert!(err.to_string().contains("no_such_profile.txt"), "{err}");
+}
+
+#[test]
+fn overrides_change_the_model() {
+    let base = load(&[]).unwrap().expected().unwrap();
+    let half = load(&["instrument.pulse_energy_j=0.5"])
+        .unwrap()
+        .expected()
+        .unwrap();
+    for (a, b) in base.signal.iter().zip(&half.signal) {
+        assert!((b - 0.5 * a).abs() <= 1e-12 * a, "signal ∝ E0");
+    }
+    let day = load(&["background.radiance=1.1e15"])
+        .unwrap()
+        .expected()
+        .unwrap();
+    assert!((day.background / base.background - 1e5).abs() < 1e-6 * 1e5);
+    // an inline-table override and an array element override
+    let sc = load(&[
+        "atmosphere.layers.0.top_km=13",
+        "instrument.overlap={model=\"full_range\", full_overlap_m=1}",
+    ])
+    .unwrap();
+    assert_eq!(sc.atmosphere.layers[0].top_m, 13_000.0);
+    // a bare string needs no quotes
+    assert!(load(&["background.efficiency=paper"]).is_ok());
+    // the resolved config records the override
+    assert!(
+        load(&["acquisition.profiles=7"])
+            .unwrap()
+            .loaded
+            .resolved_toml
+            .contains("profiles = 7")
+    );
+}
+
+#[test]
+fn paper_background_form_drops_the_receiver_efficiencies() {
+    let rx = load(&[]).unwrap().instrument.background_per_bin;
+    let paper = load(&["background.efficiency=paper"])
+        .unwrap()
+        .instrument
+        .background_per_bin;
+    assert!((paper * 0.8 * 1.0 - rx).abs() < 1e-15, "ε_bkg = TR·Q = 0.8");
+}
