@@ -6,6 +6,7 @@ use std::path::Path;
 use crate::error::{Error, Result};
 use crate::output::{self, expect, snr_map};
 use crate::scenario::{ExpectedProfile, Scenario};
+use crate::simulate;
 use crate::snr;
 
 /// Accumulation times of the S/N map, s: 1 to 1000, log-spaced (the paper's Figs. 2–3).
@@ -89,4 +90,25 @@ pub fn snr_map(config: &Path, overrides: &[String], png: &Path, csv: Option<&Pat
         })?;
     }
     snr_map::write_png(png, &map)
+}
+
+/// `lidarsim simulate`: the Monte Carlo run, then a one-paragraph summary on stderr.
+pub fn simulate(
+    config: &Path,
+    overrides: &[String],
+    opts: &simulate::RunOptions,
+    threads: Option<usize>,
+) -> Result<()> {
+    let sc = Scenario::load(config, overrides)?;
+    let summary = match threads {
+        Some(0) => return Err(Error::Unsupported("--threads must be at least 1".into())),
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .map_err(|e| Error::Unsupported(format!("cannot start {n} threads: {e}")))?
+            .install(|| simulate::run(&sc, opts))?,
+        None => simulate::run(&sc, opts)?,
+    };
+    eprintln!("{summary}");
+    Ok(())
 }

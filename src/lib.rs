@@ -14,4 +14,5 @@ pub mod output;
 pub mod sampling;
 pub mod scenario;
 pub mod signal;
+pub mod simulate;
 pub mod snr;

@@ -40,6 +40,43 @@ enum Command {
         #[arg(long, value_name = "PATH")]
         csv: Option<PathBuf>,
     },
+    /// The Monte Carlo: draws photon counts and writes a raw lidar file (HDF5).
+    Simulate {
+        /// Scenario config (TOML).
+        config: PathBuf,
+        /// Override a config key (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Output raw file (HDF5, netCDF-4 readable).
+        #[arg(short = 'o', long = "output", value_name = "OUT.h5")]
+        output: PathBuf,
+        /// Random seed (default: simulation.seed).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Number of profiles (default: acquisition.profiles).
+        #[arg(long)]
+        profiles: Option<usize>,
+        /// auto, shot or aggregate (default: simulation.method).
+        #[arg(long, value_parser = parse_method)]
+        method: Option<lidarsim::config::Method>,
+        /// Also store signal, background and dark counts separately.
+        #[arg(long)]
+        components: bool,
+        /// Worker threads (default: all cores); results do not depend on it.
+        #[arg(long)]
+        threads: Option<usize>,
+    },
+}
+
+fn parse_method(s: &str) -> Result<lidarsim::config::Method, String> {
+    match s {
+        "auto" => Ok(lidarsim::config::Method::Auto),
+        "shot" => Ok(lidarsim::config::Method::Shot),
+        "aggregate" => Ok(lidarsim::config::Method::Aggregate),
+        _ => Err(format!(
+            "`{s}` is not a method: expected auto, shot or aggregate"
+        )),
+    }
 }
 
 fn main() -> ExitCode {
@@ -54,6 +91,27 @@ fn main() -> ExitCode {
             png,
             csv,
         } => lidarsim::commands::snr_map(config, set, png, csv.as_deref()),
+        Command::Simulate {
+            config,
+            set,
+            output,
+            seed,
+            profiles,
+            method,
+            components,
+            threads,
+        } => {
+            let opts = lidarsim::simulate::RunOptions {
+                output: output.clone(),
+                seed: *seed,
+                profiles: *profiles,
+                method: *method,
+                components: components.then_some(true),
+                progress: std::io::IsTerminal::is_terminal(&std::io::stderr()),
+                command_line: std::env::args().collect::<Vec<_>>().join(" "),
+            };
+            lidarsim::commands::simulate(config, set, &opts, *threads)
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -2,6 +2,7 @@
 //! Every file is written under a temporary name and renamed when complete.
 
 pub mod expect;
+pub mod raw_file;
 pub mod snr_map;
 
 use std::io::Write;

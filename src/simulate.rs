@@ -1,0 +1,382 @@
+//! The Monte Carlo run (`lidarsim simulate`, model.md §6): per-bin expectations from the
+//! deterministic model, Poisson photon counts accumulated over each profile's shots by
+//! the chosen method, streamed into a raw HDF5 file.
+//!
+//! Profiles are drawn in parallel (rayon) in batches and written in order by this
+//! thread (all HDF5 calls are serialized anyway). Every profile's counts come from
+//! [`sampling::stream_rng`]`(seed', profile, block)` only, so the file's bytes depend on
+//! the seed alone, never on the thread count, and any profile can be regenerated alone
+//! with [`profile_counts`].
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use rayon::prelude::*;
+
+use crate::config::Method;
+use crate::error::{Error, Result};
+use crate::output::raw_file::{
+    AttrValue, BinVariable, CountWidth, ProfileRecord, RawFileSpec, RawFileWriter,
+};
+use crate::sampling::{self, ShotSampler};
+use crate::scenario::{ExpectedProfile, Scenario};
+
+/// The method actually used for a run (after `auto` is resolved).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ResolvedMethod {
+    /// Every shot drawn.
+    Shot,
+    /// One exact Poisson(M·λ) draw per bin per profile.
+    Aggregate,
+}
+
+impl ResolvedMethod {
+    /// The name stored in the file's `method` attribute.
+    pub fn name(self) -> &'static str {
+        match self {
+            ResolvedMethod::Shot => "shot",
+            ResolvedMethod::Aggregate => "aggregate",
+        }
+    }
+}
+
+/// What the scene needs drawn shot by shot; `None` when every shot has the same
+/// expectations and the detector is linear, so that `aggregate` is exact.
+pub fn per_shot_reason(_scenario: &Scenario) -> Option<&'static str> {
+    None
+}
+
+/// Resolves `auto`, and refuses `aggregate` where it would not be exact.
+pub fn resolve_method(requested: Method, scenario: &Scenario) -> Result<ResolvedMethod> {
+    match (requested, per_shot_reason(scenario)) {
+        (Method::Shot, _) | (Method::Auto, Some(_)) => Ok(ResolvedMethod::Shot),
+        (Method::Aggregate | Method::Auto, None) => Ok(ResolvedMethod::Aggregate),
+        (Method::Aggregate, Some(why)) => Err(Error::Unsupported(format!(
+            "--method aggregate is not exact for this scene ({why}); use --method shot or auto"
+        ))),
+    }
+}
+
+/// Options of one run; `None` takes the config's value.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Output raw file.
+    pub output: PathBuf,
+    /// Seed (`simulation.seed`).
+    pub seed: Option<u64>,
+    /// Profiles (`acquisition.profiles`).
+    pub profiles: Option<usize>,
+    /// Method (`simulation.method`).
+    pub method: Option<Method>,
+    /// Component-resolved counts (`simulation.components`).
+    pub components: Option<bool>,
+    /// Show a progress bar (on a terminal only).
+    pub progress: bool,
+    /// The command line, recorded in the file's `history`.
+    pub command_line: String,
+}
+
+/// What a run did, for the closing summary.
+#[derive(Debug, Clone)]
+pub struct RunSummary {
+    /// The file written.
+    pub output: PathBuf,
+    /// Profiles written.
+    pub profiles: usize,
+    /// Bins per profile.
+    pub bins: usize,
+    /// Shots per profile.
+    pub shots_per_profile: u64,
+    /// Total counts in the file.
+    pub total_counts: u64,
+    /// Method used.
+    pub method: ResolvedMethod,
+    /// Seed used.
+    pub seed: u64,
+    /// Wall time.
+    pub elapsed: Duration,
+}
+
+impl std::fmt::Display for RunSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let shot_bins = self.profiles as f64 * self.shots_per_profile as f64 * self.bins as f64;
+        let secs = self.elapsed.as_secs_f64();
+        write!(
+            f,
+            "Wrote {}: {} profiles × {} bins, {} shots per profile, {} counts in all; method {}, seed {}; \
+             {:.3} s, {:.3e} shot-bins/s.",
+            self.output.display(),
+            self.profiles,
+            self.bins,
+            self.shots_per_profile,
+            self.total_counts,
+            self.method.name(),
+            self.seed,
+            secs,
+            shot_bins / secs.max(1e-9)
+        )
+    }
+}
+
+/// Seeds of the signal, background and dark streams in a component-resolved run.
+fn component_seed(seed: u64, component: u64) -> u64 {
+    seed ^ (component + 1).wrapping_mul(0xD1B5_4A32_D192_ED03)
+}
+
+/// Draws the counts of profile `profile` (`shots` shots of per-bin means `lambda`) into
+/// `acc` by `method`: a function of its arguments only.
+pub fn profile_counts(
+    lambda: &[f64],
+    sampler: Option<&ShotSampler>,
+    method: ResolvedMethod,
+    seed: u64,
+    profile: u64,
+    shots: u64,
+    acc: &mut [u64],
+) {
+    match (method, sampler) {
+        (ResolvedMethod::Shot, Some(s)) => sampling::shot_profile(s, seed, profile, shots, acc),
+        (ResolvedMethod::Shot, None) => {
+            sampling::shot_profile(&ShotSampler::new(lambda), seed, profile, shots, acc)
+        }
+        (ResolvedMethod::Aggregate, _) => {
+            sampling::aggregate_profile(lambda, seed, profile, shots, acc)
+        }
+    }
+}
+
+/// The per-bin means of each stream: the total, or signal, background and dark apart.
+fn stream_means(e: &ExpectedProfile, components: bool) -> Vec<Vec<f64>> {
+    if components {
+        vec![
+            e.signal.clone(),
+            vec![e.background; e.n_bins()],
+            vec![e.dark; e.n_bins()],
+        ]
+    } else {
+        vec![e.total_per_shot()]
+    }
+}
+
+/// Runs the Monte Carlo of `scenario` and writes the raw file.
+pub fn run(scenario: &Scenario, opts: &RunOptions) -> Result<RunSummary> {
+    let start = Instant::now();
+    let cfg = &scenario.loaded.config;
+    let seed = opts.seed.unwrap_or(cfg.simulation.seed);
+    let profiles = opts.profiles.unwrap_or(cfg.acquisition.profiles);
+    if profiles == 0 {
+        return Err(Error::Unsupported("--profiles must be at least 1".into()));
+    }
+    let components = opts.components.unwrap_or(cfg.simulation.components);
+    let method = resolve_method(opts.method.unwrap_or(cfg.simulation.method), scenario)?;
+    let e = scenario.expected()?;
+    let shots = scenario.shots_per_profile();
+    let n_bins = e.n_bins();
+    let max_mean = e.total_per_shot().iter().fold(0.0f64, |m, &l| m.max(l)) * shots as f64;
+    let spec = RawFileSpec {
+        n_bins,
+        n_profiles: profiles,
+        count_width: CountWidth::for_max_count(max_mean)?,
+        components,
+        bin_variables: bin_variables(&e, shots),
+        root_attributes: root_attributes(scenario, seed, method, opts),
+    };
+    let mut writer = RawFileWriter::create(&opts.output, &spec)?;
+
+    let means = stream_means(&e, components);
+    let samplers: Vec<Option<ShotSampler>> = means
+        .iter()
+        .map(|l| (method == ResolvedMethod::Shot).then(|| ShotSampler::new(l)))
+        .collect();
+    let seeds: Vec<u64> = if components {
+        (0..3).map(|c| component_seed(seed, c)).collect()
+    } else {
+        vec![seed]
+    };
+    let profile_time_s = shots as f64 / scenario.instrument.rep_rate_hz;
+    let progress = progress_bar(opts.progress, profiles);
+    // batch size: bounded memory (about 32 MiB of counts per batch)
+    let batch = (4 << 20) / (n_bins * means.len()).max(1);
+    let batch = batch.clamp(1, 1024);
+    let mut total_counts = 0u64;
+    for first in (0..profiles).step_by(batch) {
+        let last = (first + batch).min(profiles);
+        let drawn: Vec<Vec<Vec<u64>>> = (first..last)
+            .into_par_iter()
+            .map(|p| {
+                means
+                    .iter()
+                    .zip(&samplers)
+                    .zip(&seeds)
+                    .map(|((l, s), &sd)| {
+                        let mut acc = vec![0u64; n_bins];
+                        profile_counts(l, s.as_ref(), method, sd, p as u64, shots, &mut acc);
+                        acc
+                    })
+                    .collect()
+            })
+            .collect();
+        for (k, streams) in drawn.iter().enumerate() {
+            let total: Vec<u64> = if components {
+                (0..n_bins)
+                    .map(|i| streams.iter().map(|s| s[i]).sum())
+                    .collect()
+            } else {
+                streams[0].clone()
+            };
+            total_counts += total.iter().sum::<u64>();
+            writer.write_profile(&ProfileRecord {
+                index: first + k,
+                time_s: (first + k) as f64 * profile_time_s + 0.5 * profile_time_s,
+                n_shots: shots,
+                counts: &total,
+                components: components.then(|| [&streams[0][..], &streams[1][..], &streams[2][..]]),
+            })?;
+        }
+        progress.inc((last - first) as u64);
+    }
+    writer.finish()?;
+    progress.finish_and_clear();
+    Ok(RunSummary {
+        output: opts.output.clone(),
+        profiles,
+        bins: n_bins,
+        shots_per_profile: shots,
+        total_counts,
+        method,
+        seed,
+        elapsed: start.elapsed(),
+    })
+}
+
+fn progress_bar(show: bool, profiles: usize) -> indicatif::ProgressBar {
+    if !show {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(profiles as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} {pos}/{len} profiles [{bar:40}] {elapsed} (eta {eta})",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
+}
+
+fn bin_var(name: &str, long_name: &str, units: &str, data: Vec<f64>) -> BinVariable {
+    BinVariable {
+        name: name.into(),
+        long_name: long_name.into(),
+        units: units.into(),
+        data,
+    }
+}
+
+/// The per-bin variables of interface.md and the atmosphere's truth.
+fn bin_variables(e: &ExpectedProfile, shots: u64) -> Vec<BinVariable> {
+    let n = e.n_bins();
+    vec![
+        bin_var(
+            "altitude",
+            "bin-centre altitude above sea level",
+            "m",
+            e.altitude_m.clone(),
+        ),
+        bin_var(
+            "range",
+            "bin-centre range from the instrument",
+            "m",
+            e.range_m.clone(),
+        ),
+        bin_var(
+            "expected_signal",
+            "expected signal counts per shot (exact bin integral of Eq. 2)",
+            "1",
+            e.signal.clone(),
+        ),
+        bin_var(
+            "expected_background",
+            "expected sky-background counts per shot (Eq. 3)",
+            "1",
+            vec![e.background; n],
+        ),
+        bin_var(
+            "expected_dark",
+            "expected dark counts per shot",
+            "1",
+            vec![e.dark; n],
+        ),
+        bin_var(
+            "snr_eq4",
+            "Eq. 4 signal-to-noise ratio of one profile",
+            "1",
+            e.snr_eq4(shots as f64),
+        ),
+        bin_var(
+            "beta_mol",
+            "molecular backscatter coefficient at the bin centre",
+            "m-1 sr-1",
+            e.beta_mol.clone(),
+        ),
+        bin_var(
+            "beta_aer",
+            "aerosol backscatter coefficient at the bin centre",
+            "m-1 sr-1",
+            e.beta_aer.clone(),
+        ),
+        bin_var(
+            "beta_cld",
+            "cloud backscatter coefficient at the bin centre",
+            "m-1 sr-1",
+            e.beta_cld.clone(),
+        ),
+        bin_var(
+            "alpha_total",
+            "total extinction coefficient at the bin centre",
+            "m-1",
+            e.alpha_total.clone(),
+        ),
+        bin_var(
+            "t2",
+            "two-way transmission to the bin centre (multiple-scattering factors applied)",
+            "1",
+            e.t2.clone(),
+        ),
+    ]
+}
+
+fn root_attributes(
+    sc: &Scenario,
+    seed: u64,
+    method: ResolvedMethod,
+    opts: &RunOptions,
+) -> Vec<(String, AttrValue)> {
+    let cfg = &sc.loaded.config;
+    let version = env!("CARGO_PKG_VERSION");
+    let now = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs())
+        .unwrap_or(0);
+    let s = |k: &str, v: String| (k.to_string(), AttrValue::Str(v));
+    let f = |k: &str, v: f64| (k.to_string(), AttrValue::F64(v));
+    vec![
+        s("Conventions", "CF-1.8".into()),
+        s(
+            "title",
+            format!("lidarsim synthetic raw lidar data: {}", cfg.name),
+        ),
+        s("source", format!("lidarsim {version}")),
+        s(
+            "history",
+            format!("created at unix time {now} by: {}", opts.command_line),
+        ),
+        s("config", sc.loaded.resolved_toml.clone()),
+        ("seed".into(), AttrValue::U64(seed)),
+        s("method", method.name().into()),
+        s("config_file", sc.loaded.path.display().to_string()),
+        f("wavelength_nm", sc.instrument.wavelength_nm),
+        f("rep_rate_hz", sc.instrument.rep_rate_hz),
+        f("bin_width_s", sc.instrument.bin_width_s),
+        f("accumulation_time_s", sc.accumulation_time_s()),
+    ]
+}
