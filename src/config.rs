@@ -44,6 +44,9 @@ pub struct InstrumentConfig {
     pub wavelength_nm: f64,
     /// Pulse energy E0, J.
     pub pulse_energy_j: f64,
+    /// Relative rms shot-to-shot pulse-energy jitter (0 = none; at most 0.2).
+    #[serde(default)]
+    pub pulse_energy_jitter: f64,
     /// Pulse repetition frequency fL, Hz.
     pub rep_rate_hz: f64,
     /// Effective telescope collecting area A, m².
@@ -544,6 +547,12 @@ impl ScenarioConfig {
         let i = &self.instrument;
         c.range("instrument.wavelength_nm", i.wavelength_nm, 200.0, 4000.0)?;
         c.positive("instrument.pulse_energy_j", i.pulse_energy_j, 1e3)?;
+        c.range(
+            "instrument.pulse_energy_jitter",
+            i.pulse_energy_jitter,
+            0.0,
+            crate::sampling::jitter::MAX_JITTER,
+        )?;
         c.positive("instrument.rep_rate_hz", i.rep_rate_hz, 1e7)?;
         c.positive("instrument.telescope_area_m2", i.telescope_area_m2, 1e3)?;
         c.efficiency("instrument.optical_efficiency", i.optical_efficiency)?;

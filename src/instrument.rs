@@ -13,6 +13,8 @@ pub struct Instrument {
     pub bin_width_s: f64,
     /// Pulse repetition frequency fL, Hz.
     pub rep_rate_hz: f64,
+    /// Relative rms shot-to-shot pulse-energy jitter.
+    pub pulse_energy_jitter: f64,
     /// Receiver channel.
     pub channel: Channel,
     /// `C = K·E0·(λ0/(h·c))·A·TR·TF·Qλ` (Eq. 2 without the atmosphere), counts·m³·sr per
@@ -65,6 +67,7 @@ impl Instrument {
             wavelength_nm: i.wavelength_nm,
             bin_width_s: i.bin_width_s,
             rep_rate_hz: i.rep_rate_hz,
+            pulse_energy_jitter: i.pulse_energy_jitter,
             channel: i.channel,
             signal_constant,
             background_per_bin: background_rate_hz

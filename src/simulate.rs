@@ -6,7 +6,7 @@
 //! thread (all HDF5 calls are serialized anyway). Every profile's counts come from
 //! [`sampling::stream_rng`]`(seed', profile, block)` only, so the file's bytes depend on
 //! the seed alone, never on the thread count, and any profile can be regenerated alone
-//! with [`profile_counts`].
+//! with [`StreamSampler::profile_counts`].
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -18,6 +18,7 @@ use crate::error::{Error, Result};
 use crate::output::raw_file::{
     AttrValue, BinVariable, CountWidth, ProfileRecord, RawFileSpec, RawFileWriter,
 };
+use crate::sampling::jitter::JitteredShots;
 use crate::sampling::{self, ShotSampler};
 use crate::scenario::{ExpectedProfile, Scenario};
 
@@ -42,8 +43,9 @@ impl ResolvedMethod {
 
 /// What the scene needs drawn shot by shot; `None` when every shot has the same
 /// expectations and the detector is linear, so that `aggregate` is exact.
-pub fn per_shot_reason(_scenario: &Scenario) -> Option<&'static str> {
-    None
+pub fn per_shot_reason(scenario: &Scenario) -> Option<&'static str> {
+    (scenario.instrument.pulse_energy_jitter > 0.0)
+        .then_some("pulse-energy jitter varies the signal from shot to shot")
 }
 
 /// Resolves `auto`, and refuses `aggregate` where it would not be exact.
@@ -123,38 +125,77 @@ fn component_seed(seed: u64, component: u64) -> u64 {
     seed ^ (component + 1).wrapping_mul(0xD1B5_4A32_D192_ED03)
 }
 
-/// Draws the counts of profile `profile` (`shots` shots of per-bin means `lambda`) into
-/// `acc` by `method`: a function of its arguments only.
-pub fn profile_counts(
-    lambda: &[f64],
-    sampler: Option<&ShotSampler>,
-    method: ResolvedMethod,
-    seed: u64,
-    profile: u64,
-    shots: u64,
-    acc: &mut [u64],
-) {
-    match (method, sampler) {
-        (ResolvedMethod::Shot, Some(s)) => sampling::shot_profile(s, seed, profile, shots, acc),
-        (ResolvedMethod::Shot, None) => {
-            sampling::shot_profile(&ShotSampler::new(lambda), seed, profile, shots, acc)
+/// The sampler of one stream of counts (the total, or one component), built once per run.
+#[derive(Debug, Clone)]
+pub enum StreamSampler {
+    /// One Poisson(M·λ) draw per bin.
+    Aggregate(Vec<f64>),
+    /// Every shot drawn with fixed means.
+    Shot(Box<ShotSampler>),
+    /// Every shot drawn, the signal scaled by the shot's pulse energy.
+    Jittered(Box<JitteredShots>),
+}
+
+impl StreamSampler {
+    /// Builds the sampler for per-shot means `signal` + `rest` (rest: background and dark).
+    pub fn new(method: ResolvedMethod, signal: &[f64], rest: &[f64], jitter: f64) -> Self {
+        let total = || {
+            signal
+                .iter()
+                .zip(rest)
+                .map(|(s, r)| s + r)
+                .collect::<Vec<f64>>()
+        };
+        match method {
+            ResolvedMethod::Aggregate => StreamSampler::Aggregate(total()),
+            ResolvedMethod::Shot if jitter > 0.0 => {
+                StreamSampler::Jittered(Box::new(JitteredShots::new(signal, rest, jitter)))
+            }
+            ResolvedMethod::Shot => StreamSampler::Shot(Box::new(ShotSampler::new(&total()))),
         }
-        (ResolvedMethod::Aggregate, _) => {
-            sampling::aggregate_profile(lambda, seed, profile, shots, acc)
+    }
+
+    /// Draws profile `profile` of `shots` shots into `acc`: a function of the arguments only,
+    /// so any profile can be regenerated alone.
+    pub fn profile_counts(&self, seed: u64, profile: u64, shots: u64, acc: &mut [u64]) {
+        match self {
+            StreamSampler::Aggregate(l) => {
+                sampling::aggregate_profile(l, seed, profile, shots, acc)
+            }
+            StreamSampler::Shot(s) => sampling::shot_profile(s, seed, profile, shots, acc),
+            StreamSampler::Jittered(j) => j.profile(seed, profile, shots, acc),
         }
     }
 }
 
-/// The per-bin means of each stream: the total, or signal, background and dark apart.
-fn stream_means(e: &ExpectedProfile, components: bool) -> Vec<Vec<f64>> {
+/// The streams of a run with their seeds: the total, or signal, background and dark apart.
+fn stream_samplers(
+    e: &ExpectedProfile,
+    method: ResolvedMethod,
+    jitter: f64,
+    components: bool,
+    seed: u64,
+) -> Vec<(StreamSampler, u64)> {
+    let n = e.n_bins();
+    let zeros = vec![0.0; n];
     if components {
         vec![
-            e.signal.clone(),
-            vec![e.background; e.n_bins()],
-            vec![e.dark; e.n_bins()],
+            (
+                StreamSampler::new(method, &e.signal, &zeros, jitter),
+                component_seed(seed, 0),
+            ),
+            (
+                StreamSampler::new(method, &zeros, &vec![e.background; n], 0.0),
+                component_seed(seed, 1),
+            ),
+            (
+                StreamSampler::new(method, &zeros, &vec![e.dark; n], 0.0),
+                component_seed(seed, 2),
+            ),
         ]
     } else {
-        vec![e.total_per_shot()]
+        let rest = vec![e.background + e.dark; n];
+        vec![(StreamSampler::new(method, &e.signal, &rest, jitter), seed)]
     }
 }
 
@@ -183,20 +224,17 @@ pub fn run(scenario: &Scenario, opts: &RunOptions) -> Result<RunSummary> {
     };
     let mut writer = RawFileWriter::create(&opts.output, &spec)?;
 
-    let means = stream_means(&e, components);
-    let samplers: Vec<Option<ShotSampler>> = means
-        .iter()
-        .map(|l| (method == ResolvedMethod::Shot).then(|| ShotSampler::new(l)))
-        .collect();
-    let seeds: Vec<u64> = if components {
-        (0..3).map(|c| component_seed(seed, c)).collect()
-    } else {
-        vec![seed]
-    };
+    let samplers = stream_samplers(
+        &e,
+        method,
+        scenario.instrument.pulse_energy_jitter,
+        components,
+        seed,
+    );
     let profile_time_s = shots as f64 / scenario.instrument.rep_rate_hz;
     let progress = progress_bar(opts.progress, profiles);
     // batch size: bounded memory (about 32 MiB of counts per batch)
-    let batch = (4 << 20) / (n_bins * means.len()).max(1);
+    let batch = (4 << 20) / (n_bins * samplers.len()).max(1);
     let batch = batch.clamp(1, 1024);
     let mut total_counts = 0u64;
     for first in (0..profiles).step_by(batch) {
@@ -204,13 +242,11 @@ pub fn run(scenario: &Scenario, opts: &RunOptions) -> Result<RunSummary> {
         let drawn: Vec<Vec<Vec<u64>>> = (first..last)
             .into_par_iter()
             .map(|p| {
-                means
+                samplers
                     .iter()
-                    .zip(&samplers)
-                    .zip(&seeds)
-                    .map(|((l, s), &sd)| {
+                    .map(|(sampler, stream_seed)| {
                         let mut acc = vec![0u64; n_bins];
-                        profile_counts(l, s.as_ref(), method, sd, p as u64, shots, &mut acc);
+                        sampler.profile_counts(*stream_seed, p as u64, shots, &mut acc);
                         acc
                     })
                     .collect()

@@ -14,7 +14,13 @@ fn scratch(name: &str) -> PathBuf {
 
 fn simulate(cfg: &str, out: &Path, extra: &[&str], threads: Option<&str>) -> std::process::Output {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_lidarsim"));
-    cmd.args(["simulate", config_path(cfg).to_str().unwrap(), "-o", out.to_str().unwrap()]).args(extra);
+    cmd.args([
+        "simulate",
+        config_path(cfg).to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ])
+    .args(extra);
     if let Some(t) = threads {
         cmd.env("RAYON_NUM_THREADS", t);
     }
@@ -24,7 +30,17 @@ fn simulate(cfg: &str, out: &Path, extra: &[&str], threads: Option<&str>) -> std
 fn read_counts(path: &Path) -> Vec<u64> {
     let f = hdf5::File::open(path).unwrap();
     let ds = f.dataset("counts").unwrap();
-    ds.read_raw::<u64>().unwrap_or_else(|_| ds.read_raw::<u32>().map(|v| v.into_iter().map(u64::from).collect()).unwrap_or_else(|_| ds.read_raw::<u16>().unwrap().into_iter().map(u64::from).collect()))
+    ds.read_raw::<u64>().unwrap_or_else(|_| {
+        ds.read_raw::<u32>()
+            .map(|v| v.into_iter().map(u64::from).collect())
+            .unwrap_or_else(|_| {
+                ds.read_raw::<u16>()
+                    .unwrap()
+                    .into_iter()
+                    .map(u64::from)
+                    .collect()
+            })
+    })
 }
 
 #[test]
@@ -35,7 +51,12 @@ fn same_seed_same_counts_whatever_the_thread_count() {
         let b = dir.join(format!("{method}-2.h5"));
         let c = dir.join(format!("{method}-seed.h5"));
         for (out, threads, seed) in [(&a, "1", "7"), (&b, "2", "7"), (&c, "2", "8")] {
-            let o = simulate("paper/scenario2.toml", out, &["--method", method, "--profiles", "20", "--seed", seed], Some(threads));
+            let o = simulate(
+                "paper/scenario2.toml",
+                out,
+                &["--method", method, "--profiles", "20", "--seed", seed],
+                Some(threads),
+            );
             assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         }
         assert_eq!(read_counts(&a), read_counts(&b), "{method}: 1 vs 2 threads");
@@ -48,25 +69,59 @@ fn same_seed_same_counts_whatever_the_thread_count() {
 fn the_file_has_every_interface_variable_with_units() {
     let dir = scratch("vars");
     let out = dir.join("s1.h5");
-    let o = simulate("paper/scenario1.toml", &out, &["--profiles", "3", "--components"], None);
+    let o = simulate(
+        "paper/scenario1.toml",
+        &out,
+        &["--profiles", "3", "--components"],
+        None,
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let f = hdf5::File::open(&out).unwrap();
     for name in [
-        "counts", "altitude", "range", "time", "n_shots", "expected_signal", "expected_background", "expected_dark",
-        "snr_eq4", "beta_mol", "beta_aer", "beta_cld", "alpha_total", "t2", "signal_counts", "background_counts",
+        "counts",
+        "altitude",
+        "range",
+        "time",
+        "n_shots",
+        "expected_signal",
+        "expected_background",
+        "expected_dark",
+        "snr_eq4",
+        "beta_mol",
+        "beta_aer",
+        "beta_cld",
+        "alpha_total",
+        "t2",
+        "signal_counts",
+        "background_counts",
         "dark_counts",
     ] {
         let ds = f.dataset(name).unwrap_or_else(|_| panic!("{name} missing"));
-        assert!(ds.attr("units").is_ok() && ds.attr("long_name").is_ok(), "{name} lacks CF attributes");
+        assert!(
+            ds.attr("units").is_ok() && ds.attr("long_name").is_ok(),
+            "{name} lacks CF attributes"
+        );
     }
     assert_eq!(f.dataset("counts").unwrap().shape(), vec![3, 134]);
-    for attr in ["Conventions", "title", "source", "history", "config", "seed", "method"] {
+    for attr in [
+        "Conventions",
+        "title",
+        "source",
+        "history",
+        "config",
+        "seed",
+        "method",
+    ] {
         assert!(f.attr(attr).is_ok(), "root attribute {attr} missing");
     }
     // components add up to the counts
     let total = read_counts(&out);
     let part = |n: &str| f.dataset(n).unwrap().read_raw::<u32>().unwrap();
-    let (s, b, d) = (part("signal_counts"), part("background_counts"), part("dark_counts"));
+    let (s, b, d) = (
+        part("signal_counts"),
+        part("background_counts"),
+        part("dark_counts"),
+    );
     for i in 0..total.len() {
         assert_eq!(total[i], u64::from(s[i] + b[i] + d[i]));
     }
@@ -79,14 +134,68 @@ fn the_file_has_every_interface_variable_with_units() {
 fn bad_input_leaves_no_file() {
     let dir = scratch("bad");
     let out = dir.join("x.h5");
-    let o = simulate("paper/scenario1.toml", &out, &["--set", "instrument.pulse_energy_j=nan"], None);
+    let o = simulate(
+        "paper/scenario1.toml",
+        &out,
+        &["--set", "instrument.pulse_energy_j=nan"],
+        None,
+    );
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("instrument.pulse_energy_j"));
-    let o = simulate("paper/scenario1.toml", &dir.join("no/such/dir/x.h5"), &[], None);
+    let o = simulate(
+        "paper/scenario1.toml",
+        &dir.join("no/such/dir/x.h5"),
+        &[],
+        None,
+    );
     assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("no/such/dir/x.h5"), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("no/such/dir/x.h5"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let o = simulate("paper/scenario1.toml", &out, &["--method", "fastest"], None);
     assert_eq!(o.status.code(), Some(2));
-    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "nothing written");
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        0,
+        "nothing written"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn aggregate_is_refused_where_shots_differ() {
+    let dir = scratch("jitter");
+    let out = dir.join("j.h5");
+    let o = simulate(
+        "paper/scenario1.toml",
+        &out,
+        &[
+            "--set",
+            "instrument.pulse_energy_jitter=0.05",
+            "--method",
+            "aggregate",
+        ],
+        None,
+    );
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("aggregate") && err.contains("jitter"), "{err}");
+    assert!(!out.exists());
+    // auto falls back to the shot path and says so in the file
+    let o = simulate(
+        "paper/scenario1.toml",
+        &out,
+        &[
+            "--set",
+            "instrument.pulse_energy_jitter=0.05",
+            "--profiles",
+            "2",
+        ],
+        None,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("method shot"));
     std::fs::remove_dir_all(&dir).ok();
 }

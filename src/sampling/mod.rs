@@ -46,6 +46,7 @@
 
 mod aggregate;
 mod alias;
+pub mod jitter;
 mod shot;
 mod table;
 #[cfg(test)]
