@@ -15,18 +15,40 @@ use lidarsim::simulate::{ResolvedMethod, StreamSampler};
 
 fn scenario(overrides: &[&str]) -> Scenario {
     let ov: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-    Scenario::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/paper/scenario1.toml"), &ov).expect("config")
+    Scenario::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/paper/scenario1.toml"),
+        &ov,
+    )
+    .expect("config")
 }
 
 fn profile_bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("profile");
-    g.sample_size(10).measurement_time(Duration::from_secs(3)).warm_up_time(Duration::from_millis(500));
+    g.sample_size(10)
+        .measurement_time(Duration::from_secs(3))
+        .warm_up_time(Duration::from_millis(500));
     let cases = [
-        ("s1_10Hz_100s", vec!["instrument.rep_rate_hz=10", "acquisition.accumulation_time_s=100"]),
-        ("s1_250Hz_1000s", vec!["instrument.rep_rate_hz=250", "acquisition.accumulation_time_s=1000"]),
+        (
+            "s1_10Hz_100s",
+            vec![
+                "instrument.rep_rate_hz=10",
+                "acquisition.accumulation_time_s=100",
+            ],
+        ),
+        (
+            "s1_250Hz_1000s",
+            vec![
+                "instrument.rep_rate_hz=250",
+                "acquisition.accumulation_time_s=1000",
+            ],
+        ),
         (
             "s1_1mJ_10Hz_1000s",
-            vec!["instrument.pulse_energy_j=0.001", "instrument.rep_rate_hz=10", "acquisition.accumulation_time_s=1000"],
+            vec![
+                "instrument.pulse_energy_j=0.001",
+                "instrument.rep_rate_hz=10",
+                "acquisition.accumulation_time_s=1000",
+            ],
         ),
     ];
     for (name, ov) in cases {
