@@ -8,6 +8,7 @@ use crate::output::{self, expect, snr_map};
 use crate::scenario::{ExpectedProfile, Scenario};
 use crate::simulate;
 use crate::snr;
+use crate::validate;
 
 /// Accumulation times of the S/N map, s: 1 to 1000, log-spaced (the paper's Figs. 2–3).
 pub fn snr_map_times_s() -> Vec<f64> {
@@ -111,4 +112,19 @@ pub fn simulate(
     };
     eprintln!("{summary}");
     Ok(())
+}
+
+/// `lidarsim validate`: the table on stdout, optionally the JSON; `Ok(consistent)`.
+pub fn validate(
+    config: &Path,
+    overrides: &[String],
+    opts: &validate::ValidateOptions,
+) -> Result<bool> {
+    let sc = Scenario::load(config, overrides)?;
+    let report = validate::run(&sc, opts)?;
+    if let Some(p) = &opts.json {
+        validate::write_json(p, &report)?;
+    }
+    to_stdout(|w| validate::write_table(w, &report))?;
+    Ok(report.consistent)
 }

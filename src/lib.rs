@@ -16,3 +16,4 @@ pub mod scenario;
 pub mod signal;
 pub mod simulate;
 pub mod snr;
+pub mod validate;

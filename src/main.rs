@@ -66,6 +66,26 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
+    /// Statistical check of the simulator against Eq. 4; exit 0 when consistent, 1 when not.
+    Validate {
+        /// Scenario config (TOML).
+        config: PathBuf,
+        /// Override a config key (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Number of independent profiles to draw.
+        #[arg(long, default_value_t = 1000)]
+        realizations: usize,
+        /// auto, shot or aggregate (default: simulation.method).
+        #[arg(long, value_parser = parse_method)]
+        method: Option<lidarsim::config::Method>,
+        /// Random seed (default: simulation.seed).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Also write the full report (every bin) as JSON.
+        #[arg(long, value_name = "PATH")]
+        json: Option<PathBuf>,
+    },
 }
 
 fn parse_method(s: &str) -> Result<lidarsim::config::Method, String> {
@@ -83,14 +103,14 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Expect { config, set, csv } => {
-            lidarsim::commands::expect(config, set, csv.as_deref())
+            lidarsim::commands::expect(config, set, csv.as_deref()).map(|()| true)
         }
         Command::SnrMap {
             config,
             set,
             png,
             csv,
-        } => lidarsim::commands::snr_map(config, set, png, csv.as_deref()),
+        } => lidarsim::commands::snr_map(config, set, png, csv.as_deref()).map(|()| true),
         Command::Simulate {
             config,
             set,
@@ -110,11 +130,28 @@ fn main() -> ExitCode {
                 progress: std::io::IsTerminal::is_terminal(&std::io::stderr()),
                 command_line: std::env::args().collect::<Vec<_>>().join(" "),
             };
-            lidarsim::commands::simulate(config, set, &opts, *threads)
+            lidarsim::commands::simulate(config, set, &opts, *threads).map(|()| true)
+        }
+        Command::Validate {
+            config,
+            set,
+            realizations,
+            method,
+            seed,
+            json,
+        } => {
+            let opts = lidarsim::validate::ValidateOptions {
+                realizations: *realizations,
+                method: *method,
+                seed: *seed,
+                json: json.clone(),
+            };
+            lidarsim::commands::validate(config, set, &opts)
         }
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::from(1),
         Err(e) => {
             eprintln!("lidarsim: error: {e}");
             ExitCode::from(2)
