@@ -143,24 +143,47 @@ mod approx {
         out
     }
 
+    /// `κ·(−ln(1−y) − y)`, `y = d/κ`: minus the log of `t^κ e^{-t}/(κ^κ e^{-κ})` at `t = κ − d`.
+    fn bd0_shift(kappa: f64, d: f64) -> f64 {
+        let y = d / kappa;
+        if y.abs() < 0.1 {
+            let mut term = y * y;
+            let mut s = 0.5 * term;
+            for j in 3..100 {
+                term *= y;
+                let s1 = s + term / j as f64;
+                if s1 == s {
+                    break;
+                }
+                s = s1;
+            }
+            kappa * s
+        } else {
+            kappa * (-(-y).ln_1p() - y)
+        }
+    }
+
     /// Q(κ+1, x) = P(Poisson(x) ≤ κ) = ∫_x^∞ t^κ e^{-t}/Γ(κ+1) dt, κ > 15.
     pub fn gamma_q_int(kappa: f64, x: f64) -> f64 {
         let sk = kappa.sqrt();
         let h = 0.5 * sk;
-        let top = x.max(kappa) + 14.0 * sk;
-        let panels = ((top - x) / h).ceil().max(1.0) as usize;
+        let d0 = kappa - x; // t = x + u  ⇒  κ − t = d0 − u
+        let top = d0.max(0.0) + 14.0 * sk;
+        let panels = (top / h).ceil().max(1.0) as usize;
         let nodes = gl16();
+        let norm = -stirlerr(kappa);
+        let pre = 1.0 / (2.0 * PI * kappa).sqrt();
         let mut sum = 0.0;
         for p in 0..panels {
-            let a = x + p as f64 * h;
-            let mid = a + 0.5 * h;
+            let mid = (p as f64 + 0.5) * h;
             let mut part = 0.0;
-            for &(u, w) in nodes {
-                part += w * pmf(kappa, mid + 0.5 * h * u);
+            for &(v, w) in nodes {
+                let u = mid + 0.5 * h * v;
+                part += w * (norm - bd0_shift(kappa, d0 - u)).exp();
             }
             sum += 0.5 * h * part;
         }
-        sum
+        sum * pre
     }
 
     pub fn ks_smooth(mu: f64) -> (f64, f64) {

@@ -199,3 +199,39 @@ fn aggregate_is_refused_where_shots_differ() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("method shot"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn validate_sees_exactly_the_counts_simulate_writes() {
+    use lidarsim::validate::RealizationSource;
+    let dir = scratch("same");
+    let out = dir.join("s3.h5");
+    let o = simulate(
+        "paper/scenario3.toml",
+        &out,
+        &["--profiles", "5", "--seed", "31", "--method", "shot"],
+        None,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let file = read_counts(&out);
+    let sc = common::scenario("paper/scenario3.toml", &[]);
+    let e = sc.expected().unwrap();
+    let source = lidarsim::validate::SimulatorSource::new(
+        &e,
+        lidarsim::simulate::ResolvedMethod::Shot,
+        0.0,
+        31,
+        sc.shots_per_profile(),
+    );
+    let n = e.n_bins();
+    for p in 0..5u64 {
+        let mut c = vec![0u64; n];
+        let mut b = vec![0u64; 1];
+        source.draw(p, &mut c, &mut b);
+        assert_eq!(
+            &file[p as usize * n..(p as usize + 1) * n],
+            &c[..],
+            "profile {p}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
