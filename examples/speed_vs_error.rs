@@ -30,6 +30,37 @@ fn main() {
         }
         println!("c = {:.9}", approx::KS_ASYMPTOTE);
     }
+    if args.get(1).map(|s| s.as_str()) == Some("sweep") {
+        let c = approx::KS_ASYMPTOTE;
+        let t = Instant::now();
+        let mut pts: Vec<(f64, f64)> = Vec::new();
+        let segs = [(-3.0, -1.0, 2000), (-1.0, 2.0, 20000), (2.0, 4.0, 2000), (4.0, 6.0, 200)];
+        for (a, b, per) in segs {
+            let n = ((b - a) * per as f64) as usize;
+            for i in 0..n {
+                let mu = 10f64.powf(a + (b - a) * i as f64 / n as f64);
+                pts.push((mu, approx::ks_sum(mu).0));
+            }
+        }
+        eprintln!("sum part {:?}", t.elapsed());
+        for i in 0..=180 {
+            let mu = 10f64.powf(6.0 + 9.0 * i as f64 / 180.0);
+            pts.push((mu, approx::ks_smooth(mu).0));
+        }
+        eprintln!("all {:?}", t.elapsed());
+        // last mu where s > c
+        let mut last = 0.0;
+        let mut maxks: f64 = 0.0;
+        for &(mu, ks) in &pts { if ks * mu.sqrt() > c { last = mu; } maxks = maxks.max(ks); }
+        println!("last crossing mu = {last:.6}, max ks = {maxks:.6}");
+        for &(lo, hi) in &[(1.0, 10.0), (10.0, 100.0), (100.0, 1e4), (1e4, 1e6), (1e6, 1e9), (1e9, 1e12), (1e12, 1.01e15)] {
+            let m = pts.iter().filter(|p| p.0 >= lo && p.0 < hi).map(|p| p.1 * p.0.sqrt() / c).fold(0.0f64, f64::max);
+            let mn = pts.iter().filter(|p| p.0 >= lo && p.0 < hi).map(|p| p.1 * p.0.sqrt() / c).fold(9.0f64, f64::min);
+            println!("[{lo:e},{hi:e}) s/c in [{mn:.9}, {m:.9}]");
+        }
+        for &(mu, ks) in pts.iter().filter(|p| p.0 > 0.3 && p.0 < 1.5).step_by(300) { println!("{mu:.4} {ks:.5} {:.5}", ks*mu.sqrt()/c); }
+        for &(mu, ks) in pts.iter().filter(|p| p.0 >= 1e6).step_by(10) { println!("{mu:.3e} {:.4e} s/c-1 = {:.3e}", ks, ks*mu.sqrt()/c - 1.0); }
+    }
 }
 
 #[allow(dead_code)]
