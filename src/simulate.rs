@@ -111,12 +111,21 @@ impl std::fmt::Display for RunSummary {
             self.profiles,
             self.bins,
             self.shots_per_profile,
-            self.total_counts,
+            human_count(self.total_counts),
             self.method.name(),
             self.seed,
             secs,
             shot_bins / secs.max(1e-9)
         )
+    }
+}
+
+/// A count for a person: exact below a million, else in scientific notation.
+fn human_count(n: u64) -> String {
+    if n < 1_000_000 {
+        n.to_string()
+    } else {
+        format!("{:.4e}", n as f64)
     }
 }
 
@@ -233,9 +242,9 @@ pub fn run(scenario: &Scenario, opts: &RunOptions) -> Result<RunSummary> {
     );
     let profile_time_s = shots as f64 / scenario.instrument.rep_rate_hz;
     let progress = progress_bar(opts.progress, profiles);
-    // batch size: bounded memory (about 32 MiB of counts per batch)
+    // batch size: bounded memory (at most 32 MiB of counts) and a lively progress bar
     let batch = (4 << 20) / (n_bins * samplers.len()).max(1);
-    let batch = batch.clamp(1, 1024);
+    let batch = batch.clamp(1, 64);
     let mut total_counts = 0u64;
     for first in (0..profiles).step_by(batch) {
         let last = (first + batch).min(profiles);
