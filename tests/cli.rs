@@ -162,11 +162,24 @@ fn validate_exits_0_when_consistent_and_writes_json() {
     let dir = scratch_dir("validate");
     let json = dir.join("v.json");
     let cfg = config_path("paper/scenario2.toml");
-    let out = lidarsim(&["validate", cfg.to_str().unwrap(), "--realizations", "300", "--json", json.to_str().unwrap()]);
-    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stdout));
+    let out = lidarsim(&[
+        "validate",
+        cfg.to_str().unwrap(),
+        "--realizations",
+        "300",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.contains("CONSISTENT") && text.contains("snr_known_background"));
-    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(report["consistent"], serde_json::Value::Bool(true));
     assert_eq!(report["bins"].as_array().unwrap().len(), 134);
     let out = lidarsim(&["validate", cfg.to_str().unwrap(), "--realizations", "3"]);
