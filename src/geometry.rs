@@ -125,22 +125,58 @@ pub enum Overlap {
         /// Range of complete overlap, m.
         full_overlap_m: f64,
     },
-    /// Biaxial geometric overlap: the fraction of the laser spot (radius `w0 + r·θL/2`)
-    /// inside the field-of-view circle (radius `R_tel + r·θ/2`) whose centre is
-    /// `axis_offset_m` away (parallel axes), after Measures (1984), *Laser Remote
-    /// Sensing*, §7.5 (uniform spot, circle–circle intersection).
-    Geometric {
-        /// Laser radius at the exit, m.
-        beam_radius_m: f64,
-        /// Laser half divergence, rad.
-        beam_half_angle_rad: f64,
-        /// Telescope radius, m.
-        telescope_radius_m: f64,
-        /// Receiver half field of view, rad.
-        fov_half_angle_rad: f64,
-        /// Axis separation, m.
-        axis_offset_m: f64,
-    },
+    /// Biaxial geometric overlap.
+    Geometric(BiaxialOverlap),
+}
+
+/// Biaxial geometric overlap: the fraction of a uniform laser spot (radius
+/// `w0 + r·θL/2`) inside the field-of-view circle (radius `R_tel + r·θ/2`) whose centre
+/// is `axis_offset_m` away (parallel axes), after Measures (1984), *Laser Remote
+/// Sensing*, §7.5 (circle–circle intersection).
+#[derive(Debug, Clone, Copy)]
+pub struct BiaxialOverlap {
+    /// Laser radius at the exit, m.
+    pub beam_radius_m: f64,
+    /// Laser half divergence, rad.
+    pub beam_half_angle_rad: f64,
+    /// Telescope radius, m.
+    pub telescope_radius_m: f64,
+    /// Receiver half field of view, rad.
+    pub fov_half_angle_rad: f64,
+    /// Axis separation, m.
+    pub axis_offset_m: f64,
+}
+
+impl BiaxialOverlap {
+    /// η(r): intersection area over the spot area.
+    pub fn eta(&self, r_m: f64) -> f64 {
+        let r = r_m.max(0.0);
+        let r_laser = self.beam_radius_m + r * self.beam_half_angle_rad;
+        let r_fov = self.telescope_radius_m + r * self.fov_half_angle_rad;
+        circle_overlap_area(r_laser, r_fov, self.axis_offset_m)
+            / (std::f64::consts::PI * r_laser * r_laser)
+    }
+
+    /// Ranges of the kinks, where the circles start to touch (`d = R_L + R_T`) and where
+    /// one comes to lie inside the other (`d + R_L = R_T` or `d + R_T = R_L`): the radii
+    /// grow linearly with range, so each is a closed form.
+    pub fn breakpoints_m(&self) -> Vec<f64> {
+        let grow = self.beam_half_angle_rad + self.fov_half_angle_rad;
+        let gain = self.fov_half_angle_rad - self.beam_half_angle_rad;
+        let (w0, rt, d) = (
+            self.beam_radius_m,
+            self.telescope_radius_m,
+            self.axis_offset_m,
+        );
+        [
+            (d - w0 - rt) / grow,
+            (d + w0 - rt) / gain,
+            (rt + d - w0) / -gain,
+        ]
+        .into_iter()
+        .filter(|r| r.is_finite() && *r > 0.0)
+        .collect()
+    }
 }
 
 impl Overlap {
@@ -156,72 +192,31 @@ impl Overlap {
                 beam_radius_m,
                 beam_divergence_rad,
                 axis_offset_m,
-            }) => Overlap::Geometric {
+            }) => Overlap::Geometric(BiaxialOverlap {
                 beam_radius_m: *beam_radius_m,
                 beam_half_angle_rad: beam_divergence_rad / 2.0,
                 telescope_radius_m: (i.telescope_area_m2 / std::f64::consts::PI).sqrt(),
                 fov_half_angle_rad: i.fov_rad / 2.0,
                 axis_offset_m: *axis_offset_m,
-            },
+            }),
         }
     }
 
     /// η(r) in [0, 1].
     pub fn eta(&self, r_m: f64) -> f64 {
-        match *self {
+        match self {
             Overlap::Full => 1.0,
-            Overlap::Step { full_overlap_m } => {
-                if r_m >= full_overlap_m {
-                    1.0
-                } else {
-                    0.0
-                }
-            }
-            Overlap::Geometric {
-                beam_radius_m,
-                beam_half_angle_rad,
-                telescope_radius_m,
-                fov_half_angle_rad,
-                axis_offset_m,
-            } => {
-                let r_laser = beam_radius_m + r_m.max(0.0) * beam_half_angle_rad;
-                let r_fov = telescope_radius_m + r_m.max(0.0) * fov_half_angle_rad;
-                circle_overlap_area(r_laser, r_fov, axis_offset_m)
-                    / (std::f64::consts::PI * r_laser * r_laser)
-            }
+            Overlap::Step { full_overlap_m } => f64::from(u8::from(r_m >= *full_overlap_m)),
+            Overlap::Geometric(b) => b.eta(r_m),
         }
     }
 
     /// Ranges where η(r) has a kink or a step; the bin integral splits there.
     pub fn breakpoints_m(&self) -> Vec<f64> {
-        match *self {
+        match self {
             Overlap::Full => vec![],
-            Overlap::Step { full_overlap_m } => vec![full_overlap_m],
-            Overlap::Geometric {
-                beam_radius_m,
-                beam_half_angle_rad,
-                telescope_radius_m,
-                fov_half_angle_rad,
-                axis_offset_m,
-            } => {
-                let mut out = vec![];
-                // circles start to touch: d = R_L + R_T
-                let grow = beam_half_angle_rad + fov_half_angle_rad;
-                if grow > 0.0 {
-                    out.push((axis_offset_m - beam_radius_m - telescope_radius_m) / grow);
-                }
-                // spot fully inside the field of view: d + R_L = R_T
-                let gain = fov_half_angle_rad - beam_half_angle_rad;
-                if gain != 0.0 {
-                    out.push((axis_offset_m + beam_radius_m - telescope_radius_m) / gain);
-                }
-                // field of view fully inside the spot: d + R_T = R_L
-                if gain != 0.0 {
-                    out.push((telescope_radius_m + axis_offset_m - beam_radius_m) / -gain);
-                }
-                out.retain(|r| r.is_finite() && *r > 0.0);
-                out
-            }
+            Overlap::Step { full_overlap_m } => vec![*full_overlap_m],
+            Overlap::Geometric(b) => b.breakpoints_m(),
         }
     }
 
@@ -286,13 +281,13 @@ mod tests {
 
     #[test]
     fn geometric_overlap_rises_from_zero_to_one() {
-        let o = Overlap::Geometric {
+        let o = Overlap::Geometric(BiaxialOverlap {
             beam_radius_m: 0.01,
             beam_half_angle_rad: 0.1e-3,
             telescope_radius_m: 0.1,
             fov_half_angle_rad: 0.5e-3,
             axis_offset_m: 0.3,
-        };
+        });
         assert_eq!(o.eta(1.0), 0.0);
         assert!(!o.sees_zero_range());
         let bp = o.breakpoints_m();
