@@ -326,6 +326,10 @@ pub struct SimulationConfig {
     /// Store signal, background and dark counts separately as well.
     #[serde(default)]
     pub components: bool,
+    /// With `method = "auto"`: the largest Kolmogorov–Smirnov distance per bin to the
+    /// exact law that a faster approximate method may have (see `docs/simulation.md`).
+    #[serde(default)]
+    pub tolerance: Option<f64>,
 }
 
 fn one() -> f64 {
@@ -540,6 +544,9 @@ impl ScenarioConfig {
         self.validate_geometry(&c)?;
         self.validate_atmosphere(&c)?;
         c.range("background.radiance", self.background.radiance, 0.0, 1e25)?;
+        if let Some(t) = self.simulation.tolerance {
+            c.range("simulation.tolerance", t, 0.0, 1.0)?;
+        }
         Ok(())
     }
 

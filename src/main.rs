@@ -62,6 +62,10 @@ enum Command {
         /// Also store signal, background and dark counts separately.
         #[arg(long)]
         components: bool,
+        /// With --method auto: largest KS distance per bin to the exact law a faster
+        /// approximation may have (e.g. 1e-3); default exact.
+        #[arg(long)]
+        tolerance: Option<f64>,
         /// Worker threads (default: all cores); results do not depend on it.
         #[arg(long)]
         threads: Option<usize>,
@@ -119,6 +123,7 @@ fn main() -> ExitCode {
             profiles,
             method,
             components,
+            tolerance,
             threads,
         } => {
             let opts = lidarsim::simulate::RunOptions {
@@ -127,6 +132,7 @@ fn main() -> ExitCode {
                 profiles: *profiles,
                 method: *method,
                 components: components.then_some(true),
+                tolerance: *tolerance,
                 progress: std::io::IsTerminal::is_terminal(&std::io::stderr()),
                 command_line: std::env::args().collect::<Vec<_>>().join(" "),
             };

@@ -18,17 +18,25 @@ use crate::error::{Error, Result};
 use crate::output::raw_file::{
     AttrValue, BinVariable, CountWidth, ProfileRecord, RawFileSpec, RawFileWriter,
 };
+use crate::sampling::approx;
 use crate::sampling::jitter::JitteredShots;
 use crate::sampling::{self, ShotSampler};
 use crate::scenario::{ExpectedProfile, Scenario};
 
 /// The method actually used for a run (after `auto` is resolved).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ResolvedMethod {
     /// Every shot drawn.
     Shot,
     /// One exact Poisson(M·λ) draw per bin per profile.
     Aggregate,
+    /// As `Aggregate`, but bins with `M·λ ≥ threshold` draw the normal approximation
+    /// (`sampling::approx`), whose KS distance to the exact law is at most the tolerance
+    /// that set the threshold. Only chosen by `auto` with a tolerance.
+    AggregateNormal {
+        /// Smallest mean drawn by the approximation, `approx::normal_threshold(tolerance)`.
+        threshold: f64,
+    },
 }
 
 impl ResolvedMethod {
@@ -37,8 +45,74 @@ impl ResolvedMethod {
         match self {
             ResolvedMethod::Shot => "shot",
             ResolvedMethod::Aggregate => "aggregate",
+            ResolvedMethod::AggregateNormal { .. } => "aggregate-normal",
         }
     }
+}
+
+/// Approximate cost of one profile by each method, ns (constants measured in
+/// `validation/reports/speed_vs_error.md`; the shot path's from its own cost model).
+mod cost {
+    /// An exact aggregate draw with `M·λ < 12` (inversion).
+    pub const AGGREGATE_SMALL_NS: f64 = 28.0;
+    /// An exact aggregate draw with `M·λ ≥ 12` (Ahrens–Dieter).
+    pub const AGGREGATE_LARGE_NS: f64 = 45.0;
+    /// One normal-approximation draw.
+    pub const NORMAL_NS: f64 = 14.0;
+}
+
+/// `auto` with a tolerance (KS distance per bin): the fastest of `shot`, `aggregate` and
+/// `aggregate-normal` whose error is within it, by the cost constants above. `shot`
+/// only where the scene needs it or where it is cheaper (sparse profiles of few shots).
+pub fn fastest_within(
+    tolerance: f64,
+    e: &ExpectedProfile,
+    shots: u64,
+    aggregate_allowed: bool,
+) -> ResolvedMethod {
+    if !aggregate_allowed {
+        return ResolvedMethod::Shot;
+    }
+    let means: Vec<f64> = e
+        .total_per_shot()
+        .iter()
+        .map(|l| l * shots as f64)
+        .collect();
+    let exact = |m: f64| {
+        if m < 12.0 {
+            cost::AGGREGATE_SMALL_NS
+        } else {
+            cost::AGGREGATE_LARGE_NS
+        }
+    };
+    let threshold = approx::normal_threshold(tolerance);
+    let aggregate: f64 = means.iter().map(|&m| exact(m)).sum();
+    let normal: f64 = means
+        .iter()
+        .map(|&m| {
+            if m >= threshold {
+                cost::NORMAL_NS
+            } else {
+                exact(m)
+            }
+        })
+        .sum();
+    let shot = ShotSampler::new(&e.total_per_shot())
+        .strategy()
+        .est_ns_per_shot
+        * shots as f64;
+    let candidates = [
+        (shot, ResolvedMethod::Shot),
+        (aggregate, ResolvedMethod::Aggregate),
+        (normal, ResolvedMethod::AggregateNormal { threshold }),
+    ];
+    // ties go to the exact method listed first
+    candidates
+        .into_iter()
+        .fold((f64::INFINITY, ResolvedMethod::Aggregate), |best, c| {
+            if c.0 < 0.8 * best.0 { c } else { best }
+        })
+        .1
 }
 
 /// What the scene needs drawn shot by shot; `None` when every shot has the same
@@ -70,6 +144,8 @@ pub struct RunOptions {
     pub profiles: Option<usize>,
     /// Method (`simulation.method`).
     pub method: Option<Method>,
+    /// Tolerance for `auto` (`simulation.tolerance`): largest KS distance per bin.
+    pub tolerance: Option<f64>,
     /// Component-resolved counts (`simulation.components`).
     pub components: Option<bool>,
     /// Show a progress bar (on a terminal only).
@@ -143,6 +219,8 @@ pub enum StreamSampler {
     Shot(Box<ShotSampler>),
     /// Every shot drawn, the signal scaled by the shot's pulse energy.
     Jittered(Box<JitteredShots>),
+    /// Aggregate with the normal approximation at and above a mean threshold.
+    AggregateNormal(Vec<f64>, f64),
 }
 
 impl StreamSampler {
@@ -157,6 +235,9 @@ impl StreamSampler {
         };
         match method {
             ResolvedMethod::Aggregate => StreamSampler::Aggregate(total()),
+            ResolvedMethod::AggregateNormal { threshold } => {
+                StreamSampler::AggregateNormal(total(), threshold)
+            }
             ResolvedMethod::Shot if jitter > 0.0 => {
                 StreamSampler::Jittered(Box::new(JitteredShots::new(signal, rest, jitter)))
             }
@@ -173,6 +254,9 @@ impl StreamSampler {
             }
             StreamSampler::Shot(s) => sampling::shot_profile(s, seed, profile, shots, acc),
             StreamSampler::Jittered(j) => j.profile(seed, profile, shots, acc),
+            StreamSampler::AggregateNormal(l, threshold) => {
+                approx::aggregate_approx_profile(l, seed, profile, shots, *threshold, acc)
+            }
         }
     }
 }
@@ -218,9 +302,20 @@ pub fn run(scenario: &Scenario, opts: &RunOptions) -> Result<RunSummary> {
         return Err(Error::Unsupported("--profiles must be at least 1".into()));
     }
     let components = opts.components.unwrap_or(cfg.simulation.components);
-    let method = resolve_method(opts.method.unwrap_or(cfg.simulation.method), scenario)?;
+    let requested = opts.method.unwrap_or(cfg.simulation.method);
+    let tolerance = opts.tolerance.or(cfg.simulation.tolerance);
+    let mut method = resolve_method(requested, scenario)?;
     let e = scenario.expected()?;
     let shots = scenario.shots_per_profile();
+    if let Some(t) = tolerance {
+        if requested != Method::Auto {
+            return Err(Error::Unsupported(format!(
+                "--tolerance chooses among methods: use it with --method auto, not {}",
+                method.name()
+            )));
+        }
+        method = fastest_within(t, &e, shots, method == ResolvedMethod::Aggregate);
+    }
     let n_bins = e.n_bins();
     let max_mean = e.total_per_shot().iter().fold(0.0f64, |m, &l| m.max(l)) * shots as f64;
     let spec = RawFileSpec {
@@ -229,7 +324,7 @@ pub fn run(scenario: &Scenario, opts: &RunOptions) -> Result<RunSummary> {
         count_width: CountWidth::for_max_count(max_mean)?,
         components,
         bin_variables: bin_variables(&e, shots),
-        root_attributes: root_attributes(scenario, seed, method, opts),
+        root_attributes: root_attributes(scenario, seed, method, tolerance, opts),
     };
     let mut writer = RawFileWriter::create(&opts.output, &spec)?;
 
@@ -394,6 +489,7 @@ fn root_attributes(
     sc: &Scenario,
     seed: u64,
     method: ResolvedMethod,
+    tolerance: Option<f64>,
     opts: &RunOptions,
 ) -> Vec<(String, AttrValue)> {
     let cfg = &sc.loaded.config;
@@ -404,7 +500,7 @@ fn root_attributes(
         .unwrap_or(0);
     let s = |k: &str, v: String| (k.to_string(), AttrValue::Str(v));
     let f = |k: &str, v: f64| (k.to_string(), AttrValue::F64(v));
-    vec![
+    let mut attrs = vec![
         s("Conventions", "CF-1.8".into()),
         s(
             "title",
@@ -423,5 +519,10 @@ fn root_attributes(
         f("rep_rate_hz", sc.instrument.rep_rate_hz),
         f("bin_width_s", sc.instrument.bin_width_s),
         f("accumulation_time_s", sc.accumulation_time_s()),
-    ]
+    ];
+    if let ResolvedMethod::AggregateNormal { threshold } = method {
+        attrs.push(f("normal_approximation_threshold", threshold));
+        attrs.push(f("tolerance_ks", tolerance.unwrap_or(f64::NAN)));
+    }
+    attrs
 }

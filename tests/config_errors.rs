@@ -202,6 +202,11 @@ fn bad_values_name_their_key() {
             "simulation.method",
             "unknown variant",
         ),
+        (
+            &["simulation.tolerance=-1"],
+            "simulation.tolerance",
+            "within",
+        ),
     ];
     for (ov, key, reason) in cases {
         expect_config_error(ov, key, reason);

@@ -235,3 +235,68 @@ fn validate_sees_exactly_the_counts_simulate_writes() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn tolerance_picks_the_fastest_method_within_it() {
+    use lidarsim::simulate::{ResolvedMethod, fastest_within};
+    let sc = common::scenario(
+        "paper/scenario1.toml",
+        &["acquisition.accumulation_time_s=100"],
+    );
+    let e = sc.expected().unwrap();
+    let m = sc.shots_per_profile();
+    // 1 J, 1000 shots: every bin has M·λ ≫ 44, the normal approximation is within 1e-2
+    let t2 = fastest_within(1e-2, &e, m, true);
+    assert!(
+        matches!(t2, ResolvedMethod::AggregateNormal { threshold } if (threshold - 44.46).abs() < 0.1),
+        "{t2:?}"
+    );
+    // a tolerance so tight no bin qualifies keeps the exact aggregate
+    assert_eq!(fastest_within(1e-9, &e, m, true), ResolvedMethod::Aggregate);
+    // a scene that needs shots keeps them
+    assert_eq!(fastest_within(1e-2, &e, m, false), ResolvedMethod::Shot);
+    // sparse profiles of few shots: the shot path is cheaper than one draw per bin
+    let sparse = common::scenario(
+        "paper/scenario1.toml",
+        &[
+            "instrument.pulse_energy_j=0.001",
+            "acquisition.accumulation_time_s=1",
+        ],
+    );
+    let es = sparse.expected().unwrap();
+    assert_eq!(
+        fastest_within(1e-3, &es, sparse.shots_per_profile(), true),
+        ResolvedMethod::Shot
+    );
+    // the CLI records the choice and refuses a tolerance with a forced method
+    let dir = scratch("tol");
+    let out = dir.join("t.h5");
+    let o = simulate(
+        "paper/scenario1.toml",
+        &out,
+        &[
+            "--tolerance",
+            "1e-2",
+            "--set",
+            "acquisition.accumulation_time_s=100",
+        ],
+        None,
+    );
+    assert!(String::from_utf8_lossy(&o.stderr).contains("method aggregate-normal"));
+    let f = hdf5::File::open(&out).unwrap();
+    let threshold: f64 = f
+        .attr("normal_approximation_threshold")
+        .unwrap()
+        .read_scalar()
+        .unwrap();
+    assert!((threshold - 44.46).abs() < 0.1);
+    let o = simulate(
+        "paper/scenario1.toml",
+        &dir.join("u.h5"),
+        &["--tolerance", "1e-2", "--method", "shot"],
+        None,
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!dir.join("u.h5").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}

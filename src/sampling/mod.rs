@@ -46,6 +46,7 @@
 
 mod aggregate;
 mod alias;
+pub mod approx;
 pub mod jitter;
 mod shot;
 mod table;
