@@ -439,19 +439,19 @@ fn bin_variables(e: &ExpectedProfile, shots: u64) -> Vec<BinVariable> {
         bin_var(
             "expected_signal",
             "expected signal counts per shot (exact bin integral of Eq. 2)",
-            "1",
+            "count",
             e.signal.clone(),
         ),
         bin_var(
             "expected_background",
             "expected sky-background counts per shot (Eq. 3)",
-            "1",
+            "count",
             vec![e.background; n],
         ),
         bin_var(
             "expected_dark",
             "expected dark counts per shot",
-            "1",
+            "count",
             vec![e.dark; n],
         ),
         bin_var(
