@@ -1017,15 +1017,26 @@ fn switch_dense_table_to_ahrens_dieter() {
     let below: Vec<usize> = (0..200).step_by(2).collect();
     let above: Vec<usize> = (1..200).step_by(2).collect();
     let h = shot_histograms(&s, 30, 20_000, &[&below, &above]);
-    for (hist, side) in h.iter().zip(["table", "Ahrens–Dieter"]) {
-        let (stat, df, p) = chi2_poisson(hist, DENSE_TABLE_MAX);
-        assert!(p > 1e-6, "{side}: chi2 {stat:.1}, df {df}, p {p:.2e}");
-        assert!(chi2_poisson(hist, DENSE_TABLE_MAX * 1.01).2 < 1e-6);
+    assert_both_sides_poisson(&h, DENSE_TABLE_MAX, ["table", "Ahrens–Dieter"]);
+}
+
+/// Both sides of a switch point fit Poisson(`mean`) (p > 1e-6 each), a mean 1 % higher is
+/// rejected (power), and the two sides agree with each other (two-sample chi-square).
+fn assert_both_sides_poisson(h: &[Vec<u64>], mean: f64, sides: [&str; 2]) {
+    for (hist, side) in h.iter().zip(sides) {
+        let (stat, df, p) = chi2_poisson(hist, mean);
+        assert!(
+            p > 1e-6,
+            "{side} (λ = {mean}): chi2 {stat:.1}, df {df}, p {p:.2e}"
+        );
+        assert!(chi2_poisson(hist, mean * 1.01).2 < 1e-6);
     }
     let (stat, df, p) = chi2_two_sample(&h[0], &h[1]);
     assert!(
         p > 1e-6,
-        "table vs Ahrens–Dieter: chi2 {stat:.1}, df {df}, p {p:.2e}"
+        "{} vs {}: chi2 {stat:.1}, df {df}, p {p:.2e}",
+        sides[0],
+        sides[1]
     );
 }
 
@@ -1127,19 +1138,7 @@ fn switch_sparse_to_dense_at_the_cost_model_split() {
     let sparse_side: Vec<usize> = (1000..1000 + in_ramp).collect();
     let dense_side: Vec<usize> = (1000 + in_ramp..1060).collect();
     let h = shot_histograms(&s, 4, 200_000, &[&sparse_side, &dense_side]);
-    for (hist, side) in h.iter().zip(["sparse", "dense"]) {
-        let (stat, df, p) = chi2_poisson(hist, star);
-        assert!(
-            p > 1e-6,
-            "{side} (λ* = {star}): chi2 {stat:.1}, df {df}, p {p:.2e}"
-        );
-        assert!(chi2_poisson(hist, star * 1.01).2 < 1e-6);
-    }
-    let (stat, df, p) = chi2_two_sample(&h[0], &h[1]);
-    assert!(
-        p > 1e-6,
-        "sparse vs dense: chi2 {stat:.1}, df {df}, p {p:.2e}"
-    );
+    assert_both_sides_poisson(&h, star, ["sparse", "dense"]);
 }
 
 /// Aggregate, inversion ↔ Ahrens–Dieter at M·λ = AGGREGATE_INVERSION_MAX = 12, through
