@@ -301,7 +301,7 @@ pub struct BackgroundConfig {
 }
 
 /// Monte Carlo method (interface.md `--method`).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
     /// `aggregate` whenever the scene allows it, else `shot`.

@@ -57,7 +57,7 @@ enum Command {
         #[arg(long)]
         profiles: Option<usize>,
         /// auto, shot or aggregate (default: simulation.method).
-        #[arg(long, value_parser = parse_method)]
+        #[arg(long, value_enum)]
         method: Option<lidarsim::config::Method>,
         /// Also store signal, background and dark counts separately.
         #[arg(long)]
@@ -81,7 +81,7 @@ enum Command {
         #[arg(long, default_value_t = 1000)]
         realizations: usize,
         /// auto, shot or aggregate (default: simulation.method).
-        #[arg(long, value_parser = parse_method)]
+        #[arg(long, value_enum)]
         method: Option<lidarsim::config::Method>,
         /// Random seed (default: simulation.seed).
         #[arg(long)]
@@ -90,17 +90,6 @@ enum Command {
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
     },
-}
-
-fn parse_method(s: &str) -> Result<lidarsim::config::Method, String> {
-    match s {
-        "auto" => Ok(lidarsim::config::Method::Auto),
-        "shot" => Ok(lidarsim::config::Method::Shot),
-        "aggregate" => Ok(lidarsim::config::Method::Aggregate),
-        _ => Err(format!(
-            "`{s}` is not a method: expected auto, shot or aggregate"
-        )),
-    }
 }
 
 fn main() -> ExitCode {

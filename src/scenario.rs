@@ -171,11 +171,11 @@ impl Scenario {
             e.signal.push(signal);
         }
         let top = self.atmosphere.top_m();
+        // bins lying wholly above the atmosphere
         let signal_free = (0..n)
             .filter(|&i| {
-                g.altitude_at_range(g.bin_range_bounds(i).0)
-                    .min(g.altitude_at_range(g.bin_range_bounds(i).1))
-                    >= top
+                let (ra, rb) = g.bin_range_bounds(i);
+                g.altitude_at_range(ra).min(g.altitude_at_range(rb)) >= top
             })
             .count();
         e.background_bins = self

@@ -364,19 +364,21 @@ pub fn run(scenario: &Scenario, opts: &RunOptions) -> Result<RunSummary> {
             .collect();
         drawing += draw_start.elapsed();
         for (k, streams) in drawn.iter().enumerate() {
-            let total: Vec<u64> = if components {
-                (0..n_bins)
+            let summed: Vec<u64>;
+            let total: &[u64] = if components {
+                summed = (0..n_bins)
                     .map(|i| streams.iter().map(|s| s[i]).sum())
-                    .collect()
+                    .collect();
+                &summed
             } else {
-                streams[0].clone()
+                &streams[0]
             };
             total_counts += total.iter().sum::<u64>();
             writer.write_profile(&ProfileRecord {
                 index: first + k,
                 time_s: (first + k) as f64 * profile_time_s + 0.5 * profile_time_s,
                 n_shots: shots,
-                counts: &total,
+                counts: total,
                 components: components.then(|| [&streams[0][..], &streams[1][..], &streams[2][..]]),
             })?;
         }

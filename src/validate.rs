@@ -99,7 +99,6 @@ pub fn snr_standard_error(m: f64, mu2: f64, mu3: f64, mu4: f64, n: f64) -> f64 {
 #[derive(Debug, Clone, Default)]
 struct BinSums {
     total: u128,
-    sum_sq: f64,
     x: Welford,
     y: Welford,
 }
@@ -272,7 +271,6 @@ fn accumulate(source: &dyn RealizationSource, n: usize, bins: usize, n_b: usize)
         for (c, b_hat) in &drawn {
             for (s, &v) in sums.iter_mut().zip(c) {
                 s.total += u128::from(v);
-                s.sum_sq += (v as f64) * (v as f64);
                 s.x.push(v as f64);
                 s.y.push(v as f64 - b_hat);
             }

@@ -179,10 +179,6 @@ impl Atmosphere {
         })
     }
 
-    fn share(&self, depolarization: f64) -> f64 {
-        self.channel.share(depolarization)
-    }
-
     /// Optical properties at altitude `z_m`: `β = β_mol + β_aer + β_cld`,
     /// `α = α_mol + α_aer + α_cld` (model.md §4).
     pub fn optics_at(&self, z_m: f64) -> Optics {
@@ -191,14 +187,14 @@ impl Atmosphere {
         o.beta_mol = alpha_mol / self.molecules.lidar_ratio_sr;
         o.alpha_total = alpha_mol;
         o.alpha_effective = alpha_mol;
-        o.beta_channel = o.beta_mol * self.share(self.molecules.depolarization);
+        o.beta_channel = o.beta_mol * self.channel.share(self.molecules.depolarization);
         if let Some(a) = &self.aerosol {
             let alpha = a.extinction_per_m(z_m);
             let beta = alpha / a.lidar_ratio_sr;
             o.beta_aer += beta;
             o.alpha_total += alpha;
             o.alpha_effective += alpha;
-            o.beta_channel += beta * self.share(a.depolarization);
+            o.beta_channel += beta * self.channel.share(a.depolarization);
         }
         for l in self.layers.iter().filter(|l| l.contains(z_m)) {
             let beta = l.extinction_per_m / l.lidar_ratio_sr;
@@ -208,7 +204,7 @@ impl Atmosphere {
             }
             o.alpha_total += l.extinction_per_m;
             o.alpha_effective += l.extinction_per_m * l.multiple_scattering;
-            o.beta_channel += beta * self.share(l.depolarization);
+            o.beta_channel += beta * self.channel.share(l.depolarization);
         }
         o
     }

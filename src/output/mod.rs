@@ -7,16 +7,18 @@ pub mod snr_map;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::error::{Error, Result};
 
-/// The temporary name a file is written under before it is renamed to `path`.
-pub fn partial_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.partial-{}", std::process::id()))
+/// The temporary name a file is written under before it is renamed to `path`:
+/// `.NAME.partial-PID-SEQ` in the same directory (SEQ keeps two writers of one process
+/// apart); `None` when `path` names no file.
+pub fn partial_path(path: &Path) -> Option<PathBuf> {
+    static SEQ: AtomicU64 = AtomicU64::new(0);
+    let name = path.file_name()?.to_string_lossy();
+    let seq = SEQ.fetch_add(1, Ordering::Relaxed);
+    Some(path.with_file_name(format!(".{name}.partial-{}-{seq}", std::process::id())))
 }
 
 /// Writes `path` through `fill`, complete or not at all: into a temporary file in the
@@ -25,7 +27,7 @@ pub fn write_atomically(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<()> {
-    let tmp = partial_path(path);
+    let tmp = partial_path(path).ok_or_else(|| Error::output(path, "not a file name"))?;
     let io_err = |source| Error::Io {
         path: path.to_path_buf(),
         source,

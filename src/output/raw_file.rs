@@ -34,7 +34,6 @@ use std::ffi::CString;
 use std::fs;
 use std::io;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use hdf5::plist::dataset_create::AttrCreationOrder;
 use hdf5::plist::file_access::LibraryVersion;
@@ -268,9 +267,6 @@ pub struct RawFileWriter {
     buf: RowBuf,
 }
 
-/// Distinguishes the temporary files of several writers in one process.
-static TEMP_SEQ: AtomicU64 = AtomicU64::new(0);
-
 /// A short, user-facing description of an I/O error ("permission denied", ...).
 fn describe_io(err: &io::Error) -> String {
     match err.kind() {
@@ -373,16 +369,6 @@ fn attach_scales(ds: &Dataset, scales: &[&Dataset]) -> hdf5::Result<()> {
     })
 }
 
-/// The temporary name for `final_path`: `.NAME.partial-PID-SEQ` in the same directory.
-fn temp_path_for(final_path: &Path) -> Option<PathBuf> {
-    let name = final_path.file_name()?;
-    let seq = TEMP_SEQ.fetch_add(1, Ordering::Relaxed);
-    let mut temp_name = std::ffi::OsString::from(".");
-    temp_name.push(name);
-    temp_name.push(format!(".partial-{}-{}", std::process::id(), seq));
-    Some(final_path.with_file_name(temp_name))
-}
-
 /// The directory holding `path` (`.` for a bare file name).
 fn parent_dir(path: &Path) -> &Path {
     match path.parent() {
@@ -406,7 +392,8 @@ impl RawFileWriter {
         if final_path.is_dir() {
             return Err(fail("is a directory, not a file name".into()));
         }
-        let temp_path = temp_path_for(final_path).ok_or_else(|| fail("not a file name".into()))?;
+        let temp_path =
+            super::partial_path(final_path).ok_or_else(|| fail("not a file name".into()))?;
         let dir = parent_dir(final_path);
 
         // Create the temporary file with std first: a clear OS error beats HDF5's stack.
@@ -849,6 +836,7 @@ mod tests {
     }
 
     fn scratch_dir() -> TestDir {
+        use std::sync::atomic::{AtomicU64, Ordering};
         static N: AtomicU64 = AtomicU64::new(0);
         let n = N.fetch_add(1, Ordering::Relaxed);
         let dir =
