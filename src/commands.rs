@@ -1,10 +1,12 @@
 //! The subcommands' work, called by the thin `lidarsim` binary.
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
+use crate::config::MolecularModel;
 use crate::error::{Error, Result};
-use crate::output::{self, expect, snr_map};
+use crate::output::safe_file::{Outputs, Stream};
+use crate::output::{expect, snr_map};
 use crate::scenario::{ExpectedProfile, Scenario};
 use crate::simulate;
 use crate::snr;
@@ -28,14 +30,36 @@ fn to_stdout(fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result
     }
 }
 
+/// The files a scenario reads (its config and any profile file): no output may replace them.
+pub fn input_files(sc: &Scenario) -> Vec<PathBuf> {
+    let loaded = &sc.loaded;
+    let mut files = vec![loaded.path.clone()];
+    if let MolecularModel::File { file } = &loaded.config.atmosphere.molecular.model {
+        files.push(loaded.resolve_path(file));
+    }
+    files
+}
+
+/// The output set of a command on `sc`, with the scenario's inputs protected.
+pub fn outputs_for(sc: &Scenario) -> Outputs {
+    let inputs = input_files(sc);
+    Outputs::new(inputs.iter().map(PathBuf::as_path))
+}
+
 /// `lidarsim expect`: the CSV (to a file or `-` for stdout) or the terminal table.
 pub fn expect(config: &Path, overrides: &[String], csv: Option<&Path>) -> Result<()> {
     let sc = Scenario::load(config, overrides)?;
+    let mut outputs = outputs_for(&sc);
+    let csv = csv
+        .map(|p| outputs.add("--csv", p, Stream::Text))
+        .transpose()?;
     let e = sc.expected()?;
     let shots = sc.instrument.rep_rate_hz * sc.accumulation_time_s();
     match csv {
-        Some(p) if p == Path::new("-") => to_stdout(|w| expect::write_csv(w, &e, shots)),
-        Some(p) => output::write_atomically(p, |w| expect::write_csv(w, &e, shots)),
+        Some(id) => {
+            outputs.write(id, |w| expect::write_csv(w, &e, shots))?;
+            outputs.commit()
+        }
         None => to_stdout(|w| expect::write_table(w, &sc, &e)),
     }
 }
@@ -77,10 +101,15 @@ pub fn build_snr_map(sc: &Scenario, e: &ExpectedProfile) -> snr_map::SnrMap {
 /// (`altitude_m,accumulation_time_s,snr`).
 pub fn snr_map(config: &Path, overrides: &[String], png: &Path, csv: Option<&Path>) -> Result<()> {
     let sc = Scenario::load(config, overrides)?;
+    let mut outputs = outputs_for(&sc);
+    let png = outputs.add("--png", png, Stream::Binary)?;
+    let csv = csv
+        .map(|p| outputs.add("--csv", p, Stream::Text))
+        .transpose()?;
     let e = sc.expected()?;
     let map = build_snr_map(&sc, &e);
-    if let Some(p) = csv {
-        output::write_atomically(p, |w| {
+    if let Some(id) = csv {
+        outputs.write(id, |w| {
             writeln!(w, "altitude_m,accumulation_time_s,snr")?;
             for (z, row) in e.altitude_m.iter().zip(&map.snr) {
                 for (tc, s) in map.accumulation_time_s.iter().zip(row) {
@@ -90,7 +119,9 @@ pub fn snr_map(config: &Path, overrides: &[String], png: &Path, csv: Option<&Pat
             Ok(())
         })?;
     }
-    snr_map::write_png(png, &map)
+    let bytes = snr_map::png_bytes(&map).map_err(|r| Error::output(outputs.shown_path(png), r))?;
+    outputs.write(png, |w| w.write_all(&bytes))?;
+    outputs.commit()
 }
 
 /// `lidarsim simulate`: the Monte Carlo run, then a one-paragraph summary on stderr.
@@ -121,10 +152,29 @@ pub fn validate(
     opts: &validate::ValidateOptions,
 ) -> Result<bool> {
     let sc = Scenario::load(config, overrides)?;
+    let mut outputs = outputs_for(&sc);
+    let json = opts
+        .json
+        .as_deref()
+        .map(|p| outputs.add("--json", p, Stream::Text))
+        .transpose()?;
     let report = validate::run(&sc, opts)?;
-    if let Some(p) = &opts.json {
-        validate::write_json(p, &report)?;
+    if let Some(id) = json {
+        outputs.write(id, |w| {
+            serde_json::to_writer_pretty(&mut *w, &report).map_err(std::io::Error::other)?;
+            writeln!(w)
+        })?;
     }
-    to_stdout(|w| validate::write_table(w, &report))?;
+    let table_to_stderr = opts.json.as_deref() == Some(Path::new("-"));
+    outputs.commit()?;
+    if table_to_stderr {
+        // the JSON holds standard output; the table for a person goes to stderr
+        validate::write_table(&mut std::io::stderr(), &report).map_err(|e| Error::Io {
+            path: "<stderr>".into(),
+            source: e,
+        })?;
+    } else {
+        to_stdout(|w| validate::write_table(w, &report))?;
+    }
     Ok(report.consistent)
 }

@@ -94,6 +94,10 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Err(e) = lidarsim::output::safe_file::install_signal_handlers() {
+        eprintln!("lidarsim: error: {e}");
+        return ExitCode::from(2);
+    }
     let result = match &cli.command {
         Command::Expect { config, set, csv } => {
             lidarsim::commands::expect(config, set, csv.as_deref()).map(|()| true)

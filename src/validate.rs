@@ -30,7 +30,7 @@
 //! Eight checks at 2.5·10⁻⁴ give an overall false-alarm rate below 2·10⁻³.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -489,14 +489,6 @@ pub fn run(sc: &Scenario, opts: &ValidateOptions) -> Result<Report> {
         bins,
         checks,
         consistent,
-    })
-}
-
-/// Writes the report as JSON.
-pub fn write_json(path: &Path, report: &Report) -> Result<()> {
-    crate::output::write_atomically(path, |w| {
-        serde_json::to_writer_pretty(&mut *w, report).map_err(std::io::Error::other)?;
-        writeln!(w)
     })
 }
 

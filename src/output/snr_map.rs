@@ -6,16 +6,13 @@
 //! Text is drawn with DejaVu Sans embedded in the binary (`assets/fonts/`,
 //! licence beside it) through plotters' `ab_glyph` feature, so no system font
 //! or fontconfig is needed. The PNG is encoded in memory with the `png` crate
-//! and written through [`super::write_atomically`] (complete or not at all).
+//! and written through [`super::safe_file`] (complete or not at all).
 
-use std::path::Path;
 use std::sync::OnceLock;
 
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{FontStyle, FontTransform, register_font};
-
-use crate::error::{Error, Result};
 
 /// S/N against altitude and accumulation time, ready to be drawn.
 #[derive(Debug, Clone)]
@@ -52,21 +49,18 @@ static FONT_BYTES: &[u8] = include_bytes!(concat!(
     "/assets/fonts/DejaVuSans.ttf"
 ));
 
-/// Writes `map` as a `WIDTH`×`HEIGHT` PNG at `path`.
+/// Renders `map` as a `WIDTH`×`HEIGHT` PNG, encoded in memory.
 ///
 /// Invalid input (empty grid, fewer than 2 altitudes or times, ragged rows, NaN,
 /// infinite or negative S/N, non-increasing or non-positive TC, duplicate
-/// altitudes) is an [`Error::Output`] naming `path`, and nothing is written;
-/// failing to write the file is an [`Error::Io`] naming `path`.
-pub fn write_png(path: &Path, map: &SnrMap) -> Result<()> {
-    let grid = Grid::new(map).map_err(|reason| Error::output(path, reason))?;
-    ensure_font().map_err(|reason| Error::output(path, reason))?;
+/// altitudes) is an error message; the caller writes the bytes through
+/// [`super::safe_file`].
+pub fn png_bytes(map: &SnrMap) -> std::result::Result<Vec<u8>, String> {
+    let grid = Grid::new(map)?;
+    ensure_font()?;
     let mut rgb = vec![0u8; (WIDTH * HEIGHT * 3) as usize];
-    render(&grid, map, &mut rgb)
-        .map_err(|e| Error::output(path, format!("drawing failed: {e}")))?;
-    let bytes = encode_png(&rgb, WIDTH, HEIGHT)
-        .map_err(|e| Error::output(path, format!("PNG encoding failed: {e}")))?;
-    super::write_atomically(path, |w| w.write_all(&bytes))
+    render(&grid, map, &mut rgb).map_err(|e| format!("drawing failed: {e}"))?;
+    encode_png(&rgb, WIDTH, HEIGHT).map_err(|e| format!("PNG encoding failed: {e}"))
 }
 
 fn ensure_font() -> std::result::Result<(), String> {
@@ -895,7 +889,7 @@ fn place_labels(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::path::PathBuf;
+    use std::path::{Path, PathBuf};
 
     /// A fresh scratch directory for one test.
     fn scratch_dir(name: &str) -> PathBuf {
@@ -956,17 +950,9 @@ mod tests {
         (info.width, info.height, buf)
     }
 
-    fn assert_output_error(result: Result<()>, path: &Path, needle: &str) {
-        match result {
-            Err(Error::Output { path: p, reason }) => {
-                assert_eq!(p, path);
-                assert!(
-                    reason.contains(needle),
-                    "reason {reason:?} lacks {needle:?}"
-                );
-            }
-            other => panic!("expected an output error containing {needle:?}, got {other:?}"),
-        }
+    /// Renders `map` and writes it to `path` (the command goes through safe_file).
+    fn write_png(path: &Path, map: &SnrMap) -> std::result::Result<(), String> {
+        std::fs::write(path, png_bytes(map)?).map_err(|e| e.to_string())
     }
 
     // --- marching squares -------------------------------------------------
@@ -1243,41 +1229,13 @@ mod tests {
         m.altitude_km[2] = f64::NAN;
         cases.push(("NaN altitude", m, "altitude_km[2]"));
         for (what, map, needle) in cases {
-            let result = write_png(&path, &map);
-            assert!(result.is_err(), "{what}");
-            assert_output_error(result, &path, needle);
+            let reason = write_png(&path, &map).expect_err(what);
+            assert!(
+                reason.contains(needle),
+                "{what}: {reason:?} lacks {needle:?}"
+            );
             assert!(!path.exists(), "{what}: a file was written");
         }
-        std::fs::remove_dir_all(dir).unwrap();
-    }
-
-    #[test]
-    fn unwritable_paths_are_errors() {
-        let dir = scratch_dir("unwritable");
-        let map = synthetic_map();
-        let missing = dir.join("no such dir").join("snr.png");
-        for path in [&missing, &dir] {
-            match write_png(path, &map) {
-                Err(Error::Io { path: p, .. }) => assert_eq!(&p, path),
-                other => panic!(
-                    "expected an I/O error for {}, got {other:?}",
-                    path.display()
-                ),
-            }
-        }
-        // Nothing half-written is left behind.
-        let parent = dir.parent().unwrap();
-        let leftovers: Vec<_> = std::fs::read_dir(parent)
-            .unwrap()
-            .filter_map(|e| e.ok())
-            .filter(|e| {
-                e.file_name()
-                    .to_string_lossy()
-                    .contains(&format!("partial-{}", std::process::id()))
-            })
-            .collect();
-        assert!(leftovers.is_empty(), "{leftovers:?}");
-        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
         std::fs::remove_dir_all(dir).unwrap();
     }
 }
