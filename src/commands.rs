@@ -7,10 +7,18 @@ use crate::config::MolecularModel;
 use crate::error::{Error, Result};
 use crate::output::safe_file::{Outputs, Stream};
 use crate::output::{expect, snr_map};
+use crate::resources;
 use crate::scenario::{ExpectedProfile, Scenario};
 use crate::simulate;
 use crate::snr;
 use crate::validate;
+
+/// Bytes per bin of the `expect` CSV (measured: 576 MB for 2.7e6 bins).
+const EXPECT_CSV_BYTES_PER_BIN: f64 = 220.0;
+/// Bytes per row of the `snr-map` CSV (measured: 9.25 GB for 1.65e8 rows).
+const SNR_MAP_CSV_BYTES_PER_ROW: f64 = 57.0;
+/// Seconds per row of the `snr-map` CSV (measured: ~77 s for 1.65e8 rows, one core).
+const SNR_MAP_CSV_S_PER_ROW: f64 = 0.5e-6;
 
 /// Accumulation times of the S/N map, s: 1 to 1000, log-spaced (the paper's Figs. 2–3).
 pub fn snr_map_times_s() -> Vec<f64> {
@@ -50,9 +58,14 @@ pub fn outputs_for(sc: &Scenario) -> Outputs {
 pub fn expect(config: &Path, overrides: &[String], csv: Option<&Path>) -> Result<()> {
     let sc = Scenario::load(config, overrides)?;
     let mut outputs = outputs_for(&sc);
+    let csv_path = csv.filter(|p| *p != Path::new("-"));
     let csv = csv
         .map(|p| outputs.add("--csv", p, Stream::Text))
         .transpose()?;
+    if let Some(p) = csv_path {
+        let bytes = sc.geometry.n_bins as f64 * EXPECT_CSV_BYTES_PER_BIN;
+        resources::require_disk("--csv", p, bytes)?;
+    }
     let e = sc.expected()?;
     let shots = sc.instrument.rep_rate_hz * sc.accumulation_time_s();
     match csv {
@@ -64,23 +77,33 @@ pub fn expect(config: &Path, overrides: &[String], csv: Option<&Path>) -> Result
     }
 }
 
+/// Most altitude rows drawn in the S/N map PNG: more than its pixel rows, so a
+/// window of millions of bins is drawn from every k-th bin (the CSV has them all).
+pub const MAX_MAP_ROWS: usize = 4 * snr_map::HEIGHT as usize;
+
+/// The bins drawn in the map: all of them, or every k-th where there are more than
+/// [`MAX_MAP_ROWS`].
+fn map_rows(n_bins: usize) -> impl Iterator<Item = usize> {
+    (0..n_bins).step_by(n_bins.div_ceil(MAX_MAP_ROWS).max(1))
+}
+
 /// The S/N map of a scenario: Eq. 4 against altitude and accumulation time.
 pub fn build_snr_map(sc: &Scenario, e: &ExpectedProfile) -> snr_map::SnrMap {
     let cfg = &sc.loaded.config;
     let i = &cfg.instrument;
     let times = snr_map_times_s();
-    let snr = e
-        .signal
+    let rows: Vec<usize> = map_rows(e.n_bins()).collect();
+    let snr = rows
         .iter()
-        .map(|&s| {
+        .map(|&b| {
             times
                 .iter()
-                .map(|tc| snr::eq4(s, e.background, e.dark, i.rep_rate_hz * tc))
+                .map(|tc| snr::eq4(e.signal[b], e.background, e.dark, i.rep_rate_hz * tc))
                 .collect()
         })
         .collect();
     snr_map::SnrMap {
-        altitude_km: e.altitude_m.iter().map(|z| z / 1e3).collect(),
+        altitude_km: rows.iter().map(|&b| e.altitude_m[b] / 1e3).collect(),
         accumulation_time_s: times,
         snr,
         title: format!("{} — S/N (Eq. 4)", cfg.name),
@@ -103,17 +126,27 @@ pub fn snr_map(config: &Path, overrides: &[String], png: &Path, csv: Option<&Pat
     let sc = Scenario::load(config, overrides)?;
     let mut outputs = outputs_for(&sc);
     let png = outputs.add("--png", png, Stream::Binary)?;
+    let csv_path = csv.filter(|p| *p != Path::new("-"));
     let csv = csv
         .map(|p| outputs.add("--csv", p, Stream::Text))
         .transpose()?;
+    if csv.is_some() {
+        let rows = (sc.geometry.n_bins * snr_map_times_s().len()) as f64;
+        if let Some(p) = csv_path {
+            resources::require_disk("--csv", p, rows * SNR_MAP_CSV_BYTES_PER_ROW)?;
+        }
+        resources::announce_duration("the S/N map CSV", rows * SNR_MAP_CSV_S_PER_ROW);
+    }
     let e = sc.expected()?;
     let map = build_snr_map(&sc, &e);
     if let Some(id) = csv {
+        let fl = sc.instrument.rep_rate_hz;
         outputs.write(id, |w| {
             writeln!(w, "altitude_m,accumulation_time_s,snr")?;
-            for (z, row) in e.altitude_m.iter().zip(&map.snr) {
-                for (tc, s) in map.accumulation_time_s.iter().zip(row) {
-                    writeln!(w, "{z},{tc},{s:e}")?;
+            for (z, &s) in e.altitude_m.iter().zip(&e.signal) {
+                for tc in &map.accumulation_time_s {
+                    let snr = snr::eq4(s, e.background, e.dark, fl * tc);
+                    writeln!(w, "{z},{tc},{snr:e}")?;
                 }
             }
             Ok(())

@@ -11,6 +11,7 @@ pub mod error;
 pub mod geometry;
 pub mod instrument;
 pub mod output;
+pub mod resources;
 pub mod sampling;
 pub mod scenario;
 pub mod signal;

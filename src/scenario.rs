@@ -11,6 +11,11 @@ use crate::instrument::Instrument;
 use crate::signal::BeamPath;
 use crate::snr;
 
+/// Memory the deterministic model holds per range bin, bytes: the expected profile and
+/// truth (~15 f64) and at least four atmosphere slabs per bin along the beam (measured:
+/// 1.65 GB peak for `expect --csv` of 2.7e6 bins).
+pub const MODEL_BYTES_PER_BIN: f64 = 650.0;
+
 /// Everything the deterministic model needs, built from one validated config.
 #[derive(Debug, Clone)]
 pub struct Scenario {
@@ -106,6 +111,11 @@ impl Scenario {
         let file = loaded.file_label();
         let instrument = Instrument::from_config(cfg);
         let geometry = Geometry::from_config(cfg, &file)?;
+        let bins = geometry.n_bins as f64;
+        crate::resources::require_memory(
+            &format!("the model of {bins} range bins"),
+            bins * MODEL_BYTES_PER_BIN,
+        )?;
         let mut atmosphere = Atmosphere::from_config(&loaded)?;
         // at least four slabs per bin, so that the piecewise representation resolves every bin
         atmosphere.grid_m = atmosphere
