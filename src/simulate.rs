@@ -322,6 +322,7 @@ pub fn run(scenario: &Scenario, opts: &RunOptions) -> Result<RunSummary> {
     }
     let n_bins = e.n_bins();
     let max_mean = e.total_per_shot().iter().fold(0.0f64, |m, &l| m.max(l)) * shots as f64;
+    check_sizes(&e, method, shots, profiles, components, opts)?;
     let spec = RawFileSpec {
         n_bins,
         n_profiles: profiles,
@@ -397,6 +398,82 @@ pub fn run(scenario: &Scenario, opts: &RunOptions) -> Result<RunSummary> {
         elapsed: start.elapsed(),
         drawing,
     })
+}
+
+/// Bytes per stored count beyond the Poisson entropy: deflate after shuffle stores
+/// ~1.6–1.75 × the entropy (measured: scenario 1 1.46 B against 0.90 B of entropy, the
+/// CALIOP-like config 0.51 B against 0.29 B), rounded up.
+const FILE_BYTES_PER_ENTROPY_BYTE: f64 = 1.8;
+/// Bytes per profile of the per-profile variables (`profile`, `time`, `n_shots`, ...).
+const FILE_BYTES_PER_PROFILE: f64 = 32.0;
+/// Bytes of a raw file besides its profiles: metadata, attributes (the config), and the
+/// per-bin variables at this many bytes per bin (measured: 39 kB for 20 profiles of
+/// scenario 1's 134 bins).
+const FILE_FIXED_BYTES: f64 = 64e3;
+/// Bytes per bin of the per-bin variables (about 25 f64 per bin).
+const FILE_BYTES_PER_BIN: f64 = 200.0;
+/// Single-threaded cost of the model, the file and its writes per stored count, ns
+/// (measured: 0.06–0.14 µs on scenario 1 and the CALIOP-like config).
+const FILE_NS_PER_COUNT: f64 = 150.0;
+
+/// Estimated size of the raw file, bytes: per stored count the smaller of its width and
+/// the compressed Poisson entropy of its mean.
+pub fn estimated_file_bytes(
+    e: &ExpectedProfile,
+    shots: u64,
+    profiles: usize,
+    streams: usize,
+) -> f64 {
+    let max_mean = e.total_per_shot().iter().fold(0.0f64, |m, &l| m.max(l)) * shots as f64;
+    let width = CountWidth::for_max_count(max_mean).map_or(8.0, |w| w.bytes() as f64);
+    let per_profile: f64 = e
+        .total_per_shot()
+        .iter()
+        .map(|l| {
+            let h = crate::resources::poisson_entropy_bits(l * shots as f64) / 8.0;
+            width.min(FILE_BYTES_PER_ENTROPY_BYTE * h + 0.05)
+        })
+        .sum();
+    FILE_FIXED_BYTES
+        + FILE_BYTES_PER_BIN * e.n_bins() as f64
+        + profiles as f64 * (per_profile * streams as f64 + FILE_BYTES_PER_PROFILE)
+}
+
+/// Refuses a run whose memory or file cannot fit, and announces a long one
+/// (interface.md: sizes checked before work starts).
+fn check_sizes(
+    e: &ExpectedProfile,
+    method: ResolvedMethod,
+    shots: u64,
+    profiles: usize,
+    components: bool,
+    opts: &RunOptions,
+) -> Result<()> {
+    let streams = if components { 4 } else { 1 };
+    let bins = e.n_bins() as f64;
+    // one bit per profile (written yet?), the batch of drawn rows, the samplers' tables
+    let memory = profiles as f64 / 8.0 + 64.0 * bins * 8.0 * 2.0 * streams as f64 + 64.0 * bins;
+    crate::resources::require_memory(&format!("simulating {profiles} profiles"), memory)?;
+    let file = estimated_file_bytes(e, shots, profiles, streams);
+    crate::resources::require_disk("-o", &opts.output, file)?;
+    let draw_ns_per_profile = match method {
+        ResolvedMethod::Shot => {
+            ShotSampler::new(&e.total_per_shot())
+                .strategy()
+                .est_ns_per_shot
+                * shots as f64
+        }
+        _ => bins * cost::AGGREGATE_LARGE_NS,
+    };
+    let threads = rayon::current_num_threads().max(1) as f64;
+    let ns = profiles as f64
+        * (draw_ns_per_profile * streams.min(3) as f64 / threads
+            + bins * streams as f64 * FILE_NS_PER_COUNT);
+    crate::resources::announce_duration(
+        &format!("{profiles} profiles × {} bins", e.n_bins()),
+        ns * 1e-9,
+    );
+    Ok(())
 }
 
 fn progress_bar(show: bool, profiles: usize) -> indicatif::ProgressBar {
