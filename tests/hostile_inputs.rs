@@ -710,17 +710,17 @@ fn cases() -> Vec<Case> {
         ),
         c(
             "snr-map --csv -",
-            Stdout,
+            Stdout(&["map.png"]),
             args(&["snr-map", "@S1", "--png", "@D/map.png", "--csv", "-"]),
         ),
         c(
             "validate --json -",
-            Stdout,
+            Stdout(&[]),
             args(&["validate", "@S1", "--realizations", "100", "--json", "-"]),
         ),
         c(
             "expect --csv -",
-            Stdout,
+            Stdout(&[]),
             args(&["expect", "@S1", "--csv", "-"]),
         ),
         c(
