@@ -768,7 +768,7 @@ fn cases() -> Vec<Case> {
         c(
             "disk full mid-run",
             Refused("no space left"),
-            Run::FullDisk(300_000),
+            Run::FullDisk(256 << 20),
         ),
     ];
     v.push(Case {
