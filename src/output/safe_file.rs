@@ -466,6 +466,21 @@ pub fn describe_io(err: &io::Error) -> String {
     }
 }
 
+/// The OS reason inside an HDF5 error message, in plain words: HDF5 reports a failed
+/// system call as `... errno = 28, error message = 'No space left on device' ...`;
+/// any other message is returned as it is.
+pub fn describe_hdf5_error(message: &str) -> String {
+    let errno = message
+        .split("errno = ")
+        .nth(1)
+        .and_then(|rest| rest.split(|c: char| !c.is_ascii_digit()).next())
+        .and_then(|digits| digits.parse::<i32>().ok());
+    match errno {
+        Some(n) => describe_io(&io::Error::from_raw_os_error(n)),
+        None => message.to_string(),
+    }
+}
+
 /// Files this process deletes if a signal ends it: temporary outputs and lock files.
 static CLEANUP: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
@@ -648,6 +663,15 @@ mod tests {
         third.add("-o", &target, Stream::Binary).unwrap();
         third.commit().unwrap();
         assert_eq!(entries(&d.0), ["x.h5"]);
+    }
+
+    #[test]
+    fn hdf5_errors_read_as_their_os_reason() {
+        let m = "H5Dwrite(): can't write data: file write failed: time = Sun Nov 22, \
+                 filename = 'x.h5', file descriptor = 5, errno = 28, error message = \
+                 'No space left on device', buf = 0x1, total write size = 4096";
+        assert_eq!(describe_hdf5_error(m), "no space left on device");
+        assert_eq!(describe_hdf5_error("bad chunk"), "bad chunk");
     }
 
     #[test]
