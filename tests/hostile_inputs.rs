@@ -846,7 +846,7 @@ impl Outcome {
             .filter(|l| !l.trim().is_empty())
             .collect();
         if let Some(first) = lines.first() {
-            let first: String = first.chars().take(140).collect();
+            let first: String = shorten(first).chars().take(160).collect();
             s += &format!(": `{}`", first.replace('|', "\\|").replace('`', "'"));
             if lines.len() > 1 {
                 s += &format!(" (+{} lines)", lines.len() - 1);
@@ -860,6 +860,23 @@ impl Outcome {
         }
         s
     }
+}
+
+/// A message with the scratch directory written `D/` and the repository's configs
+/// `configs/`, for the table.
+fn shorten(line: &str) -> String {
+    let tmp = format!("{}/lidarsim-hostile-case-", std::env::temp_dir().display());
+    let mut out = line.replace(
+        &format!("{}/configs/", env!("CARGO_MANIFEST_DIR")),
+        "configs/",
+    );
+    while let Some(i) = out.find(&tmp) {
+        let end = out[i + tmp.len()..]
+            .find('/')
+            .map_or(out.len(), |j| i + tmp.len() + j + 1);
+        out.replace_range(i..end, "D/");
+    }
+    out
 }
 
 fn bin() -> PathBuf {
