@@ -166,14 +166,16 @@ pub fn simulate(
     threads: Option<usize>,
 ) -> Result<()> {
     let sc = Scenario::load(config, overrides)?;
+    let mut outputs = outputs_for(&sc);
+    let raw = outputs.add("-o", &opts.output, Stream::Binary)?;
     let summary = match threads {
         Some(0) => return Err(Error::Unsupported("--threads must be at least 1".into())),
         Some(n) => rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .build()
             .map_err(|e| Error::Unsupported(format!("cannot start {n} threads: {e}")))?
-            .install(|| simulate::run(&sc, opts))?,
-        None => simulate::run(&sc, opts)?,
+            .install(|| simulate::run(&sc, opts, outputs, raw))?,
+        None => simulate::run(&sc, opts, outputs, raw)?,
     };
     eprintln!("{summary}");
     Ok(())

@@ -166,6 +166,10 @@ pub struct AcquisitionConfig {
     /// absent = the bins of the window above the top of the atmosphere.
     #[serde(default)]
     pub background_bins: Option<usize>,
+    /// UTC time of the first shot, RFC 3339 (`2004-03-21T00:00:00Z`): the origin of the
+    /// raw file's CF `time`.
+    #[serde(default = "default_start_time")]
+    pub start_time: String,
 }
 
 /// Atmosphere: molecules, an aerosol profile and any number of layers.
@@ -341,6 +345,11 @@ fn one_usize() -> usize {
 fn default_bin_width_s() -> f64 {
     2e-6
 }
+fn default_start_time() -> String {
+    DEFAULT_START_TIME.to_string()
+}
+/// Default `acquisition.start_time`.
+pub const DEFAULT_START_TIME: &str = "2000-01-01T00:00:00Z";
 fn default_grid_m() -> f64 {
     10.0
 }
@@ -638,6 +647,15 @@ impl ScenarioConfig {
         }
         if a.profiles == 0 {
             return Err(c.fail("acquisition.profiles", "must be at least 1"));
+        }
+        if let Err(e) = humantime::parse_rfc3339(&a.start_time) {
+            return Err(c.fail(
+                "acquisition.start_time",
+                format!(
+                    "must be a UTC time like \"2004-03-21T00:00:00Z\" (RFC 3339), got {:?}: {e}",
+                    a.start_time
+                ),
+            ));
         }
         match p.kind {
             PlatformKind::Spaceborne => {

@@ -50,6 +50,12 @@ pub struct ExpectedProfile {
     pub t2: Vec<f64>,
     /// Expected signal counts per shot (exact bin integral of Eq. 2).
     pub signal: Vec<f64>,
+    /// Range weight `∫_bin η(r)/r² dr`, m⁻¹.
+    pub range_weight: Vec<f64>,
+    /// Bin-averaged attenuated backscatter `∫η β T² r⁻² dr / ∫η r⁻² dr`, m⁻¹ sr⁻¹, so
+    /// that `signal = C · attenuated_backscatter · range_weight`; 0 where the range
+    /// weight is 0 (no overlap).
+    pub attenuated_backscatter: Vec<f64>,
     /// Expected background counts per shot per bin (Eq. 3).
     pub background: f64,
     /// Expected dark counts per shot per bin.
@@ -165,7 +171,9 @@ impl Scenario {
             let r = g.bin_centre_range_m(i);
             let z = g.altitude_at_range(r);
             let o = self.atmosphere.optics_at(z);
-            let signal = self.instrument.signal_constant * self.path.bin_integral(ra, rb)?;
+            let integral = self.path.bin_integral(ra, rb)?;
+            let signal = self.instrument.signal_constant * integral;
+            let weight = self.path.range_weight(ra, rb);
             if !signal.is_finite() {
                 return Err(Error::Unsupported(format!(
                     "bin {i} (altitude {z:.0} m): the signal is not finite"
@@ -179,6 +187,9 @@ impl Scenario {
             e.alpha_total.push(o.alpha_total);
             e.t2.push(self.path.two_way_transmission(r));
             e.signal.push(signal);
+            e.range_weight.push(weight);
+            e.attenuated_backscatter
+                .push(if weight > 0.0 { integral / weight } else { 0.0 });
         }
         let top = self.atmosphere.top_m();
         // bins lying wholly above the atmosphere

@@ -165,6 +165,19 @@ impl BeamPath {
         Ok(total)
     }
 
+    /// The range weight of a bin, `∫_{r_a}^{r_b} η(r)/r² dr` (m⁻¹): the bin integral
+    /// of a uniform, unattenuated unit backscatter, so that
+    /// `bin_integral = attenuated backscatter (bin average) · range_weight`. Same
+    /// quadrature as [`bin_integral`](Self::bin_integral); call it on bins whose
+    /// integral converges.
+    pub fn range_weight(&self, r_a: f64, r_b: f64) -> f64 {
+        let r_a = r_a.max(self.zero_overlap_until_m.min(r_b));
+        if r_b <= r_a || r_a <= 0.0 {
+            return 0.0;
+        }
+        self.attenuated_range_integral(r_a, r_b, 0.0)
+    }
+
     /// `∫_a^b η(r)/r² · e^{−k(r−a)} dr`, splitting at the overlap's kinks.
     fn attenuated_range_integral(&self, a: f64, b: f64, k: f64) -> f64 {
         let mut cuts: Vec<f64> = self

@@ -15,9 +15,9 @@ use rayon::prelude::*;
 
 use crate::config::Method;
 use crate::error::{Error, Result};
-use crate::output::raw_file::{
-    AttrValue, BinVariable, CountWidth, ProfileRecord, RawFileSpec, RawFileWriter,
-};
+use crate::output::raw_file::content::{self, RunInfo};
+use crate::output::raw_file::{AttrValue, CountWidth, ProfileRecord, RawFileSpec, RawFileWriter};
+use crate::output::safe_file::{OutputId, Outputs};
 use crate::sampling::approx;
 use crate::sampling::jitter::JitteredShots;
 use crate::sampling::{self, ShotSampler};
@@ -296,8 +296,14 @@ fn stream_samplers(
     }
 }
 
-/// Runs the Monte Carlo of `scenario` and writes the raw file.
-pub fn run(scenario: &Scenario, opts: &RunOptions) -> Result<RunSummary> {
+/// Runs the Monte Carlo of `scenario` and writes the raw file as output `raw` of
+/// `outputs` (the command's output set, committed here when the file is complete).
+pub fn run(
+    scenario: &Scenario,
+    opts: &RunOptions,
+    outputs: Outputs,
+    raw: OutputId,
+) -> Result<RunSummary> {
     let start = Instant::now();
     let cfg = &scenario.loaded.config;
     let seed = opts.seed.unwrap_or(cfg.simulation.seed);
@@ -323,15 +329,31 @@ pub fn run(scenario: &Scenario, opts: &RunOptions) -> Result<RunSummary> {
     let n_bins = e.n_bins();
     let max_mean = e.total_per_shot().iter().fold(0.0f64, |m, &l| m.max(l)) * shots as f64;
     check_sizes(&e, method, shots, profiles, components, opts)?;
+    let mut method_attributes = vec![];
+    if let ResolvedMethod::AggregateNormal { threshold } = method {
+        method_attributes.push(("normal_approximation_threshold".into(), AttrValue::F64(threshold)));
+        method_attributes.push(("tolerance_ks".into(), AttrValue::F64(tolerance.unwrap_or(f64::NAN))));
+    }
+    let run_info = RunInfo {
+        seed,
+        method: method.name(),
+        method_attributes,
+        command_line: &opts.command_line,
+    };
     let spec = RawFileSpec {
         n_bins,
         n_profiles: profiles,
+        channels: vec![content::channel_name(
+            scenario.instrument.wavelength_nm,
+            scenario.instrument.channel,
+        )],
         count_width: CountWidth::for_max_count(max_mean)?,
         components,
-        bin_variables: bin_variables(&e, shots),
-        root_attributes: root_attributes(scenario, seed, method, tolerance, opts),
+        time_units: content::time_units(&cfg.acquisition.start_time)?,
+        variables: content::variables(scenario, &e, shots),
+        root_attributes: content::root_attributes(scenario, &run_info)?,
     };
-    let mut writer = RawFileWriter::create(&opts.output, &spec)?;
+    let mut writer = RawFileWriter::create(outputs.temp_path(raw)?, &opts.output, &spec)?;
 
     let samplers = stream_samplers(
         &e,
@@ -386,6 +408,7 @@ pub fn run(scenario: &Scenario, opts: &RunOptions) -> Result<RunSummary> {
         progress.inc((last - first) as u64);
     }
     writer.finish()?;
+    outputs.commit()?;
     progress.finish_and_clear();
     Ok(RunSummary {
         output: opts.output.clone(),
@@ -488,128 +511,4 @@ fn progress_bar(show: bool, profiles: usize) -> indicatif::ProgressBar {
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     bar
-}
-
-fn bin_var(name: &str, long_name: &str, units: &str, data: Vec<f64>) -> BinVariable {
-    BinVariable {
-        name: name.into(),
-        long_name: long_name.into(),
-        units: units.into(),
-        data,
-    }
-}
-
-/// The per-bin variables of interface.md and the atmosphere's truth.
-fn bin_variables(e: &ExpectedProfile, shots: u64) -> Vec<BinVariable> {
-    let n = e.n_bins();
-    vec![
-        bin_var(
-            "altitude",
-            "bin-centre altitude above sea level",
-            "m",
-            e.altitude_m.clone(),
-        ),
-        bin_var(
-            "range",
-            "bin-centre range from the instrument",
-            "m",
-            e.range_m.clone(),
-        ),
-        bin_var(
-            "expected_signal",
-            "expected signal counts per shot (exact bin integral of Eq. 2)",
-            "count",
-            e.signal.clone(),
-        ),
-        bin_var(
-            "expected_background",
-            "expected sky-background counts per shot (Eq. 3)",
-            "count",
-            vec![e.background; n],
-        ),
-        bin_var(
-            "expected_dark",
-            "expected dark counts per shot",
-            "count",
-            vec![e.dark; n],
-        ),
-        bin_var(
-            "snr_eq4",
-            "Eq. 4 signal-to-noise ratio of one profile",
-            "1",
-            e.snr_eq4(shots as f64),
-        ),
-        bin_var(
-            "beta_mol",
-            "molecular backscatter coefficient at the bin centre",
-            "m-1 sr-1",
-            e.beta_mol.clone(),
-        ),
-        bin_var(
-            "beta_aer",
-            "aerosol backscatter coefficient at the bin centre",
-            "m-1 sr-1",
-            e.beta_aer.clone(),
-        ),
-        bin_var(
-            "beta_cld",
-            "cloud backscatter coefficient at the bin centre",
-            "m-1 sr-1",
-            e.beta_cld.clone(),
-        ),
-        bin_var(
-            "alpha_total",
-            "total extinction coefficient at the bin centre",
-            "m-1",
-            e.alpha_total.clone(),
-        ),
-        bin_var(
-            "t2",
-            "two-way transmission to the bin centre (multiple-scattering factors applied)",
-            "1",
-            e.t2.clone(),
-        ),
-    ]
-}
-
-fn root_attributes(
-    sc: &Scenario,
-    seed: u64,
-    method: ResolvedMethod,
-    tolerance: Option<f64>,
-    opts: &RunOptions,
-) -> Vec<(String, AttrValue)> {
-    let cfg = &sc.loaded.config;
-    let version = env!("CARGO_PKG_VERSION");
-    let now = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_secs())
-        .unwrap_or(0);
-    let s = |k: &str, v: String| (k.to_string(), AttrValue::Str(v));
-    let f = |k: &str, v: f64| (k.to_string(), AttrValue::F64(v));
-    let mut attrs = vec![
-        s("Conventions", "CF-1.8".into()),
-        s(
-            "title",
-            format!("lidarsim synthetic raw lidar data: {}", cfg.name),
-        ),
-        s("source", format!("lidarsim {version}")),
-        s(
-            "history",
-            format!("created at unix time {now} by: {}", opts.command_line),
-        ),
-        s("config", sc.loaded.resolved_toml.clone()),
-        ("seed".into(), AttrValue::U64(seed)),
-        s("method", method.name().into()),
-        s("config_file", sc.loaded.path.display().to_string()),
-        f("wavelength_nm", sc.instrument.wavelength_nm),
-        f("rep_rate_hz", sc.instrument.rep_rate_hz),
-        f("bin_width_s", sc.instrument.bin_width_s),
-        f("accumulation_time_s", sc.accumulation_time_s()),
-    ];
-    if let ResolvedMethod::AggregateNormal { threshold } = method {
-        attrs.push(f("normal_approximation_threshold", threshold));
-        attrs.push(f("tolerance_ks", tolerance.unwrap_or(f64::NAN)));
-    }
-    attrs
 }

@@ -1,0 +1,210 @@
+//! The raw lidar file, format version 2: HDF5 readable as netCDF-4, with CF-1.10
+//! metadata (`docs/file-format.md` lists every variable and attribute).
+//!
+//! | name | dims | type |
+//! |---|---|---|
+//! | `profile`, `bin` | (profile), (bin) | i64 index coordinates, dimension scales |
+//! | `channel` | (channel) | string coordinate (channel names), dimension scale |
+//! | `counts` | (profile, channel, bin) | u16 / u32 / u64 ([`CountWidth`]), chunked, shuffle + deflate |
+//! | `signal_counts`, `background_counts`, `dark_counts` | (profile, channel, bin) | as `counts`, only with [`RawFileSpec::components`] |
+//! | `time` | (profile) | f64, CF time (`seconds since <start>`) |
+//! | `n_shots` | (profile) | u64 |
+//! | one per [`Variable`] | (bin), (channel) or (channel, bin) | f64 |
+//!
+//! The modules: [`layout`] creates the file and everything known up front,
+//! [`writer`] streams the profiles, [`content`] decides what a simulation puts in the
+//! file, `hdf5_ds` makes the HDF5 calls the `hdf5` crate does not.
+//!
+//! The writer creates the file at exactly the path it is given: where the file goes, its
+//! temporary name, the final rename, locks and signals are decided by
+//! [`super::safe_file`].
+
+pub mod content;
+mod hdf5_ds;
+pub mod layout;
+pub mod writer;
+
+pub use writer::RawFileWriter;
+
+use crate::error::{Error, Result};
+
+/// `lidarsim_format_version` of the files this code writes.
+pub const FORMAT_VERSION: i32 = 2;
+/// The CF version the files declare (CF-1.9 and later allow the unsigned counts).
+pub const CONVENTIONS: &str = "CF-1.10";
+/// Name of the profile dimension (and of its coordinate variable).
+pub const PROFILE_DIM: &str = "profile";
+/// Name of the channel dimension (and of its string coordinate variable).
+pub const CHANNEL_DIM: &str = "channel";
+/// Name of the range-bin dimension (and of its coordinate variable).
+pub const BIN_DIM: &str = "bin";
+/// Names of the per-component count variables, in the order of
+/// [`ProfileRecord::components`]: signal, background, dark.
+pub const COMPONENT_NAMES: [&str; 3] = ["signal_counts", "background_counts", "dark_counts"];
+/// Variable names the layout itself defines; a [`Variable`] may not use them.
+pub const RESERVED_NAMES: [&str; 9] = [
+    PROFILE_DIM,
+    CHANNEL_DIM,
+    BIN_DIM,
+    "counts",
+    "time",
+    "n_shots",
+    COMPONENT_NAMES[0],
+    COMPONENT_NAMES[1],
+    COMPONENT_NAMES[2],
+];
+
+/// Integer width of the stored counts, chosen from the largest count expected (see
+/// [`CountWidth::for_max_count`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum CountWidth {
+    /// Unsigned 16-bit: counts up to 65 535.
+    U16,
+    /// Unsigned 32-bit: counts up to 4 294 967 295.
+    U32,
+    /// Unsigned 64-bit.
+    U64,
+}
+
+impl CountWidth {
+    /// The largest count this width stores.
+    pub fn max_value(self) -> u64 {
+        match self {
+            CountWidth::U16 => u64::from(u16::MAX),
+            CountWidth::U32 => u64::from(u32::MAX),
+            CountWidth::U64 => u64::MAX,
+        }
+    }
+
+    /// Bytes per stored count.
+    pub fn bytes(self) -> usize {
+        match self {
+            CountWidth::U16 => 2,
+            CountWidth::U32 => 4,
+            CountWidth::U64 => 8,
+        }
+    }
+
+    /// Lower-case type name, e.g. `"u16"`, for messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            CountWidth::U16 => "u16",
+            CountWidth::U32 => "u32",
+            CountWidth::U64 => "u64",
+        }
+    }
+
+    /// The narrowest width that holds a Poisson count of mean `max_expected` (the largest
+    /// expected count of any bin in any profile) with safe headroom:
+    /// `mean + 20·sqrt(mean) + 64`. A Poisson draw exceeds that bound with probability
+    /// below 1e-80, so a width chosen here never overflows in practice (and
+    /// [`RawFileWriter::write_profile`] refuses, rather than wraps, if it does).
+    ///
+    /// Errors if `max_expected` is negative or not finite, or if even u64 cannot hold it.
+    pub fn for_max_count(max_expected: f64) -> Result<CountWidth> {
+        if !max_expected.is_finite() || max_expected < 0.0 {
+            return Err(Error::Unsupported(format!(
+                "cannot size the raw file's counts: the largest expected count per bin is \
+                 {max_expected:e}, not a finite non-negative number"
+            )));
+        }
+        let bound = max_expected + 20.0 * max_expected.sqrt() + 64.0;
+        for width in [CountWidth::U16, CountWidth::U32, CountWidth::U64] {
+            // `as f64` rounds u64::MAX up to 2^64, so compare strictly below it.
+            if bound < width.max_value() as f64 {
+                return Ok(width);
+            }
+        }
+        Err(Error::Unsupported(format!(
+            "the largest expected count per bin ({max_expected:e}) does not fit a 64-bit \
+             counter; accumulate fewer shots per profile"
+        )))
+    }
+}
+
+/// The dimensions of a [`Variable`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Dims {
+    /// (bin): e.g. `altitude`, `range`, `range_weight`, the point truth.
+    Bin,
+    /// (channel): e.g. `lidar_constant`.
+    Channel,
+    /// (channel, bin), channel-major: e.g. `expected_signal`, `attenuated_backscatter`.
+    ChannelBin,
+}
+
+/// A f64 variable written at creation beside the counts.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Variable {
+    /// Name in the file (not one of [`RESERVED_NAMES`]).
+    pub name: String,
+    /// Its dimensions.
+    pub dims: Dims,
+    /// CF `long_name`.
+    pub long_name: String,
+    /// CF `units` (UDUNITS string, `"1"` for dimensionless).
+    pub units: String,
+    /// Further text attributes (`standard_name`, `positive`, `comment`, ...).
+    pub attributes: Vec<(String, String)>,
+    /// The values, channel-major for (channel, bin).
+    pub data: Vec<f64>,
+}
+
+/// The value of a root (global) attribute.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AttrValue {
+    /// Text (a variable-length UTF-8 string, netCDF `NC_STRING`).
+    Str(String),
+    /// An unsigned integer (netCDF `NC_UINT64`), e.g. the seed.
+    U64(u64),
+    /// A signed integer (netCDF `NC_INT`), e.g. the format version.
+    I32(i32),
+    /// A floating-point number (netCDF `NC_DOUBLE`).
+    F64(f64),
+}
+
+/// Everything about a raw file that is known before the first profile.
+#[derive(Clone, Debug)]
+pub struct RawFileSpec {
+    /// Range bins per profile (length of the `bin` dimension), at least 1.
+    pub n_bins: usize,
+    /// Profiles in the file, at least 1; every one must be written before
+    /// [`RawFileWriter::finish`].
+    pub n_profiles: usize,
+    /// Channel names (the `channel` coordinate), at least one.
+    pub channels: Vec<String>,
+    /// Integer width of `counts` (and of the component variables).
+    pub count_width: CountWidth,
+    /// Whether the file also holds `signal_counts`, `background_counts` and
+    /// `dark_counts`; each [`ProfileRecord`] must then carry them.
+    pub components: bool,
+    /// CF units of `time`, e.g. `seconds since 2000-01-01 00:00:00`.
+    pub time_units: String,
+    /// Variables written at creation, in this order.
+    pub variables: Vec<Variable>,
+    /// Root attributes, in this order.
+    pub root_attributes: Vec<(String, AttrValue)>,
+}
+
+impl RawFileSpec {
+    /// Counts per profile: channels × bins.
+    pub fn counts_per_profile(&self) -> usize {
+        self.channels.len() * self.n_bins
+    }
+}
+
+/// One profile, as handed to [`RawFileWriter::write_profile`].
+#[derive(Clone, Copy, Debug)]
+pub struct ProfileRecord<'a> {
+    /// Row in the file, `0..n_profiles`; profiles may come in any order, each once.
+    pub index: usize,
+    /// Profile centre time since `acquisition.start_time`, s.
+    pub time_s: f64,
+    /// Shots accumulated in this profile.
+    pub n_shots: u64,
+    /// Accumulated raw counts, channel-major: `counts[c·n_bins + b]`.
+    pub counts: &'a [u64],
+    /// Signal, background and dark counts laid out as `counts`; present exactly when the
+    /// spec asked for components, and then summing to `counts`.
+    pub components: Option<[&'a [u64]; 3]>,
+}
