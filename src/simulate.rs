@@ -331,8 +331,14 @@ pub fn run(
     check_sizes(&e, method, shots, profiles, components, opts)?;
     let mut method_attributes = vec![];
     if let ResolvedMethod::AggregateNormal { threshold } = method {
-        method_attributes.push(("normal_approximation_threshold".into(), AttrValue::F64(threshold)));
-        method_attributes.push(("tolerance_ks".into(), AttrValue::F64(tolerance.unwrap_or(f64::NAN))));
+        method_attributes.push((
+            "normal_approximation_threshold".into(),
+            AttrValue::F64(threshold),
+        ));
+        method_attributes.push((
+            "tolerance_ks".into(),
+            AttrValue::F64(tolerance.unwrap_or(f64::NAN)),
+        ));
     }
     let run_info = RunInfo {
         seed,

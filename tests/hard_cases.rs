@@ -63,7 +63,7 @@ struct Raw {
     bins: usize,
     /// Bytes per stored count (2, 4 or 8).
     count_bytes: usize,
-    /// `counts`, row-major (profile, bin).
+    /// `counts`, row-major (profile, bin) of the one channel.
     counts: Vec<u64>,
     n_shots: Vec<u64>,
 }
@@ -73,7 +73,8 @@ impl Raw {
         let file = hdf5::File::open(path).unwrap();
         let ds = file.dataset("counts").unwrap();
         let shape = ds.shape();
-        assert_eq!(shape.len(), 2, "counts is (profile, bin)");
+        assert_eq!(shape.len(), 3, "counts is (profile, channel, bin)");
+        assert_eq!(shape[1], 1, "one channel");
         let count_bytes = ds.dtype().unwrap().size();
         let counts: Vec<u64> = match count_bytes {
             2 => ds
@@ -95,7 +96,7 @@ impl Raw {
         Raw {
             file,
             profiles: shape[0],
-            bins: shape[1],
+            bins: shape[2],
             count_bytes,
             counts,
             n_shots,

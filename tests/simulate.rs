@@ -86,7 +86,11 @@ fn the_file_has_every_interface_variable_with_units() {
         "expected_signal",
         "expected_background",
         "expected_dark",
+        "expected_counts",
         "snr_eq4",
+        "range_weight",
+        "lidar_constant",
+        "attenuated_backscatter",
         "beta_mol",
         "beta_aer",
         "beta_cld",
@@ -102,7 +106,7 @@ fn the_file_has_every_interface_variable_with_units() {
             "{name} lacks CF attributes"
         );
     }
-    assert_eq!(f.dataset("counts").unwrap().shape(), vec![3, 134]);
+    assert_eq!(f.dataset("counts").unwrap().shape(), vec![3, 1, 134]);
     for attr in [
         "Conventions",
         "title",
@@ -111,6 +115,8 @@ fn the_file_has_every_interface_variable_with_units() {
         "config",
         "seed",
         "method",
+        "date_created",
+        "lidarsim_format_version",
     ] {
         assert!(f.attr(attr).is_ok(), "root attribute {attr} missing");
     }

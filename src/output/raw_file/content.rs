@@ -39,9 +39,8 @@ pub fn channel_name(wavelength_nm: f64, channel: Channel) -> String {
 /// CF units of `time`: `seconds since 2004-03-21 00:00:00` from an RFC 3339 start time
 /// (validated with the config).
 pub fn time_units(start_time: &str) -> Result<String> {
-    let t = humantime::parse_rfc3339(start_time).map_err(|e| {
-        Error::Unsupported(format!("acquisition.start_time {start_time:?}: {e}"))
-    })?;
+    let t = humantime::parse_rfc3339(start_time)
+        .map_err(|e| Error::Unsupported(format!("acquisition.start_time {start_time:?}: {e}")))?;
     let iso = humantime::format_rfc3339_seconds(t).to_string();
     Ok(format!(
         "seconds since {}",
@@ -233,16 +232,19 @@ pub fn root_attributes(sc: &Scenario, run: &RunInfo) -> Result<Vec<(String, Attr
             "title",
             format!("lidarsim synthetic raw lidar data: {}", cfg.name),
         ),
-        s(
-            "institution",
-            "synthetic data (lidarsim simulation)".into(),
-        ),
+        s("institution", "synthetic data (lidarsim simulation)".into()),
         s("source", format!("lidarsim {}", env!("CARGO_PKG_VERSION"))),
         s("history", format!("{created} {}", run.command_line)),
         s("date_created", created),
-        s("references", "Fochesatto et al. (2004), Adv. Space Res. 34, 2227-2231".into()),
+        s(
+            "references",
+            "Fochesatto et al. (2004), Adv. Space Res. 34, 2227-2231".into(),
+        ),
         s("comment", cfg.description.clone()),
-        ("lidarsim_format_version".into(), AttrValue::I32(FORMAT_VERSION)),
+        (
+            "lidarsim_format_version".into(),
+            AttrValue::I32(FORMAT_VERSION),
+        ),
         s("config", sc.loaded.resolved_toml.clone()),
         ("seed".into(), AttrValue::U64(run.seed)),
         s("method", run.method.into()),
@@ -273,7 +275,10 @@ mod tests {
     #[test]
     fn channel_names_read_like_the_field() {
         assert_eq!(channel_name(532.0, Channel::Total), "532_total");
-        assert_eq!(channel_name(1064.0, Channel::Perpendicular), "1064_perpendicular");
+        assert_eq!(
+            channel_name(1064.0, Channel::Perpendicular),
+            "1064_perpendicular"
+        );
         assert_eq!(channel_name(354.7, Channel::Parallel), "354.7_parallel");
     }
 }

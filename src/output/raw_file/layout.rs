@@ -77,7 +77,10 @@ pub fn validate_spec(spec: &RawFileSpec) -> Result<(), String> {
             return Err(format!("invalid variable name {:?}", var.name));
         }
         if RESERVED_NAMES.contains(&var.name.as_str()) || seen.contains(&var.name.as_str()) {
-            return Err(format!("variable `{}` is reserved or given twice", var.name));
+            return Err(format!(
+                "variable `{}` is reserved or given twice",
+                var.name
+            ));
         }
         seen.push(&var.name);
         let want = match var.dims {
@@ -184,7 +187,10 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
     let names: Vec<VarLenUnicode> = spec
         .channels
         .iter()
-        .map(|c| c.parse().map_err(|_| hdf5::Error::from("channel name contains NUL")))
+        .map(|c| {
+            c.parse()
+                .map_err(|_| hdf5::Error::from("channel name contains NUL"))
+        })
         .collect::<hdf5::Result<_>>()?;
     channel.write(&names[..])?;
     write_attrs(&channel, &[("long_name", "receiver channel")])?;
@@ -200,7 +206,10 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
     write_attrs(
         &counts,
         &[
-            ("long_name", "accumulated raw photon counts (signal + background + dark)"),
+            (
+                "long_name",
+                "accumulated raw photon counts (signal + background + dark)",
+            ),
             ("units", "count"),
             ("coordinates", COORDS_PROFILE_BIN),
         ],

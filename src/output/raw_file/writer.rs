@@ -54,8 +54,12 @@ impl RawFileWriter {
             spec.n_profiles.div_ceil(64),
             0u64,
         )?;
-        let open = layout::create_layout(path, spec)
-            .map_err(|e| fail(format!("cannot write: {}", describe_hdf5_error(&e.to_string()))))?;
+        let open = layout::create_layout(path, spec).map_err(|e| {
+            fail(format!(
+                "cannot write: {}",
+                describe_hdf5_error(&e.to_string())
+            ))
+        })?;
         Ok(RawFileWriter {
             display: display.to_path_buf(),
             open: Some(open),

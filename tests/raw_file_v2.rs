@@ -1,0 +1,181 @@
+//! The raw file, format version 2 (docs/file-format.md): CF time, coordinates, the
+//! bin-averaged truth consistent with the counts, reproducible bytes.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use common::config_path;
+use hdf5::types::VarLenUnicode;
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("lidarsim-v2-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Runs `simulate` on a shipped config with SOURCE_DATE_EPOCH fixed.
+fn simulate(cfg: &str, out: &Path, extra: &[&str]) {
+    let o = Command::new(env!("CARGO_BIN_EXE_lidarsim"))
+        .args(["simulate", config_path(cfg).to_str().unwrap(), "-o"])
+        .arg(out)
+        .args(extra)
+        .env("SOURCE_DATE_EPOCH", "1700000000")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+fn str_attr(loc: &hdf5::Location, name: &str) -> String {
+    let v: VarLenUnicode = loc.attr(name).unwrap().read_scalar().unwrap();
+    v.as_str().to_string()
+}
+
+fn f64s(f: &hdf5::File, name: &str) -> Vec<f64> {
+    f.dataset(name).unwrap().read_raw::<f64>().unwrap()
+}
+
+#[test]
+fn same_arguments_and_source_date_epoch_give_identical_bytes() {
+    let dir = scratch("bytes");
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    std::fs::create_dir_all(&a).unwrap();
+    std::fs::create_dir_all(&b).unwrap();
+    for d in [&a, &b] {
+        let o = Command::new(env!("CARGO_BIN_EXE_lidarsim"))
+            .current_dir(d)
+            .args([
+                "simulate",
+                config_path("paper/scenario1.toml").to_str().unwrap(),
+            ])
+            .args(["-o", "x.nc", "--profiles", "50", "--method", "shot"])
+            .env("SOURCE_DATE_EPOCH", "1700000000")
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let (x, y) = (
+        std::fs::read(a.join("x.nc")).unwrap(),
+        std::fs::read(b.join("x.nc")).unwrap(),
+    );
+    assert!(
+        x == y,
+        "two runs differ ({} and {} bytes)",
+        x.len(),
+        y.len()
+    );
+    let f = hdf5::File::open(a.join("x.nc")).unwrap();
+    assert_eq!(str_attr(&f, "date_created"), "2023-11-14T22:13:20Z");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn the_layout_is_format_version_2() {
+    let dir = scratch("layout");
+    let out = dir.join("s1.h5");
+    simulate(
+        "paper/scenario1.toml",
+        &out,
+        &[
+            "--profiles",
+            "4",
+            "--set",
+            "acquisition.start_time=\"2004-03-21T06:30:00Z\"",
+        ],
+    );
+    let f = hdf5::File::open(&out).unwrap();
+    let v: i32 = f
+        .attr("lidarsim_format_version")
+        .unwrap()
+        .read_scalar()
+        .unwrap();
+    assert_eq!(v, 2);
+    assert!(str_attr(&f, "Conventions").starts_with("CF-1."));
+    let counts = f.dataset("counts").unwrap();
+    assert_eq!(counts.shape(), vec![4, 1, 134]);
+    assert_eq!(str_attr(&counts, "coordinates"), "time altitude range");
+    let ch: Vec<VarLenUnicode> = f.dataset("channel").unwrap().read_raw().unwrap();
+    assert_eq!(ch[0].as_str(), "532_total");
+    let time = f.dataset("time").unwrap();
+    assert_eq!(
+        str_attr(&time, "units"),
+        "seconds since 2004-03-21 06:30:00"
+    );
+    assert_eq!(str_attr(&time, "standard_name"), "time");
+    // 100 shots at 10 Hz: profile centres at 5, 15, 25, 35 s
+    assert_eq!(f64s(&f, "time"), vec![5.0, 15.0, 25.0, 35.0]);
+    let alt = f.dataset("altitude").unwrap();
+    assert_eq!(str_attr(&alt, "standard_name"), "altitude");
+    assert_eq!(str_attr(&alt, "positive"), "up");
+    assert_eq!(f.dataset("expected_signal").unwrap().shape(), vec![1, 134]);
+    assert_eq!(f.dataset("lidar_constant").unwrap().shape(), vec![1]);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn expected_signal_is_lidar_constant_times_attenuated_backscatter_times_range_weight() {
+    let dir = scratch("truth");
+    let out = dir.join("s3.h5");
+    simulate("paper/scenario3.toml", &out, &["--profiles", "2"]);
+    let f = hdf5::File::open(&out).unwrap();
+    let c = f64s(&f, "lidar_constant")[0];
+    let (s, ab, rw) = (
+        f64s(&f, "expected_signal"),
+        f64s(&f, "attenuated_backscatter"),
+        f64s(&f, "range_weight"),
+    );
+    for i in 0..s.len() {
+        let model = c * ab[i] * rw[i];
+        assert!(
+            (model - s[i]).abs() <= 1e-12 * s[i].abs().max(1e-300),
+            "bin {i}: {model} vs {}",
+            s[i]
+        );
+    }
+    let total: Vec<f64> = f64s(&f, "expected_counts");
+    let (b, d) = (f64s(&f, "expected_background"), f64s(&f, "expected_dark"));
+    for i in 0..s.len() {
+        assert!((total[i] - (s[i] + b[i] + d[i])).abs() <= 1e-12 * total[i]);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn the_bin_averaged_truth_follows_a_cut_cloud_edge_where_the_point_truth_does_not() {
+    // scenario 1's cirrus spans 10-12 km; move its top to cut a 300 m bin in the middle
+    let dir = scratch("edge");
+    let out = dir.join("edge.h5");
+    simulate(
+        "paper/scenario1.toml",
+        &out,
+        &[
+            "--profiles",
+            "2",
+            "--set",
+            "atmosphere.layers.0.top_km=11.9151",
+        ],
+    );
+    let f = hdf5::File::open(&out).unwrap();
+    let (alt, ab) = (f64s(&f, "altitude"), f64s(&f, "attenuated_backscatter"));
+    let (bm, ba, bc, t2) = (
+        f64s(&f, "beta_mol"),
+        f64s(&f, "beta_aer"),
+        f64s(&f, "beta_cld"),
+        f64s(&f, "t2"),
+    );
+    let i = alt
+        .iter()
+        .position(|z| (z - 11_915.1).abs() < 150.0)
+        .expect("a bin holds the cloud top");
+    let point = (bm[i] + ba[i] + bc[i]) * t2[i];
+    let rel = (ab[i] - point).abs() / ab[i];
+    assert!(
+        rel > 0.2,
+        "bin {i} at {} m: averaged {} point {point}",
+        alt[i],
+        ab[i]
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
