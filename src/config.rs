@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, compact};
 
 /// A whole scenario: instrument, platform, acquisition, atmosphere, background, simulation.
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -386,39 +386,60 @@ impl LoadedConfig {
 
 /// Reads `path`, applies `overrides` (`KEY=VALUE`, dotted keys), deserializes and validates.
 pub fn load(path: &Path, overrides: &[String]) -> Result<LoadedConfig> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+    let io = |source| Error::Io {
         path: path.to_path_buf(),
         source,
+    };
+    if std::fs::metadata(path).map_err(io)?.is_dir() {
+        return Err(Error::config(
+            path.display().to_string(),
+            "",
+            "is a directory, not a config file",
+        ));
+    }
+    let bytes = std::fs::read(path).map_err(io)?;
+    let text = String::from_utf8(bytes).map_err(|_| {
+        Error::config(
+            path.display().to_string(),
+            "",
+            "is not UTF-8 text: a config is a TOML text file",
+        )
     })?;
     load_str(&text, path, overrides)
 }
 
-/// As [`load`], from text already read; `path` names the source in errors.
+/// As [`load`], from text already read; `path` names the source in errors, and an
+/// error in a key that an override set names the override.
 pub fn load_str(text: &str, path: &Path, overrides: &[String]) -> Result<LoadedConfig> {
     let file = path.display().to_string();
     let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
-        let key = e.span().map(|s| line_of(text, s.start)).unwrap_or_default();
-        Error::config(&file, key, format!("malformed TOML: {}", e.message()))
+        let at = e
+            .span()
+            .map(|s| line_column(text, s.start))
+            .unwrap_or_default();
+        Error::config(
+            &file,
+            "",
+            format!("{at}malformed TOML: {}", one_line(e.message())),
+        )
     })?;
     for item in overrides {
         apply_override(&mut table, item)
-            .map_err(|reason| Error::config(&file, key_of(item), reason))?;
+            .map_err(|reason| Error::config(format!("--set {item}"), key_of(item), reason))?;
     }
     let resolved_toml = toml::to_string(&table).unwrap_or_default();
     let de = toml::Value::Table(table);
-    let config: ScenarioConfig = serde_path_to_error::deserialize(de).map_err(|e| {
-        let key = e.path().to_string();
-        Error::config(
-            &file,
-            if key == "." {
-                "(top level)".into()
-            } else {
-                key
-            },
-            e.into_inner().to_string(),
-        )
-    })?;
-    config.validate(&file)?;
+    let config: ScenarioConfig = serde_path_to_error::deserialize(de)
+        .map_err(|e| {
+            let key = e.path().to_string();
+            let key = if key == "." { String::new() } else { key };
+            let reason = plain_serde_message(&key, e.inner().message());
+            Error::config(&file, key, reason)
+        })
+        .map_err(|e| attribute_to_override(e, overrides))?;
+    config
+        .validate(&file)
+        .map_err(|e| attribute_to_override(e, overrides))?;
     Ok(LoadedConfig {
         config,
         path: path.to_path_buf(),
@@ -426,11 +447,77 @@ pub fn load_str(text: &str, path: &Path, overrides: &[String]) -> Result<LoadedC
     })
 }
 
-fn line_of(text: &str, offset: usize) -> String {
-    format!(
-        "(line {})",
-        text[..offset.min(text.len())].matches('\n').count() + 1
-    )
+/// `"line 10, column 17: "` for a byte offset into `text`.
+fn line_column(text: &str, offset: usize) -> String {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    format!("line {line}, column {column}: ")
+}
+
+/// A message on one line.
+fn one_line(msg: &str) -> String {
+    msg.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// A deserialization message in the user's words: no Rust type names.
+fn plain_serde_message(key: &str, msg: &str) -> String {
+    let msg = one_line(msg);
+    if key.ends_with("molecular.model") {
+        return "expected \"us76\", \"none\" or { file = \"profile.txt\" }".into();
+    }
+    if let Some(rest) = msg.strip_prefix("invalid type: ") {
+        let (got, want) = rest
+            .split_once(", expected ")
+            .unwrap_or((rest, "another type"));
+        let want = match want {
+            w if w.starts_with("struct ") || w.starts_with("a map") => "a table".to_string(),
+            "f64" | "f32" => "a number".to_string(),
+            "usize" | "u64" | "u32" => "a whole number".to_string(),
+            "a boolean" | "bool" => "true or false".to_string(),
+            w if w.starts_with("a sequence") => "an array".to_string(),
+            w => w.to_string(),
+        };
+        return format!("expected {want}, got {}", got.replace('`', "'"));
+    }
+    if let Some(rest) = msg.strip_prefix("invalid value: ") {
+        let (got, want) = rest
+            .split_once(", expected ")
+            .unwrap_or((rest, "another value"));
+        let want = match want {
+            "usize" | "u64" | "u32" => "a whole number >= 0",
+            w => w,
+        };
+        return format!("expected {want}, got {}", got.replace('`', "'"));
+    }
+    if let Some(rest) = msg.strip_prefix("unknown field ") {
+        return format!("unknown key {}", rest.replace('`', "'"));
+    }
+    if let Some(rest) = msg.strip_prefix("missing field ") {
+        return format!("missing key {}", rest.replace('`', "'"));
+    }
+    if msg.contains("untagged enum") || msg.contains("internally tagged") {
+        return "does not have one of the forms this key takes (see docs/config.md)".into();
+    }
+    msg.replace('`', "'")
+}
+
+/// An error in a key that a `--set` override set (the key or a table above it) names
+/// that override rather than the file.
+fn attribute_to_override(e: Error, overrides: &[String]) -> Error {
+    let Error::Config { file, key, reason } = e else {
+        return e;
+    };
+    // "atmosphere.layers[0].top_km" -> "atmosphere.layers.0.top_km"
+    let dotted = key.replace('[', ".").replace(']', "");
+    let hit = overrides.iter().rev().find(|item| {
+        let k = key_of(item);
+        !k.is_empty() && (dotted == k || dotted.starts_with(&format!("{k}.")))
+    });
+    match hit {
+        Some(item) => Error::config(format!("--set {item}"), key, reason),
+        None => Error::Config { file, key, reason },
+    }
 }
 
 fn key_of(item: &str) -> String {
@@ -525,7 +612,15 @@ impl Checker<'_> {
             return Err(self.fail(key, format!("must be a finite number, got {value}")));
         }
         if value < lo || value > hi {
-            return Err(self.fail(key, format!("must be within [{lo}, {hi}], got {value}")));
+            return Err(self.fail(
+                key,
+                format!(
+                    "must be within [{}, {}], got {}",
+                    compact(lo),
+                    compact(hi),
+                    compact(value)
+                ),
+            ));
         }
         Ok(())
     }
@@ -554,7 +649,11 @@ impl ScenarioConfig {
         self.validate_atmosphere(&c)?;
         c.range("background.radiance", self.background.radiance, 0.0, 1e25)?;
         if let Some(t) = self.simulation.tolerance {
-            c.range("simulation.tolerance", t, 0.0, 1.0)?;
+            c.positive(
+                "simulation.tolerance",
+                t,
+                crate::sampling::approx::MAX_TOLERANCE,
+            )?;
         }
         Ok(())
     }
@@ -645,8 +744,12 @@ impl ScenarioConfig {
                 ),
             ));
         }
-        if a.profiles == 0 {
-            return Err(c.fail("acquisition.profiles", "must be at least 1"));
+        let max_profiles = crate::cli_values::MAX_PROFILES;
+        if a.profiles == 0 || a.profiles as u64 > max_profiles {
+            return Err(c.fail(
+                "acquisition.profiles",
+                format!("must be from 1 to {}", compact(max_profiles as f64)),
+            ));
         }
         if let Err(e) = humantime::parse_rfc3339(&a.start_time) {
             return Err(c.fail(

@@ -6,7 +6,9 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// A configuration value (file or `--set` override) is missing, malformed or out of range.
-    #[error("{file}: key `{key}`: {reason}")]
+    /// Shown as `FILE: key `KEY`: REASON`, or `--set KEY=VALUE: REASON` for an override,
+    /// or `FILE: REASON` when no key applies (a TOML syntax error).
+    #[error("{}", config_message(file, key, reason))]
     Config {
         /// The config file (or `--set` for an override).
         file: String,
@@ -15,8 +17,8 @@ pub enum Error {
         /// What is wrong and what is expected.
         reason: String,
     },
-    /// Reading or writing a file failed.
-    #[error("{}: {source}", path.display())]
+    /// Reading or writing a file failed; shown with the OS reason in plain words.
+    #[error("{}: {}", path.display(), describe_io(source))]
     Io {
         /// The file concerned.
         path: PathBuf,
@@ -35,6 +37,51 @@ pub enum Error {
     /// on a scene whose expectations vary per shot).
     #[error("{0}")]
     Unsupported(String),
+}
+
+fn config_message(file: &str, key: &str, reason: &str) -> String {
+    if file.starts_with("--set ") || key.is_empty() {
+        format!("{file}: {reason}")
+    } else {
+        format!("{file}: key `{key}`: {reason}")
+    }
+}
+
+/// A number for a message, in compact form: `1000`, `0.25`, `1e308`, `2.5e-10` (the
+/// shortest representation that reads back to the same value).
+pub fn compact(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || !x.is_finite() || (1e-4..1e6).contains(&a) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// A short, user-facing description of an I/O error: the OS reason in plain words
+/// ("no space left on device"), without the "(os error 28)" tail.
+pub fn describe_io(err: &std::io::Error) -> String {
+    use std::io::ErrorKind as K;
+    match err.kind() {
+        K::PermissionDenied => "permission denied".into(),
+        K::NotFound => "no such file or directory".into(),
+        K::ReadOnlyFilesystem => "read-only file system".into(),
+        K::StorageFull => "no space left on device".into(),
+        K::QuotaExceeded => "disk quota exceeded".into(),
+        K::NotADirectory => "a component of the path is not a directory".into(),
+        K::IsADirectory => "is a directory".into(),
+        K::FileTooLarge => "file too large".into(),
+        K::InvalidData => "not UTF-8 text".into(),
+        K::InvalidFilename => "file name too long or invalid".into(),
+        _ => {
+            let s = err.to_string();
+            let s = s.split(" (os error").next().unwrap_or(&s).to_string();
+            let mut c = s.chars();
+            c.next()
+                .map(|f| f.to_lowercase().chain(c).collect())
+                .unwrap_or(s)
+        }
+    }
 }
 
 /// Shorthand for results carrying [`Error`].
@@ -60,5 +107,30 @@ impl Error {
             path: path.into(),
             reason: reason.to_string(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_in_messages_are_compact() {
+        assert_eq!(compact(1e308), "1e308");
+        assert_eq!(compact(1000.0), "1000");
+        assert_eq!(compact(-1.0), "-1");
+        assert_eq!(compact(0.25), "0.25");
+        assert_eq!(compact(2.5e-10), "2.5e-10");
+        assert_eq!(compact(f64::NAN), "NaN");
+    }
+
+    #[test]
+    fn io_reasons_are_plain_words() {
+        let e = std::io::Error::from_raw_os_error(28);
+        assert_eq!(describe_io(&e), "no space left on device");
+        let e = std::io::Error::from_raw_os_error(5);
+        assert_eq!(describe_io(&e), "input/output error");
+        let e = std::io::Error::from_raw_os_error(36);
+        assert_eq!(describe_io(&e), "file name too long or invalid");
     }
 }

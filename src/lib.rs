@@ -4,6 +4,7 @@
 //! as restated and completed in `docs/model.md`.
 
 pub mod atmosphere;
+pub mod cli_values;
 pub mod commands;
 pub mod config;
 pub mod constants;

@@ -4,6 +4,36 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use lidarsim::cli_values;
+
+/// Help and version go to stdout as clap prints them; a usage error is one line.
+fn usage_error(e: clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    if matches!(
+        e.kind(),
+        ErrorKind::DisplayHelp
+            | ErrorKind::DisplayVersion
+            | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+    ) {
+        let _ = e.print();
+        return if e.use_stderr() {
+            ExitCode::from(2)
+        } else {
+            ExitCode::SUCCESS
+        };
+    }
+    // the paragraph before clap's usage and tips, on one line
+    let text = e.render().to_string();
+    let message: Vec<&str> = text
+        .lines()
+        .take_while(|l| !l.trim().is_empty())
+        .map(str::trim)
+        .collect();
+    let message = message.join(" ");
+    let message = message.strip_prefix("error: ").unwrap_or(&message);
+    eprintln!("lidarsim: error: {message} (see lidarsim --help)");
+    ExitCode::from(2)
+}
 
 /// Monte Carlo simulator of photon-counting backscatter lidar signals.
 #[derive(Parser)]
@@ -50,11 +80,11 @@ enum Command {
         /// Output raw file (HDF5, netCDF-4 readable).
         #[arg(short = 'o', long = "output", value_name = "OUT.h5")]
         output: PathBuf,
-        /// Random seed (default: simulation.seed).
-        #[arg(long)]
+        /// Random seed (default: simulation.seed); 0 to 2^64-1.
+        #[arg(long, allow_negative_numbers = true, value_parser = cli_values::seed)]
         seed: Option<u64>,
-        /// Number of profiles (default: acquisition.profiles).
-        #[arg(long)]
+        /// Number of profiles (default: acquisition.profiles); 1 to 1e12, `1e6` accepted.
+        #[arg(long, allow_negative_numbers = true, value_parser = cli_values::profiles)]
         profiles: Option<usize>,
         /// auto, shot or aggregate (default: simulation.method).
         #[arg(long, value_enum)]
@@ -63,11 +93,11 @@ enum Command {
         #[arg(long)]
         components: bool,
         /// With --method auto: largest KS distance per bin to the exact law a faster
-        /// approximation may have (e.g. 1e-3); default exact.
-        #[arg(long)]
+        /// approximation may have, in (0, 0.01] (e.g. 1e-3); default exact.
+        #[arg(long, allow_negative_numbers = true, value_parser = cli_values::tolerance)]
         tolerance: Option<f64>,
-        /// Worker threads (default: all cores); results do not depend on it.
-        #[arg(long)]
+        /// Worker threads, 1 to 1024 (default: all cores); results do not depend on it.
+        #[arg(long, allow_negative_numbers = true, value_parser = cli_values::threads)]
         threads: Option<usize>,
     },
     /// Statistical check of the simulator against Eq. 4; exit 0 when consistent, 1 when not.
@@ -78,13 +108,13 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
         /// Number of independent profiles to draw.
-        #[arg(long, default_value_t = 1000)]
+        #[arg(long, default_value_t = 1000, allow_negative_numbers = true, value_parser = cli_values::realizations)]
         realizations: usize,
         /// auto, shot or aggregate (default: simulation.method).
         #[arg(long, value_enum)]
         method: Option<lidarsim::config::Method>,
-        /// Random seed (default: simulation.seed).
-        #[arg(long)]
+        /// Random seed (default: simulation.seed); 0 to 2^64-1.
+        #[arg(long, allow_negative_numbers = true, value_parser = cli_values::seed)]
         seed: Option<u64>,
         /// Also write the full report (every bin) as JSON.
         #[arg(long, value_name = "PATH")]
@@ -93,7 +123,10 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return usage_error(e),
+    };
     if let Err(e) = lidarsim::output::safe_file::install_signal_handlers() {
         eprintln!("lidarsim: error: {e}");
         return ExitCode::from(2);

@@ -443,28 +443,7 @@ fn describe_file_type(t: &fs::FileType) -> &'static str {
     }
 }
 
-/// A short, user-facing description of an I/O error: the OS reason in plain words.
-pub fn describe_io(err: &io::Error) -> String {
-    match err.kind() {
-        io::ErrorKind::PermissionDenied => "permission denied".into(),
-        io::ErrorKind::NotFound => "no such file or directory".into(),
-        io::ErrorKind::ReadOnlyFilesystem => "read-only file system".into(),
-        io::ErrorKind::StorageFull => "no space left on device".into(),
-        io::ErrorKind::QuotaExceeded => "disk quota exceeded".into(),
-        io::ErrorKind::NotADirectory => "a component of the path is not a directory".into(),
-        io::ErrorKind::IsADirectory => "is a directory".into(),
-        io::ErrorKind::FileTooLarge => "file too large".into(),
-        _ => {
-            // "No space left on device (os error 28)" -> "no space left on device"
-            let s = err.to_string();
-            let s = s.split(" (os error").next().unwrap_or(&s).to_string();
-            let mut c = s.chars();
-            c.next()
-                .map(|f| f.to_lowercase().chain(c).collect())
-                .unwrap_or(s)
-        }
-    }
-}
+pub use crate::error::describe_io;
 
 /// The OS reason inside an HDF5 error message, in plain words: HDF5 reports a failed
 /// system call as `... errno = 28, error message = 'No space left on device' ...`;
@@ -672,13 +651,5 @@ mod tests {
                  'No space left on device', buf = 0x1, total write size = 4096";
         assert_eq!(describe_hdf5_error(m), "no space left on device");
         assert_eq!(describe_hdf5_error("bad chunk"), "bad chunk");
-    }
-
-    #[test]
-    fn io_errors_read_as_plain_words() {
-        let e = io::Error::from_raw_os_error(28);
-        assert_eq!(describe_io(&e), "no space left on device");
-        let e = io::Error::from_raw_os_error(5);
-        assert_eq!(describe_io(&e), "input/output error");
     }
 }

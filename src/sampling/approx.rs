@@ -74,6 +74,13 @@ pub const KS_BOUND_SLACK: f64 = 1e-6;
 /// tolerance every mean may be approximated.
 pub const KS_SUP: f64 = 0.10802;
 
+/// Largest tolerance (KS distance per bin) a run may ask for: 0.01, whose threshold
+/// [`normal_threshold`] is μ* = 44.5 counts. Below ~40 counts the normal law, clipped at 0
+/// and rounded, drifts from the Poisson mean (at `--tolerance 2` every mean is drawn
+/// normally and means of 0.2 counts come out 21 % high), so larger tolerances buy
+/// speed with bias, not with the shape error the tolerance states.
+pub const MAX_TOLERANCE: f64 = 0.01;
+
 /// [`normal_approx_ks`] sums over every integer up to this mean; above, it uses the
 /// incomplete-gamma integral on a refined grid of k.
 pub const KS_SUM_MAX: f64 = 1e6;

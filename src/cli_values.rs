@@ -1,0 +1,98 @@
+//! Command-line values, validated like config values: one parser per kind of option,
+//! each refusing what the run could not honour with a message that names the range.
+//! clap calls them; its message is then `invalid value 'X' for '--opt': REASON`.
+
+use crate::error::compact;
+use crate::sampling::approx::MAX_TOLERANCE;
+
+/// Largest `--profiles` (and `acquisition.profiles`): far beyond any disk, refused up
+/// front whatever the memory and disk say.
+pub const MAX_PROFILES: u64 = 1_000_000_000_000;
+/// Largest `--threads`.
+pub const MAX_THREADS: usize = 1024;
+/// Largest `--realizations` of `validate`.
+pub const MAX_REALIZATIONS: u64 = 100_000_000;
+
+/// A whole number in `[lo, hi]`, written as an integer or in scientific notation
+/// (`1e6`).
+fn whole(s: &str, lo: u64, hi: u64) -> Result<u64, String> {
+    let range = || format!("must be a whole number from {lo} to {}", compact(hi as f64));
+    if let Ok(n) = s.trim().parse::<u64>() {
+        return if (lo..=hi).contains(&n) {
+            Ok(n)
+        } else {
+            Err(range())
+        };
+    }
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64 => {
+            Ok(x as u64)
+        }
+        _ => Err(range()),
+    }
+}
+
+/// `--profiles`: 1 to [`MAX_PROFILES`].
+pub fn profiles(s: &str) -> Result<usize, String> {
+    whole(s, 1, MAX_PROFILES).map(|n| n as usize)
+}
+
+/// `--realizations`: 1 to [`MAX_REALIZATIONS`] (`validate` has its own minimum).
+pub fn realizations(s: &str) -> Result<usize, String> {
+    whole(s, 1, MAX_REALIZATIONS).map(|n| n as usize)
+}
+
+/// `--threads`: 1 to [`MAX_THREADS`].
+pub fn threads(s: &str) -> Result<usize, String> {
+    whole(s, 1, MAX_THREADS as u64).map(|n| n as usize)
+}
+
+/// `--seed`: any whole number from 0 to 2^64 − 1, as an integer.
+pub fn seed(s: &str) -> Result<u64, String> {
+    s.trim()
+        .parse::<u64>()
+        .map_err(|_| "must be a whole number from 0 to 18446744073709551615".to_string())
+}
+
+/// `--tolerance`: a KS distance in (0, [`MAX_TOLERANCE`]].
+pub fn tolerance(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(t) if t > 0.0 && t <= MAX_TOLERANCE => Ok(t),
+        _ => Err(format!(
+            "must be a number in (0, {}] (the largest KS distance per bin; omit it for exact draws)",
+            compact(MAX_TOLERANCE)
+        )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_accept_integers_and_scientific_notation_in_range() {
+        assert_eq!(profiles("1e6"), Ok(1_000_000));
+        assert_eq!(profiles("20"), Ok(20));
+        for bad in ["-1", "0", "1.5", "abc", "1e13", "nan", "inf", ""] {
+            assert!(profiles(bad).is_err(), "{bad}");
+        }
+        assert!(threads("100000").is_err());
+        assert_eq!(threads("2"), Ok(2));
+    }
+
+    #[test]
+    fn tolerance_is_refused_outside_its_range() {
+        for bad in ["NaN", "-1", "0", "inf", "2", "0.02"] {
+            let e = tolerance(bad).unwrap_err();
+            assert!(e.contains("0.01"), "{bad}: {e}");
+        }
+        assert_eq!(tolerance("1e-3"), Ok(1e-3));
+    }
+
+    #[test]
+    fn seeds_are_whole_numbers() {
+        assert!(seed("-1").is_err());
+        assert!(seed("1000000000000000000000000000000").is_err());
+        assert_eq!(seed("18446744073709551615"), Ok(u64::MAX));
+    }
+}
