@@ -504,7 +504,7 @@ fn plain_serde_message(key: &str, msg: &str) -> String {
 
 /// An error in a key that a `--set` override set (the key or a table above it) names
 /// that override rather than the file.
-fn attribute_to_override(e: Error, overrides: &[String]) -> Error {
+pub fn attribute_to_override(e: Error, overrides: &[String]) -> Error {
     let Error::Config { file, key, reason } = e else {
         return e;
     };

@@ -109,6 +109,7 @@ impl Scenario {
     /// Loads `path` with `overrides` and builds the scenario.
     pub fn load(path: &Path, overrides: &[String]) -> Result<Self> {
         Self::from_loaded(config::load(path, overrides)?)
+            .map_err(|e| config::attribute_to_override(e, overrides))
     }
 
     /// Builds the scenario of a loaded config.

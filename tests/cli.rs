@@ -90,8 +90,8 @@ fn bad_input_is_one_clear_line_and_exit_2() {
     let err = String::from_utf8(out.stderr).unwrap();
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(
-        err.contains("scenario1.toml")
-            && err.contains("instrument.pulse_energy_j")
+        err.contains("--set instrument.pulse_energy_j=-1: must be")
+            && !err.contains("scenario1.toml")
             && !err.contains("panicked"),
         "{err}"
     );
