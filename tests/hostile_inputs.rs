@@ -161,7 +161,6 @@ fn prepare(name: &str, dir: &Scratch) -> bool {
             "in/cfg.toml",
             &s1_with("pulse_energy_j", "pulse_energy_j = inf"),
         ),
-        "number for a table" => write("in/cfg.toml", &s1_with("[platform]", "platform = 3")),
         "missing section" => write(
             "in/cfg.toml",
             &s1_with("[background]", "[unused_background]"),
@@ -292,7 +291,7 @@ fn cases() -> Vec<Case> {
         c(
             "number for a table",
             Refused("platform"),
-            args(&["expect", "@IN"]),
+            args(&["expect", "@S1", "--set", "platform=3"]),
         ),
         c(
             "missing section",
@@ -768,7 +767,7 @@ fn cases() -> Vec<Case> {
         c(
             "disk full mid-run",
             Refused("no space left"),
-            Run::FullDisk(256 << 20),
+            Run::FullDisk(512 << 20),
         ),
     ];
     v.push(Case {
@@ -892,8 +891,10 @@ fn spawn(
     env: &[(&str, &str)],
     fsize: Option<u64>,
 ) -> (std::process::Child, PathBuf, PathBuf) {
-    let out = dir.0.with_extension("stdout");
-    let err = dir.0.with_extension("stderr");
+    static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let out = dir.0.with_extension(format!("{n}.stdout"));
+    let err = dir.0.with_extension(format!("{n}.stderr"));
     let mut cmd = Command::new(bin());
     cmd.args(args.iter().map(|a| expand(a, dir)))
         .current_dir(&dir.0)
@@ -1002,7 +1003,7 @@ fn run_case(case: &Case, n: usize) -> Option<Outcome> {
                 "-o",
                 "@D/small/out.h5",
                 "--profiles",
-                "2000000",
+                "1000000",
             ]
             .iter()
             .map(|s| s.to_string())
