@@ -62,6 +62,9 @@ pub struct ExpectedProfile {
     pub dark: f64,
     /// Signal-free bins used to estimate the background (0 = none available).
     pub background_bins: usize,
+    /// Their indices: bins of the window lying wholly above the atmosphere, nearest the
+    /// atmosphere first, at most `acquisition.background_bins` of them.
+    pub background_bin_indices: Vec<usize>,
 }
 
 impl ExpectedProfile {
@@ -138,13 +141,55 @@ impl Scenario {
             ));
         }
         let path = BeamPath::new(&atmosphere, &geometry, overlap);
-        Ok(Scenario {
+        let sc = Scenario {
             loaded,
             instrument,
             geometry,
             atmosphere,
             path,
-        })
+        };
+        if let Some(asked) = sc.loaded.config.acquisition.background_bins {
+            let available = sc.signal_free_bins().len();
+            if asked > available {
+                return Err(Error::config(
+                    &file,
+                    "acquisition.background_bins",
+                    format!(
+                        "asks for {} signal-free bins, the window holds {available} above the \
+                         atmosphere (raise acquisition.top_altitude_km, or omit the key to use them all)",
+                        crate::error::compact(asked as f64)
+                    ),
+                ));
+            }
+        }
+        Ok(sc)
+    }
+
+    /// The window's bins lying wholly above the atmosphere (signal-free: they measure the
+    /// background alone), nearest the atmosphere first.
+    pub fn signal_free_bins(&self) -> Vec<usize> {
+        let g = &self.geometry;
+        let top = self.atmosphere.top_m();
+        let mut bins: Vec<usize> = (0..g.n_bins)
+            .filter(|&i| {
+                let (ra, rb) = g.bin_range_bounds(i);
+                g.altitude_at_range(ra).min(g.altitude_at_range(rb)) >= top
+            })
+            .collect();
+        let altitude = |i: usize| g.altitude_at_range(g.bin_centre_range_m(i));
+        bins.sort_by(|&a, &b| altitude(a).total_cmp(&altitude(b)));
+        bins
+    }
+
+    /// The bins a retrieval estimates the background from: the signal-free bins, at most
+    /// `acquisition.background_bins` of them (checked against those available when the
+    /// scenario is built).
+    pub fn background_bin_indices(&self) -> Vec<usize> {
+        let mut bins = self.signal_free_bins();
+        if let Some(cap) = self.loaded.config.acquisition.background_bins {
+            bins.truncate(cap);
+        }
+        bins
     }
 
     /// Accumulation time TC of one profile, s.
@@ -192,20 +237,8 @@ impl Scenario {
             e.attenuated_backscatter
                 .push(if weight > 0.0 { integral / weight } else { 0.0 });
         }
-        let top = self.atmosphere.top_m();
-        // bins lying wholly above the atmosphere
-        let signal_free = (0..n)
-            .filter(|&i| {
-                let (ra, rb) = g.bin_range_bounds(i);
-                g.altitude_at_range(ra).min(g.altitude_at_range(rb)) >= top
-            })
-            .count();
-        e.background_bins = self
-            .loaded
-            .config
-            .acquisition
-            .background_bins
-            .unwrap_or(signal_free);
+        e.background_bin_indices = self.background_bin_indices();
+        e.background_bins = e.background_bin_indices.len();
         Ok(e)
     }
 }

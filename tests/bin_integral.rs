@@ -81,6 +81,7 @@ fn clear_vacuum_slab_has_the_closed_form() {
             "atmosphere.layers.0.lidar_ratio_sr=1",
             "atmosphere.layers.0.base_km=0",
             "atmosphere.layers.0.top_km=40",
+            "acquisition.top_altitude_km=40",
         ],
     );
     let e = sc.expected().unwrap();
@@ -161,6 +162,7 @@ fn other_wavelengths_scale_like_rayleigh() {
             &[
                 &format!("instrument.wavelength_nm={wl}"),
                 "atmosphere.molecular.model=us76",
+                "acquisition.top_altitude_km=40",
             ],
         );
         let e = sc.expected().unwrap();

@@ -48,10 +48,10 @@ fn expect_csv_has_the_interface_columns() {
     let rows: Vec<Vec<f64>> = lines
         .map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect())
         .collect();
-    assert_eq!(rows.len(), 134);
+    assert_eq!(rows.len(), 334);
     assert!(rows.iter().flatten().all(|v| v.is_finite()));
     // altitudes decrease from the window top for a space-borne lidar
-    assert!(rows[0][0] > rows[1][0] && (rows[0][0] - 39_850.1).abs() < 1.0);
+    assert!(rows[0][0] > rows[1][0] && (rows[0][0] - 99_850.1).abs() < 1.0);
 }
 
 #[test]
@@ -63,8 +63,9 @@ fn set_overrides_work_on_the_command_line() {
         let out = lidarsim(&args);
         assert!(out.status.success());
         let text = String::from_utf8(out.stdout).unwrap();
+        // the lowest bin (the first ones, above the atmosphere, hold no signal)
         text.lines()
-            .nth(1)
+            .last()
             .unwrap()
             .split(',')
             .nth(7)
@@ -139,11 +140,10 @@ fn snr_map_writes_a_png_and_csv() {
         text.lines().next(),
         Some("altitude_m,accumulation_time_s,snr")
     );
-    // S/N grows as sqrt(TC): 1 s and 100 s rows of the first bin differ by 10×
-    let first: Vec<f64> = text
-        .lines()
-        .skip(1)
-        .take(61)
+    // S/N grows as sqrt(TC): 1 s and 100 s rows of the lowest bin differ by 10×
+    let lines: Vec<&str> = text.lines().collect();
+    let first: Vec<f64> = lines[lines.len() - 61..]
+        .iter()
         .map(|l| l.split(',').nth(2).unwrap().parse().unwrap())
         .collect();
     assert!((first[40] / first[0] - 10.0).abs() < 1e-9);
@@ -181,7 +181,7 @@ fn validate_exits_0_when_consistent_and_writes_json() {
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(report["consistent"], serde_json::Value::Bool(true));
-    assert_eq!(report["bins"].as_array().unwrap().len(), 134);
+    assert_eq!(report["bins"].as_array().unwrap().len(), 334);
     let out = lidarsim(&["validate", cfg.to_str().unwrap(), "--realizations", "3"]);
     assert_eq!(out.status.code(), Some(2));
     std::fs::remove_dir_all(&dir).ok();

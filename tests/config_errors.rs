@@ -118,7 +118,7 @@ fn bad_values_name_their_key() {
             "below the platform",
         ),
         (
-            &["acquisition.bottom_altitude_km=50"],
+            &["acquisition.bottom_altitude_km=150"],
             "acquisition.bottom_altitude_km",
             "below acquisition.top_altitude_km",
         ),

@@ -94,7 +94,7 @@ fn the_layout_is_format_version_2() {
     assert_eq!(v, 2);
     assert!(str_attr(&f, "Conventions").starts_with("CF-1."));
     let counts = f.dataset("counts").unwrap();
-    assert_eq!(counts.shape(), vec![4, 1, 134]);
+    assert_eq!(counts.shape(), vec![4, 1, 334]);
     assert_eq!(str_attr(&counts, "coordinates"), "time altitude range");
     let ch: Vec<VarLenUnicode> = f.dataset("channel").unwrap().read_raw().unwrap();
     assert_eq!(ch[0].as_str(), "532_total");
@@ -109,7 +109,7 @@ fn the_layout_is_format_version_2() {
     let alt = f.dataset("altitude").unwrap();
     assert_eq!(str_attr(&alt, "standard_name"), "altitude");
     assert_eq!(str_attr(&alt, "positive"), "up");
-    assert_eq!(f.dataset("expected_signal").unwrap().shape(), vec![1, 134]);
+    assert_eq!(f.dataset("expected_signal").unwrap().shape(), vec![1, 334]);
     assert_eq!(f.dataset("lidar_constant").unwrap().shape(), vec![1]);
     std::fs::remove_dir_all(&dir).ok();
 }

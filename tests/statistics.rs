@@ -138,18 +138,14 @@ fn paper_scenarios_1_and_4_day_and_night_are_consistent() {
 /// A deliberately wrong source: draws each bin from a transformed law.
 struct Wrong<F: Fn(&mut rand_pcg::Pcg64Mcg, f64) -> u64 + Sync> {
     means: Vec<f64>,
-    background: f64,
     draw: F,
 }
 
 impl<F: Fn(&mut rand_pcg::Pcg64Mcg, f64) -> u64 + Sync> RealizationSource for Wrong<F> {
-    fn draw(&self, p: u64, counts: &mut [u64], background: &mut [u64]) {
+    fn draw(&self, p: u64, counts: &mut [u64]) {
         let mut rng = stream_rng(5, p, 0);
         for (c, &m) in counts.iter_mut().zip(&self.means) {
             *c = (self.draw)(&mut rng, m);
-        }
-        for b in background.iter_mut() {
-            *b = poisson_u64(&mut rng, self.background);
         }
     }
 }
@@ -167,8 +163,13 @@ fn verdict(
     e: &ExpectedProfile,
     models: &[BinModel],
 ) -> Vec<(String, bool)> {
-    let (_, checks) =
-        validate::validate_source(source, models, &e.altitude_m, 1000, e.background_bins);
+    let (_, checks) = validate::validate_source(
+        source,
+        models,
+        &e.altitude_m,
+        1000,
+        &e.background_bin_indices,
+    );
     checks.into_iter().map(|c| (c.statistic, c.pass)).collect()
 }
 
@@ -189,14 +190,12 @@ fn validate_rejects_deliberately_wrong_samplers() {
 
     let right = Wrong {
         means: means.clone(),
-        background,
         draw: |r: &mut rand_pcg::Pcg64Mcg, m: f64| poisson_u64(r, m),
     };
     assert!(failed(verdict(&right, &e, &models)).is_empty(), "control");
 
     let mean_high = Wrong {
         means: means.clone(),
-        background,
         draw: |r: &mut rand_pcg::Pcg64Mcg, m: f64| poisson_u64(r, 1.01 * m),
     };
     assert!(failed(verdict(&mean_high, &e, &models)).contains(&"mean".to_string()));
@@ -204,7 +203,6 @@ fn validate_rejects_deliberately_wrong_samplers() {
     // Poisson(m·G), G ~ Gamma(k, 1/k) with m/k = 0.1: variance 1.1·m, mean m
     let var_high = Wrong {
         means: means.clone(),
-        background,
         draw: |r: &mut rand_pcg::Pcg64Mcg, m: f64| {
             if m <= 0.0 {
                 return 0;
@@ -217,23 +215,20 @@ fn validate_rejects_deliberately_wrong_samplers() {
     assert!(failed(verdict(&var_high, &e, &models)).contains(&"variance".to_string()));
 
     // correlated shots: one energy factor per profile, shared by all its shots and bins
-    struct Correlated(Vec<f64>, Vec<f64>, f64);
+    struct Correlated(Vec<f64>, Vec<f64>);
     impl RealizationSource for Correlated {
-        fn draw(&self, p: u64, counts: &mut [u64], background: &mut [u64]) {
+        fn draw(&self, p: u64, counts: &mut [u64]) {
             let mut rng = stream_rng(6, p, 0);
             let g: f64 = StandardNormal.sample(&mut rng);
             let f = 1.0 + 0.02 * g;
             for ((c, &s), &r) in counts.iter_mut().zip(&self.0).zip(&self.1) {
                 *c = poisson_u64(&mut rng, f * s + r);
             }
-            for b in background.iter_mut() {
-                *b = poisson_u64(&mut rng, self.2);
-            }
         }
     }
     let signal: Vec<f64> = e.signal.iter().map(|s| s * shots as f64).collect();
     let rest = vec![background; signal.len()];
-    let bad = failed(verdict(&Correlated(signal, rest, background), &e, &models));
+    let bad = failed(verdict(&Correlated(signal, rest), &e, &models));
     assert!(bad.contains(&"variance".to_string()), "{bad:?}");
 }
 
@@ -315,11 +310,21 @@ fn jitter_is_validated_against_its_own_model() {
     let shots = sc.shots_per_profile();
     let source = SimulatorSource::new(&e, ResolvedMethod::Shot, 0.05, 11, shots);
     let right = validate::bin_models(&e, shots, 0.05);
-    let (_, checks) =
-        validate::validate_source(&source, &right, &e.altitude_m, 1000, e.background_bins);
+    let (_, checks) = validate::validate_source(
+        &source,
+        &right,
+        &e.altitude_m,
+        1000,
+        &e.background_bin_indices,
+    );
     assert!(checks.iter().all(|c| c.pass), "{checks:#?}");
     let poisson = validate::bin_models(&e, shots, 0.0);
-    let (_, checks) =
-        validate::validate_source(&source, &poisson, &e.altitude_m, 1000, e.background_bins);
+    let (_, checks) = validate::validate_source(
+        &source,
+        &poisson,
+        &e.altitude_m,
+        1000,
+        &e.background_bin_indices,
+    );
     assert!(checks.iter().any(|c| c.statistic == "variance" && !c.pass));
 }
