@@ -169,7 +169,7 @@ pub fn check_calibrated(name: &str, zs: &[f64], shapes: &[Shape]) -> Check {
         Ok(p) => p.inverse_cdf(1.0 - CHECK_LEVEL) as usize,
         Err(_) => 0,
     };
-    let chi_square: f64 = zs.iter().map(|z| z * z).sum();
+    let chi_square: f64 = zs.iter().map(|z| z * z).sum::<f64>() + 0.0; // no -0.0
     let variance: f64 = shapes
         .iter()
         .map(|s| (2.0 + s.excess_kurtosis).max(0.5))
