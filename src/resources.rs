@@ -137,7 +137,7 @@ pub fn human_duration(seconds: f64) -> String {
 /// Entropy of a Poisson(μ) count, bits: exact sum over the PMF below μ = 50, the
 /// normal-limit `½·log2(2πeμ)` with its `1/(12μ)`-order correction above.
 pub fn poisson_entropy_bits(mu: f64) -> f64 {
-    if !(mu > 0.0) {
+    if mu.is_nan() || mu <= 0.0 {
         return 0.0;
     }
     if mu >= 50.0 {

@@ -107,8 +107,9 @@ pub fn sample_variance_shape(mu: f64, n: f64, poisson: bool) -> (f64, f64) {
 /// Two-sided Edgeworth tail `P(|z| > z₀)` for a standardized statistic of skewness `g1`
 /// and excess kurtosis `g2`; `None` where the expansion is not trusted.
 pub fn outside_probability(g1: f64, g2: f64) -> Option<Shape> {
-    if !(g1.abs() <= EDGEWORTH_MAX_SKEWNESS) || !(g2.abs() <= 2.0 * EDGEWORTH_MAX_SKEWNESS) {
-        return None;
+    let trusted = g1.abs() <= EDGEWORTH_MAX_SKEWNESS && g2.abs() <= 2.0 * EDGEWORTH_MAX_SKEWNESS;
+    if !trusted {
+        return None; // also for NaN
     }
     let z = z_interval();
     let phi = (-0.5 * z * z).exp() / (2.0 * std::f64::consts::PI).sqrt();
