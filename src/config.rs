@@ -1,4 +1,4 @@
-//! Scenario configuration: TOML files with the keys of `shared/spec/interface.md`,
+//! Scenario configuration: TOML files with the keys of `docs/config.md`,
 //! `--set KEY=VALUE` dotted overrides, and validation of every field.
 //!
 //! Loading happens in three steps: the file is parsed into a TOML table, the
