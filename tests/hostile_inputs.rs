@@ -844,7 +844,12 @@ impl Outcome {
             .lines()
             .filter(|l| !l.trim().is_empty())
             .collect();
-        if let Some(first) = lines.first() {
+        // an interrupted run's last line is the one that matters
+        let shown = match lines.last() {
+            Some(l) if l.contains("interrupted") => Some(l),
+            _ => lines.first(),
+        };
+        if let Some(first) = shown {
             let first: String = shorten(first).chars().take(160).collect();
             s += &format!(": `{}`", first.replace('|', "\\|").replace('`', "'"));
             if lines.len() > 1 {
