@@ -75,6 +75,21 @@ pub struct InstrumentConfig {
     /// Overlap function η(r); absent = full overlap everywhere.
     #[serde(default)]
     pub overlap: Option<OverlapConfig>,
+    /// The detector; absent = an ideal linear photon counter.
+    #[serde(default)]
+    pub detector: Option<DetectorConfig>,
+}
+
+/// A photon-counting detector (model.md §7).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct DetectorConfig {
+    /// Dead time τ, s (0 = none).
+    #[serde(default)]
+    pub dead_time_s: f64,
+    /// `"nonparalyzable"` or `"paralyzable"`.
+    #[serde(default)]
+    pub dead_time_model: crate::detector::DeadTimeModel,
 }
 
 /// Receiver channel with respect to the laser's linear polarization (model.md §4).
@@ -683,6 +698,9 @@ impl ScenarioConfig {
             1e9,
         )?;
         c.range("instrument.bin_width_s", i.bin_width_s, 1e-10, 1e-3)?;
+        if let Some(d) = &i.detector {
+            c.range("instrument.detector.dead_time_s", d.dead_time_s, 0.0, 1e-6)?;
+        }
         match &i.overlap {
             None | Some(OverlapConfig::None) => {}
             Some(OverlapConfig::FullRange { full_overlap_m }) => {

@@ -24,6 +24,8 @@ pub struct Instrument {
     pub background_per_bin: f64,
     /// Expected dark counts per shot per bin, `λ_dc = R_dc·Δt`.
     pub dark_per_bin: f64,
+    /// The detector's dead time; `None` for an ideal linear detector (τ = 0).
+    pub dead_time: Option<crate::detector::DeadTime>,
 }
 
 /// Photons per joule at `wavelength_nm`: `λ0/(h·c)`.
@@ -75,6 +77,15 @@ impl Instrument {
                 * efficiency
                 * polarization_share,
             dark_per_bin: i.dark_count_rate_hz * i.bin_width_s,
+            dead_time: i
+                .detector
+                .as_ref()
+                .filter(|d| d.dead_time_s > 0.0)
+                .map(|d| crate::detector::DeadTime {
+                    tau_s: d.dead_time_s,
+                    model: d.dead_time_model,
+                    bin_width_s: i.bin_width_s,
+                }),
         }
     }
 

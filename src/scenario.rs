@@ -60,6 +60,9 @@ pub struct ExpectedProfile {
     pub background: f64,
     /// Expected dark counts per shot per bin.
     pub dark: f64,
+    /// Expected recorded counts per shot per bin after the detector (dead time); the
+    /// total `λ_i` for an ideal detector.
+    pub recorded: Vec<f64>,
     /// Signal-free bins used to estimate the background (0 = none available).
     pub background_bins: usize,
     /// Their indices: bins of the window lying wholly above the atmosphere, nearest the
@@ -237,6 +240,10 @@ impl Scenario {
             e.attenuated_backscatter
                 .push(if weight > 0.0 { integral / weight } else { 0.0 });
         }
+        e.recorded = match &self.instrument.dead_time {
+            Some(d) => d.recorded_means(&e.total_per_shot()),
+            None => e.total_per_shot(),
+        };
         e.background_bin_indices = self.background_bin_indices();
         e.background_bins = e.background_bin_indices.len();
         Ok(e)

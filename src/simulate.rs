@@ -14,6 +14,7 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use crate::config::Method;
+use crate::detector::{DeadTime, dead_time};
 use crate::error::{Error, Result};
 use crate::output::raw_file::content::{self, RunInfo};
 use crate::output::raw_file::{AttrValue, CountWidth, ProfileRecord, RawFileSpec, RawFileWriter};
@@ -118,6 +119,9 @@ pub fn fastest_within(
 /// What the scene needs drawn shot by shot; `None` when every shot has the same
 /// expectations and the detector is linear, so that `aggregate` is exact.
 pub fn per_shot_reason(scenario: &Scenario) -> Option<&'static str> {
+    if scenario.instrument.dead_time.is_some() {
+        return Some("detector dead time makes the recorded counts non-Poisson");
+    }
     (scenario.instrument.pulse_energy_jitter > 0.0)
         .then_some("pulse-energy jitter varies the signal from shot to shot")
 }
@@ -225,6 +229,8 @@ pub enum StreamSampler {
     Jittered(Box<JitteredShots>),
     /// Aggregate with the normal approximation at and above a mean threshold.
     AggregateNormal(Vec<f64>, f64),
+    /// Every shot drawn and recorded through the detector's dead time.
+    DeadTimed(Box<ShotSampler>, DeadTime),
 }
 
 impl StreamSampler {
@@ -249,6 +255,15 @@ impl StreamSampler {
         }
     }
 
+    /// The same sampler with the detector's dead time applied to every shot (a `Shot`
+    /// sampler becomes `DeadTimed`; [`check_detector`] ensures the method is `shot`).
+    pub fn through_detector(self, dead: Option<DeadTime>) -> Self {
+        match (self, dead) {
+            (StreamSampler::Shot(s), Some(d)) => StreamSampler::DeadTimed(s, d),
+            (other, _) => other,
+        }
+    }
+
     /// Draws profile `profile` of `shots` shots into `acc`: a function of the arguments only,
     /// so any profile can be regenerated alone.
     pub fn profile_counts(&self, seed: u64, profile: u64, shots: u64, acc: &mut [u64]) {
@@ -261,6 +276,9 @@ impl StreamSampler {
             StreamSampler::AggregateNormal(l, threshold) => {
                 approx::aggregate_approx_profile(l, seed, profile, shots, *threshold, acc)
             }
+            StreamSampler::DeadTimed(s, d) => {
+                dead_time::recorded_profile(s, d, seed, profile, shots, acc)
+            }
         }
     }
 }
@@ -272,6 +290,7 @@ fn stream_samplers(
     jitter: f64,
     components: bool,
     seed: u64,
+    dead: Option<DeadTime>,
 ) -> Vec<(StreamSampler, u64)> {
     let n = e.n_bins();
     let zeros = vec![0.0; n];
@@ -292,8 +311,33 @@ fn stream_samplers(
         ]
     } else {
         let rest = vec![e.background + e.dark; n];
-        vec![(StreamSampler::new(method, &e.signal, &rest, jitter), seed)]
+        let sampler = StreamSampler::new(method, &e.signal, &rest, jitter).through_detector(dead);
+        vec![(sampler, seed)]
     }
+}
+
+/// What this version does not combine with dead time: jitter (a shot's energy and its
+/// arrival times would both have to be drawn) and component counts (a recorded count is
+/// not a sum of parts).
+pub fn check_detector(scenario: &Scenario, components: bool) -> Result<()> {
+    if scenario.instrument.dead_time.is_none() {
+        return Ok(());
+    }
+    if scenario.instrument.pulse_energy_jitter > 0.0 {
+        return Err(Error::Unsupported(
+            "instrument.detector.dead_time_s with instrument.pulse_energy_jitter is not simulated yet; \
+             set one of them to 0"
+                .into(),
+        ));
+    }
+    if components {
+        return Err(Error::Unsupported(
+            "--components is not available with dead time: a recorded count is not a sum of \
+             signal, background and dark counts"
+                .into(),
+        ));
+    }
+    Ok(())
 }
 
 /// Runs the Monte Carlo of `scenario` and writes the raw file as output `raw` of
@@ -314,6 +358,7 @@ pub fn run(
     let components = opts.components.unwrap_or(cfg.simulation.components);
     let requested = opts.method.unwrap_or(cfg.simulation.method);
     let tolerance = opts.tolerance.or(cfg.simulation.tolerance);
+    check_detector(scenario, components)?;
     let mut method = resolve_method(requested, scenario)?;
     let e = scenario.expected()?;
     let shots = scenario.shots_per_profile();
@@ -367,6 +412,7 @@ pub fn run(
         scenario.instrument.pulse_energy_jitter,
         components,
         seed,
+        scenario.instrument.dead_time,
     );
     let profile_time_s = shots as f64 / scenario.instrument.rep_rate_hz;
     let progress = progress_bar(opts.progress, profiles);

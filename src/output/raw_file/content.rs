@@ -91,7 +91,7 @@ fn var(
 pub fn variables(sc: &Scenario, e: &ExpectedProfile, shots: u64) -> Vec<Variable> {
     use Dims::{Bin, Channel, ChannelBin};
     let n = e.n_bins();
-    let expected_counts: Vec<f64> = e.total_per_shot();
+    let expected_counts: Vec<f64> = e.recorded.clone();
     vec![
         var(
             "altitude",
@@ -152,7 +152,7 @@ pub fn variables(sc: &Scenario, e: &ExpectedProfile, shots: u64) -> Vec<Variable
         var(
             "expected_counts",
             ChannelBin,
-            "expected recorded counts per shot (signal + background + dark; ideal detector)",
+            "expected recorded counts per shot after the detector (dead time); signal + background + dark for an ideal detector",
             "count",
             &[],
             expected_counts,
