@@ -226,7 +226,11 @@ mod tests {
                 let m = d.recorded_means(&lambda);
                 let want = d.stationary_rate(n) * d.bin_width_s;
                 // past the first bin the rate is stationary
-                assert!((m[20] / want - 1.0).abs() < 1e-3, "{model:?} n={n}: {} vs {want}", m[20]);
+                assert!(
+                    (m[20] / want - 1.0).abs() < 1e-3,
+                    "{model:?} n={n}: {} vs {want}",
+                    m[20]
+                );
                 // the first bin starts live: at least the stationary count
                 assert!(m[0] >= want * (1.0 - 1e-9));
             }

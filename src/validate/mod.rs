@@ -96,7 +96,12 @@ impl BinModel {
         BinModel {
             signal: shots * s,
             rest: shots * r,
-            cumulants: [shots * recorded, shots * variance, shots * variance, shots * variance],
+            cumulants: [
+                shots * recorded,
+                shots * variance,
+                shots * variance,
+                shots * variance,
+            ],
             dead_time: true,
         }
     }
