@@ -72,10 +72,14 @@ pub fn expect(config: &Path, overrides: &[String], csv: Option<&Path>) -> Result
     match csv {
         Some(id) => {
             outputs.write(id, |w| expect::write_csv(w, &e, shots))?;
-            outputs.commit()
+            outputs.commit()?;
         }
-        None => to_stdout(|w| expect::write_table(w, &sc, &e)),
+        None => to_stdout(|w| expect::write_table(w, &sc, &e))?,
     }
+    if let Some(w) = sc.linear_range_warning(&e) {
+        eprintln!("{w}");
+    }
+    Ok(())
 }
 
 /// Most altitude rows drawn in the S/N map PNG: more than its pixel rows, so a
@@ -178,6 +182,9 @@ pub fn simulate(
         None => simulate::run(&sc, opts, outputs, raw)?,
     };
     eprintln!("{summary}");
+    if let Some(w) = &summary.warning {
+        eprintln!("{w}");
+    }
     Ok(())
 }
 
@@ -211,6 +218,9 @@ pub fn validate(
         })?;
     } else {
         to_stdout(|w| validate::write_table(w, &report))?;
+    }
+    if let Some(w) = &report.warning {
+        eprintln!("{w}");
     }
     Ok(report.consistent)
 }

@@ -195,6 +195,20 @@ impl Scenario {
         bins
     }
 
+    /// The warning for a scene without dead time that counts beyond a photon counter's
+    /// linear range (the commands print it after a successful run, so that an error
+    /// stays one line).
+    pub fn linear_range_warning(&self, e: &ExpectedProfile) -> Option<String> {
+        if self.instrument.dead_time.is_some() {
+            return None;
+        }
+        crate::detector::linear_range_warning(
+            &e.total_per_shot(),
+            &e.altitude_m,
+            self.instrument.bin_width_s,
+        )
+    }
+
     /// Accumulation time TC of one profile, s.
     pub fn accumulation_time_s(&self) -> f64 {
         self.loaded.config.acquisition.accumulation_time_s

@@ -179,6 +179,8 @@ pub struct RunSummary {
     pub elapsed: Duration,
     /// Time spent drawing counts (the rest is the model, the file and its writes).
     pub drawing: Duration,
+    /// A warning about the scene (rates beyond a photon counter's range), if any.
+    pub warning: Option<String>,
 }
 
 impl std::fmt::Display for RunSummary {
@@ -472,6 +474,7 @@ pub fn run(
         seed,
         elapsed: start.elapsed(),
         drawing,
+        warning: scenario.linear_range_warning(&e),
     })
 }
 

@@ -166,3 +166,28 @@ fn dead_time_refuses_what_it_cannot_do() {
     );
     assert!(lidarsim::simulate::check_detector(&jittered, false).is_err());
 }
+
+/// Without dead time, a bin beyond a photon counter's linear range is named in a
+/// one-line warning after the run; with dead time there is none.
+#[test]
+fn rates_beyond_the_linear_range_are_warned_of() {
+    let cfg = common::config_path("paper/scenario1.toml");
+    let run = |extra: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_lidarsim"))
+            .arg("expect")
+            .arg(&cfg)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success());
+        String::from_utf8(o.stderr).unwrap()
+    };
+    let w = run(&[]);
+    assert!(
+        w.contains("warning: bin 294") && w.contains("350 MHz"),
+        "{w}"
+    );
+    assert_eq!(w.lines().count(), 1);
+    assert!(run(&["--set", "instrument.detector.dead_time_s=3.5e-9"]).is_empty());
+    assert!(run(&["--set", "instrument.pulse_energy_j=0.01"]).is_empty());
+}

@@ -203,6 +203,9 @@ pub struct Report {
     pub checks: Vec<Check>,
     /// Whether every check passed.
     pub consistent: bool,
+    /// A warning about the scene (rates beyond a photon counter's range), if any.
+    #[serde(skip)]
+    pub warning: Option<String>,
 }
 
 /// A source of realizations: per profile index, the window's counts. `validate` uses the
@@ -520,6 +523,7 @@ pub fn run(sc: &Scenario, opts: &ValidateOptions) -> Result<Report> {
         bins,
         checks,
         consistent,
+        warning: sc.linear_range_warning(&e),
     })
 }
 
