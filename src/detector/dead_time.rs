@@ -242,7 +242,9 @@ mod tests {
         let d = dead(DeadTimeModel::Nonparalyzable);
         assert_eq!(d.recorded_means(&[0.0, 0.0]), vec![0.0, 0.0]);
         let m = d.recorded_means(&[1e-3; 3]);
-        assert!((m[1] / 1e-3 - 1.0).abs() < 1e-6);
-        assert!((d.recorded_variance(1e-3) / 1e-3 - 1.0).abs() < 1e-6);
+        // n = 500 Hz: m/n = 1/(1 + nτ) = 1 − 1.75e-6
+        assert!((m[1] / 1e-3 - 1.0 + 1.75e-6).abs() < 1e-8);
+        // variance 1/(1 + nτ)³ = 1 − 5.25e-6 of the Poisson value
+        assert!((d.recorded_variance(1e-3) / 1e-3 - 1.0 + 5.25e-6).abs() < 1e-8);
     }
 }
