@@ -23,12 +23,12 @@ fn simulate_stationary(model: DeadTimeModel, n: f64, shots: u64, seed: u64) -> (
     let photons = ShotSampler::new(&[n * DT; BINS]);
     let mut rng = stream_rng(seed, 0, 0);
     let mut arrivals = stream_rng(seed, 1, 0);
-    let mut times = Vec::new();
+    let mut scratch = lidarsim::detector::dead_time::Scratch::default();
     let (mut sum, mut sum2, mut k) = (0.0f64, 0.0f64, 0.0f64);
     let mut acc = vec![0u64; BINS];
     photons.for_each_shot(&mut rng, shots, |shot| {
         acc.iter_mut().for_each(|a| *a = 0);
-        dead.record_shot(&mut arrivals, shot, &mut times, &mut acc);
+        dead.record_shot(&mut arrivals, shot, &mut scratch, &mut acc);
         for &c in &acc[1..] {
             let c = c as f64;
             sum += c;
@@ -97,9 +97,9 @@ fn the_recorded_mean_model_follows_a_rate_step() {
         let mut acc = vec![0u64; 40];
         let mut rng = stream_rng(3, 0, 0);
         let mut arrivals = stream_rng(3, 1, 0);
-        let mut times = Vec::new();
+        let mut scratch = lidarsim::detector::dead_time::Scratch::default();
         photons.for_each_shot(&mut rng, shots, |shot| {
-            dead.record_shot(&mut arrivals, shot, &mut times, &mut acc)
+            dead.record_shot(&mut arrivals, shot, &mut scratch, &mut acc)
         });
         for i in 0..40 {
             let mean = acc[i] as f64 / shots as f64;

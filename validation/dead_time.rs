@@ -50,11 +50,14 @@ fn measure(model: DeadTimeModel, n: f64, seed: u64) -> Row {
     let shots = ((1e7 / (lambda * BINS as f64)) as u64).clamp(1000, 100_000_000);
     let photons = ShotSampler::new(&[lambda; BINS]);
     let (mut rng, mut arrivals) = (stream_rng(seed, 0, 0), stream_rng(seed, 1, 0));
-    let (mut times, mut acc) = (Vec::new(), vec![0u64; BINS]);
+    let (mut scratch, mut acc) = (
+        lidarsim::detector::dead_time::Scratch::default(),
+        vec![0u64; BINS],
+    );
     let (mut s, mut s2, mut k) = (0.0f64, 0.0f64, 0.0f64);
     photons.for_each_shot(&mut rng, shots, |shot| {
         acc.iter_mut().for_each(|a| *a = 0);
-        dead.record_shot(&mut arrivals, shot, &mut times, &mut acc);
+        dead.record_shot(&mut arrivals, shot, &mut scratch, &mut acc);
         for &c in &acc[1..] {
             let c = c as f64;
             s += c;

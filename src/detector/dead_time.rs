@@ -130,37 +130,88 @@ impl DeadTime {
     }
 
     /// Records one shot: `photons` holds the shot's true counts per bin (bins in time
-    /// order); the recorded counts are added to `acc`. `times` is a reusable buffer.
+    /// order); the recorded counts are added to `acc`. `scratch` holds reusable buffers.
+    ///
+    /// A lone photon between empty bins is recorded without drawing its time (an empty
+    /// bin is at least τ long when Δt ≥ τ, so no other photon is within τ of it): that is
+    /// most photons of a sparse shot, which so costs little more than without dead time.
+    /// The other bins are swept in runs of adjacent bins, the detector live again after
+    /// each empty bin.
     pub fn record_shot<R: Rng + ?Sized>(
         &self,
         rng: &mut R,
         photons: &ShotCounts,
+        scratch: &mut Scratch,
+        acc: &mut [u64],
+    ) {
+        let counts = photons.counts();
+        let independent_runs = self.tau_s <= self.bin_width_s;
+        let empty = |b: usize| counts.get(b).is_none_or(|&c| c == 0);
+        scratch.hit.clear();
+        for &b in photons.hit_bins() {
+            let i = b as usize;
+            // a lone photon between empty bins meets no other within τ: recorded
+            if independent_runs && counts[i] == 1 && (i == 0 || empty(i - 1)) && empty(i + 1) {
+                acc[i] += 1;
+            } else {
+                scratch.hit.push(b);
+            }
+        }
+        if !scratch.hit.is_sorted() {
+            scratch.hit.sort_unstable();
+        }
+        let mut start = 0;
+        while start < scratch.hit.len() {
+            let mut end = start + 1;
+            while end < scratch.hit.len()
+                && (!independent_runs || scratch.hit[end] == scratch.hit[end - 1] + 1)
+            {
+                end += 1;
+            }
+            self.sweep(rng, counts, &scratch.hit[start..end], &mut scratch.times, acc);
+            start = end;
+        }
+    }
+
+    /// Draws the arrival times of the photons of `bins` (sorted, in time order), bin by
+    /// bin (bins are ordered, so only a bin's own times need sorting), and records those
+    /// that find the detector live; the detector is live at the first bin's start.
+    fn sweep<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        counts: &[u32],
+        bins: &[u32],
         times: &mut Vec<f64>,
         acc: &mut [u64],
     ) {
         let dt = self.bin_width_s;
-        times.clear();
-        let mut hit: Vec<u32> = photons.hit_bins().to_vec();
-        hit.sort_unstable();
-        for &b in &hit {
-            let start = b as f64 * dt;
-            for _ in 0..photons.counts()[b as usize] {
-                times.push(start + dt * unit_f64(rng.next_u64()));
-            }
-        }
-        times.sort_unstable_by(f64::total_cmp);
-        // the instant the detector is live again (live at the start)
         let mut live_at = f64::NEG_INFINITY;
-        for &t in times.iter() {
-            let live = t >= live_at;
-            if live {
-                acc[((t / dt) as usize).min(acc.len() - 1)] += 1;
+        for &b in bins {
+            let start = b as f64 * dt;
+            times.clear();
+            times.extend((0..counts[b as usize]).map(|_| start + dt * unit_f64(rng.next_u64())));
+            if times.len() > 1 {
+                times.sort_unstable_by(f64::total_cmp);
             }
-            if live || self.model == DeadTimeModel::Paralyzable {
-                live_at = t + self.tau_s;
+            for &t in times.iter() {
+                let live = t >= live_at;
+                if live {
+                    // dead time crosses bin edges, a count stays in the bin it arrived in
+                    acc[b as usize] += 1;
+                }
+                if live || self.model == DeadTimeModel::Paralyzable {
+                    live_at = t + self.tau_s;
+                }
             }
         }
     }
+}
+
+/// Reusable buffers of [`DeadTime::record_shot`]: no allocation per shot.
+#[derive(Debug, Default, Clone)]
+pub struct Scratch {
+    times: Vec<f64>,
+    hit: Vec<u32>,
 }
 
 /// Accumulates one profile of `shots` shots through the detector into `acc`: the
@@ -180,13 +231,13 @@ pub fn recorded_profile(
         .into_par_iter()
         .map(|b| {
             let mut part = vec![0u64; bins];
-            let mut times = Vec::new();
+            let mut scratch = Scratch::default();
             let n = SHOT_BLOCK.min(shots - b * SHOT_BLOCK);
             // arrival times from a stream of their own: the photons are those of the
             // shot path without dead time, shot for shot
             let mut arrivals = stream_rng(seed ^ ARRIVAL_STREAM, profile, b);
             photons.for_each_shot(&mut stream_rng(seed, profile, b), n, |shot| {
-                dead.record_shot(&mut arrivals, shot, &mut times, &mut part)
+                dead.record_shot(&mut arrivals, shot, &mut scratch, &mut part)
             });
             part
         })
