@@ -214,6 +214,22 @@ pub struct MolecularConfig {
     /// quarter of a bin's altitude extent is used).
     #[serde(default = "default_grid_m")]
     pub grid_m: f64,
+    /// Which part of the molecular line the receiver's filter passes.
+    #[serde(default)]
+    pub line: MolecularLine,
+}
+
+/// The part of the molecular return a filter passes (model.md §7).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MolecularLine {
+    /// From the filter width: Cabannes below 0.4 nm, the whole line above (default).
+    #[default]
+    Auto,
+    /// The Cabannes line alone (narrow filters, e.g. a 37 pm etalon).
+    Cabannes,
+    /// The whole Rayleigh line, Cabannes and rotational Raman wings (wide filters).
+    Rayleigh,
 }
 
 /// Source of the molecular number density.

@@ -8,7 +8,8 @@ pub mod rayleigh;
 pub mod us76;
 
 use crate::config::{
-    Channel, ExtinctionSource, LayerKind, LoadedConfig, MolecularModel, ScenarioConfig,
+    Channel, ExtinctionSource, LayerKind, LoadedConfig, MolecularLine, MolecularModel,
+    ScenarioConfig,
 };
 use crate::error::Result;
 use profile_file::MolecularProfile;
@@ -31,9 +32,12 @@ pub struct Molecules {
     pub source: MolecularSource,
     /// Rayleigh cross-section per molecule σ(λ), m².
     pub cross_section_m2: f64,
-    /// Molecular lidar ratio `S_mol = (8π/3)(1+2γ)/(1+γ)`, sr.
+    /// Molecular lidar ratio of the part of the line the filter passes, sr:
+    /// `S_mol = (8π/3)(1+2γ)/(1+γ)` for the whole line, divided by the Cabannes fraction
+    /// for the Cabannes line.
     pub lidar_ratio_sr: f64,
-    /// Linear depolarization ratio of the molecular backscatter, `γ = ρn/(2−ρn)`.
+    /// Linear depolarization ratio of that part's backscatter: `γ = ρn/(2−ρn)` for the
+    /// whole line, `3ε/(180+4ε)` for the Cabannes line.
     pub depolarization: f64,
 }
 
@@ -164,11 +168,27 @@ impl Atmosphere {
         let rho_n = m
             .depolarization
             .unwrap_or_else(|| rayleigh::depolarization_rho_n(wl));
+        let cabannes = match m.line {
+            MolecularLine::Cabannes => true,
+            MolecularLine::Rayleigh => false,
+            MolecularLine::Auto => {
+                cfg.instrument.filter_width_nm < rayleigh::CABANNES_FILTER_MAX_NM
+            }
+        };
+        // the filter keeps all of the extinction and a share of the backscatter
+        let (share, depolarization) = if cabannes {
+            (
+                rayleigh::cabannes_fraction(rho_n),
+                rayleigh::cabannes_depolarization(rho_n),
+            )
+        } else {
+            (1.0, rayleigh::gamma(rho_n))
+        };
         let molecules = Molecules {
             source,
             cross_section_m2: rayleigh::cross_section_m2(wl),
-            lidar_ratio_sr: rayleigh::lidar_ratio_sr(rho_n),
-            depolarization: rayleigh::gamma(rho_n),
+            lidar_ratio_sr: rayleigh::lidar_ratio_sr(rho_n) / share,
+            depolarization,
         };
         Ok(Atmosphere {
             molecules,

@@ -110,6 +110,33 @@ pub fn lidar_ratio_sr(rho_n: f64) -> f64 {
     8.0 * std::f64::consts::PI / 3.0 * (1.0 + 2.0 * g) / (1.0 + g)
 }
 
+/// Anisotropy ε = (Δα/ᾱ)² of the air molecule's polarizability from the depolarization
+/// factor: `ρn = 6ε/(45 + 7ε)` ⇒ `ε = 45ρn/(6 − 7ρn)` (She 2001, Appl. Opt. 40, 4875).
+pub fn anisotropy(rho_n: f64) -> f64 {
+    45.0 * rho_n / (6.0 - 7.0 * rho_n)
+}
+
+/// Linear depolarization ratio of the backscattered Cabannes line (the central line
+/// without the rotational Raman wings): `δ_C = 3ε/(180 + 4ε)`, 0.0036 at 532 nm against
+/// `3ε/(45 + 4ε)` = [`gamma`] = 0.0144 for the whole line (She 2001; Behrendt & Nakamura
+/// 2002, Opt. Express 10, 805).
+pub fn cabannes_depolarization(rho_n: f64) -> f64 {
+    let e = anisotropy(rho_n);
+    3.0 * e / (180.0 + 4.0 * e)
+}
+
+/// The Cabannes line's share of the whole line's backscatter: the isotropic part and a
+/// quarter of the anisotropic part, `(45 + 7ε/4)/(45 + 7ε)`: 0.975 at 532 nm.
+pub fn cabannes_fraction(rho_n: f64) -> f64 {
+    let e = anisotropy(rho_n);
+    (45.0 + 1.75 * e) / (45.0 + 7.0 * e)
+}
+
+/// Widest filter (full width, nm) that passes the Cabannes line alone: the nearest
+/// rotational Raman lines of O2 and N2 lie 0.24 and 0.34 nm from a 532 nm line, so a
+/// filter narrower than 0.4 nm keeps them out.
+pub const CABANNES_FILTER_MAX_NM: f64 = 0.4;
+
 /// Molecular extinction coefficient α_mol = N·σ, m⁻¹.
 pub fn extinction_per_m(number_density_m3: f64, wavelength_nm: f64) -> f64 {
     number_density_m3 * cross_section_m2(wavelength_nm)
@@ -118,6 +145,17 @@ pub fn extinction_per_m(number_density_m3: f64, wavelength_nm: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn cabannes_line_figures_at_532_nm() {
+        // She (2001): δ 0.0036 Cabannes vs 0.0144 whole line; 0.976 of the backscatter
+        let rho = depolarization_rho_n(532.0);
+        assert!((gamma(rho) - 0.0144).abs() < 2e-4, "{}", gamma(rho));
+        assert!((cabannes_depolarization(rho) - 0.0036).abs() < 1e-4);
+        assert!((cabannes_fraction(rho) - 0.976).abs() < 2e-3);
+        // the Cabannes lidar ratio: 8.70 sr (field notes)
+        assert!((lidar_ratio_sr(rho) / cabannes_fraction(rho) - 8.70).abs() < 0.02);
+    }
     use crate::atmosphere::us76;
 
     fn rel(a: f64, b: f64) -> f64 {
