@@ -8,7 +8,7 @@ use crate::error::{Error, Result};
 use crate::output::safe_file::{Outputs, Stream};
 use crate::output::{expect, snr_map};
 use crate::resources;
-use crate::scenario::{ExpectedProfile, Scenario};
+use crate::scenario::{ExpectedProfile, Lidar, Scenario};
 use crate::simulate;
 use crate::snr;
 use crate::validate;
@@ -49,6 +49,42 @@ pub fn input_files(sc: &Scenario) -> Vec<PathBuf> {
     files
 }
 
+/// One channel of a config: the one named `channel`, or the first (with a note on
+/// stderr when there are several).
+pub fn load_channel(
+    config: &Path,
+    overrides: &[String],
+    channel: Option<&str>,
+) -> Result<Scenario> {
+    let lidar = Lidar::load(config, overrides)?;
+    let names = lidar.channel_names();
+    let k = match channel {
+        Some(name) => names.iter().position(|n| n == name).ok_or_else(|| {
+            Error::config(
+                config.display().to_string(),
+                "instrument.channels",
+                format!("has no channel `{name}` (channels: {})", names.join(", ")),
+            )
+        })?,
+        None => {
+            if names.len() > 1 {
+                eprintln!(
+                    "lidarsim: channel {} of {} ({}); --channel NAME for another",
+                    names[0],
+                    names.len(),
+                    names.join(", ")
+                );
+            }
+            0
+        }
+    };
+    Ok(lidar
+        .channels
+        .into_iter()
+        .nth(k)
+        .unwrap_or_else(|| unreachable!()))
+}
+
 /// The output set of a command on `sc`, with the scenario's inputs protected.
 pub fn outputs_for(sc: &Scenario) -> Outputs {
     let inputs = input_files(sc);
@@ -56,8 +92,13 @@ pub fn outputs_for(sc: &Scenario) -> Outputs {
 }
 
 /// `lidarsim expect`: the CSV (to a file or `-` for stdout) or the terminal table.
-pub fn expect(config: &Path, overrides: &[String], csv: Option<&Path>) -> Result<()> {
-    let sc = Scenario::load(config, overrides)?;
+pub fn expect(
+    config: &Path,
+    overrides: &[String],
+    csv: Option<&Path>,
+    channel: Option<&str>,
+) -> Result<()> {
+    let sc = load_channel(config, overrides, channel)?;
     let mut outputs = outputs_for(&sc);
     let csv_path = csv.filter(|p| *p != Path::new("-"));
     let csv = csv
@@ -127,8 +168,14 @@ pub fn build_snr_map(sc: &Scenario, e: &ExpectedProfile) -> snr_map::SnrMap {
 
 /// `lidarsim snr-map`: the PNG and optionally the long-format CSV
 /// (`altitude_m,accumulation_time_s,snr`).
-pub fn snr_map(config: &Path, overrides: &[String], png: &Path, csv: Option<&Path>) -> Result<()> {
-    let sc = Scenario::load(config, overrides)?;
+pub fn snr_map(
+    config: &Path,
+    overrides: &[String],
+    png: &Path,
+    csv: Option<&Path>,
+    channel: Option<&str>,
+) -> Result<()> {
+    let sc = load_channel(config, overrides, channel)?;
     let mut outputs = outputs_for(&sc);
     let png = outputs.add("--png", png, Stream::Binary)?;
     let csv_path = csv.filter(|p| *p != Path::new("-"));
@@ -169,8 +216,8 @@ pub fn simulate(
     opts: &simulate::RunOptions,
     threads: Option<usize>,
 ) -> Result<()> {
-    let sc = Scenario::load(config, overrides)?;
-    let mut outputs = outputs_for(&sc);
+    let lidar = Lidar::load(config, overrides)?;
+    let mut outputs = outputs_for(lidar.first());
     let raw = outputs.add("-o", &opts.output, Stream::Binary)?;
     let summary = match threads {
         Some(0) => return Err(Error::Unsupported("--threads must be at least 1".into())),
@@ -178,8 +225,8 @@ pub fn simulate(
             .num_threads(n)
             .build()
             .map_err(|e| Error::Unsupported(format!("cannot start {n} threads: {e}")))?
-            .install(|| simulate::run(&sc, opts, outputs, raw))?,
-        None => simulate::run(&sc, opts, outputs, raw)?,
+            .install(|| simulate::run(&lidar, opts, outputs, raw))?,
+        None => simulate::run(&lidar, opts, outputs, raw)?,
     };
     eprintln!("{summary}");
     if let Some(w) = &summary.warning {
@@ -194,14 +241,14 @@ pub fn validate(
     overrides: &[String],
     opts: &validate::ValidateOptions,
 ) -> Result<bool> {
-    let sc = Scenario::load(config, overrides)?;
-    let mut outputs = outputs_for(&sc);
+    let lidar = Lidar::load(config, overrides)?;
+    let mut outputs = outputs_for(lidar.first());
     let json = opts
         .json
         .as_deref()
         .map(|p| outputs.add("--json", p, Stream::Text))
         .transpose()?;
-    let report = validate::run(&sc, opts)?;
+    let report = validate::run(&lidar, opts)?;
     if let Some(id) = json {
         outputs.write(id, |w| {
             serde_json::to_writer_pretty(&mut *w, &report).map_err(std::io::Error::other)?;

@@ -69,15 +69,48 @@ pub struct InstrumentConfig {
     /// Time bin width Δt, s (2 µs = 300 m in the paper).
     #[serde(default = "default_bin_width_s")]
     pub bin_width_s: f64,
-    /// Which polarization the receiver channel sees.
-    #[serde(default)]
+    /// Which polarization the receiver channel sees (`polarization` is accepted too).
+    #[serde(default, alias = "polarization")]
     pub channel: Channel,
+    /// Fraction of the other polarization's light a polarization channel sees (model.md §7).
+    #[serde(default)]
+    pub crosstalk: f64,
+    /// Slow drift of the emitted pulse energy (the energy monitor reports it); absent = none.
+    #[serde(default)]
+    pub energy_drift: Option<EnergyDriftConfig>,
+    /// Receiver channels, `[[instrument.channels]]`: each a table of `name`,
+    /// `polarization`, `crosstalk` and any instrument key it overrides (expanded into one
+    /// config per channel by [`crate::receiver::expand`]); empty = one channel.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub channels: Vec<toml::Table>,
     /// Overlap function η(r); absent = full overlap everywhere.
     #[serde(default)]
     pub overlap: Option<OverlapConfig>,
     /// The detector; absent = an ideal linear photon counter.
     #[serde(default)]
     pub detector: Option<DetectorConfig>,
+}
+
+/// A slow drift of the emitted pulse energy, as a relative factor of time `t` since the
+/// first shot (model.md §7, energy monitor).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(tag = "model", rename_all = "lowercase", deny_unknown_fields)]
+pub enum EnergyDriftConfig {
+    /// `1 + per_hour·t/3600 s`.
+    Linear {
+        /// Relative change per hour (e.g. -0.01 = 1 % less energy after an hour).
+        per_hour: f64,
+    },
+    /// `1 + amplitude·sin(2π·t/period_s + phase)`.
+    Periodic {
+        /// Relative amplitude (at most 0.5).
+        amplitude: f64,
+        /// Period, s (an orbit: ~5,900 s).
+        period_s: f64,
+        /// Phase at the first shot, degrees.
+        #[serde(default)]
+        phase_deg: f64,
+    },
 }
 
 /// A photon-counting detector (model.md §7).
@@ -107,12 +140,24 @@ pub enum Channel {
 
 impl Channel {
     /// The share of a species' backscatter this channel sees, for linear depolarization δ
-    /// (model.md §4): total 1, parallel `1/(1+δ)`, perpendicular `δ/(1+δ)`.
-    pub fn share(self, depolarization: f64) -> f64 {
+    /// and cross-talk x (model.md §7): total 1; a polarization channel `(1−x)` of its own
+    /// polarization and `x` of the other, with `β_∥ = β/(1+δ)` and `β_⊥ = β·δ/(1+δ)`.
+    pub fn share(self, depolarization: f64, crosstalk: f64) -> f64 {
+        let parallel = 1.0 / (1.0 + depolarization);
+        let perpendicular = depolarization / (1.0 + depolarization);
         match self {
             Channel::Total => 1.0,
-            Channel::Parallel => 1.0 / (1.0 + depolarization),
-            Channel::Perpendicular => depolarization / (1.0 + depolarization),
+            Channel::Parallel => (1.0 - crosstalk) * parallel + crosstalk * perpendicular,
+            Channel::Perpendicular => (1.0 - crosstalk) * perpendicular + crosstalk * parallel,
+        }
+    }
+
+    /// The name of the polarization: `total`, `parallel` or `perpendicular`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Channel::Total => "total",
+            Channel::Parallel => "parallel",
+            Channel::Perpendicular => "perpendicular",
         }
     }
 }
@@ -311,6 +356,37 @@ pub struct LayerConfig {
     /// Multiple-scattering factor η_ms multiplying the layer's optical depth (1 = single scattering).
     #[serde(default = "one")]
     pub multiple_scattering: f64,
+    /// Ångström exponent å: at wavelength λ the extinction is `α·(λ_ref/λ)^å`; absent =
+    /// 0 for a cloud, required for an aerosol layer seen at another wavelength.
+    #[serde(default)]
+    pub angstrom_exponent: Option<f64>,
+    /// Wavelength λ_ref at which `extinction_per_km` and `lidar_ratio_sr` are given, nm;
+    /// absent = `instrument.wavelength_nm`.
+    #[serde(default)]
+    pub reference_wavelength_nm: Option<f64>,
+    /// Lidar ratios at other wavelengths, sr, keyed by the wavelength in nm
+    /// (`{ 1064 = 30.0 }`); a wavelength not listed uses `lidar_ratio_sr`.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub lidar_ratio_sr_by_wavelength: std::collections::BTreeMap<String, f64>,
+}
+
+impl LayerConfig {
+    /// The layer's extinction (km⁻¹) and lidar ratio (sr) at `wavelength_nm`, where
+    /// `instrument_nm` is the wavelength its values are given at unless it says otherwise.
+    pub fn at_wavelength(&self, wavelength_nm: f64, instrument_nm: f64) -> (f64, f64) {
+        let reference = self.reference_wavelength_nm.unwrap_or(instrument_nm);
+        let exponent = self.angstrom_exponent.unwrap_or(0.0);
+        let extinction = self.extinction_per_km * (reference / wavelength_nm).powf(exponent);
+        let lidar_ratio = self
+            .lidar_ratio_sr_by_wavelength
+            .iter()
+            .find(|(k, _)| {
+                k.parse::<f64>()
+                    .is_ok_and(|w| (w - wavelength_nm).abs() < 0.5)
+            })
+            .map_or(self.lidar_ratio_sr, |(_, v)| *v);
+        (extinction, lidar_ratio)
+    }
 }
 
 /// Which efficiencies the detected sky background carries (model.md §1).
@@ -397,12 +473,26 @@ pub struct LoadedConfig {
     pub path: PathBuf,
     /// The resolved TOML after overrides (stored in output files).
     pub resolved_toml: String,
+    /// The receiver's channels, each with the whole config as that channel sees it
+    /// (`[instrument]` with the channel's overrides); one when the config lists none.
+    pub channels: Vec<crate::receiver::ChannelConfig>,
 }
 
 impl LoadedConfig {
     /// The config file's name for error messages.
     pub fn file_label(&self) -> String {
         self.path.display().to_string()
+    }
+
+    /// The config as channel `k` sees it (one channel), with the same provenance.
+    pub fn for_channel(&self, k: usize) -> LoadedConfig {
+        let channel = self.channels[k].clone();
+        LoadedConfig {
+            config: channel.config.clone(),
+            path: self.path.clone(),
+            resolved_toml: self.resolved_toml.clone(),
+            channels: vec![channel],
+        }
     }
 
     /// A path named in the config, resolved relative to the config file's directory.
@@ -459,22 +549,18 @@ pub fn load_str(text: &str, path: &Path, overrides: &[String]) -> Result<LoadedC
             .map_err(|reason| Error::config(format!("--set {item}"), key_of(item), reason))?;
     }
     let resolved_toml = toml::to_string(&table).unwrap_or_default();
-    let de = toml::Value::Table(table);
-    let config: ScenarioConfig = serde_path_to_error::deserialize(de)
-        .map_err(|e| {
-            let key = e.path().to_string();
-            let key = if key == "." { String::new() } else { key };
-            let reason = plain_serde_message(&key, e.inner().message());
-            Error::config(&file, key, reason)
-        })
-        .map_err(|e| attribute_to_override(e, overrides))?;
+    let de = toml::Value::Table(table.clone());
+    let config = deserialize(de, &file).map_err(|e| attribute_to_override(e, overrides))?;
     config
         .validate(&file)
+        .map_err(|e| attribute_to_override(e, overrides))?;
+    let channels = crate::receiver::expand(&table, &config, &file)
         .map_err(|e| attribute_to_override(e, overrides))?;
     Ok(LoadedConfig {
         config,
         path: path.to_path_buf(),
         resolved_toml,
+        channels,
     })
 }
 
@@ -627,6 +713,16 @@ fn parse_value(raw: &str) -> toml::Value {
     }
 }
 
+/// Deserializes a whole config table; errors name `file` and the dotted key.
+pub fn deserialize(table: toml::Value, file: &str) -> Result<ScenarioConfig> {
+    serde_path_to_error::deserialize(table).map_err(|e| {
+        let key = e.path().to_string();
+        let key = if key == "." { String::new() } else { key };
+        let reason = plain_serde_message(&key, e.inner().message());
+        Error::config(file, key, reason)
+    })
+}
+
 /// Collects the checks of one file; the first failure becomes the error.
 struct Checker<'a> {
     file: &'a str,
@@ -672,6 +768,39 @@ impl Checker<'_> {
 }
 
 impl ScenarioConfig {
+    /// A layer's values at other wavelengths: Ångström exponent, reference wavelength and
+    /// lidar ratios per wavelength; an aerosol layer seen at another wavelength than its
+    /// values' needs its exponent.
+    fn validate_layer_spectrum(&self, c: &Checker, n: usize, l: &LayerConfig) -> Result<()> {
+        let key = |k: &str| format!("atmosphere.layers[{n}].{k}");
+        if let Some(x) = l.angstrom_exponent {
+            c.range(&key("angstrom_exponent"), x, -1.0, 4.0)?;
+        }
+        let wl = self.instrument.wavelength_nm;
+        let reference = l.reference_wavelength_nm.unwrap_or(wl);
+        c.range(&key("reference_wavelength_nm"), reference, 200.0, 4000.0)?;
+        for (w, ratio) in &l.lidar_ratio_sr_by_wavelength {
+            let k = key(&format!("lidar_ratio_sr_by_wavelength.{w}"));
+            match w.parse::<f64>() {
+                Ok(w) if (200.0..=4000.0).contains(&w) => c.range(&k, *ratio, 1.0, 1e4)?,
+                _ => return Err(c.fail(&k, "the key must be a wavelength in nm from 200 to 4000")),
+            }
+        }
+        if l.kind == LayerKind::Aerosol
+            && l.angstrom_exponent.is_none()
+            && (reference - wl).abs() > 1e-9
+        {
+            return Err(c.fail(
+                &key("angstrom_exponent"),
+                format!(
+                    "the layer's values are at {reference} nm and a channel sees it at {wl} nm: \
+                     give the layer's Ångström exponent (about 1–1.5 for fine aerosol, 0 for dust)"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// Checks every field: finite, in range, consistent. `file` names the source in errors.
     pub fn validate(&self, file: &str) -> Result<()> {
         let c = Checker { file };
@@ -714,6 +843,33 @@ impl ScenarioConfig {
             1e9,
         )?;
         c.range("instrument.bin_width_s", i.bin_width_s, 1e-10, 1e-3)?;
+        c.range("instrument.crosstalk", i.crosstalk, 0.0, 0.5)?;
+        if i.crosstalk > 0.0 && i.channel == Channel::Total {
+            return Err(c.fail(
+                "instrument.crosstalk",
+                "applies to a parallel or perpendicular channel; a total channel sees both",
+            ));
+        }
+        match i.energy_drift {
+            None => {}
+            Some(EnergyDriftConfig::Linear { per_hour }) => {
+                c.range("instrument.energy_drift.per_hour", per_hour, -0.5, 0.5)?;
+            }
+            Some(EnergyDriftConfig::Periodic {
+                amplitude,
+                period_s,
+                phase_deg,
+            }) => {
+                c.range("instrument.energy_drift.amplitude", amplitude, 0.0, 0.5)?;
+                c.positive("instrument.energy_drift.period_s", period_s, 1e9)?;
+                c.range(
+                    "instrument.energy_drift.phase_deg",
+                    phase_deg,
+                    -360.0,
+                    360.0,
+                )?;
+            }
+        }
         if let Some(d) = &i.detector {
             c.range("instrument.detector.dead_time_s", d.dead_time_s, 0.0, 1e-6)?;
         }
@@ -889,6 +1045,7 @@ impl ScenarioConfig {
             c.range(&key("lidar_ratio_sr"), l.lidar_ratio_sr, 1.0, 1e4)?;
             c.range(&key("depolarization"), l.depolarization, 0.0, 1.0)?;
             c.efficiency(&key("multiple_scattering"), l.multiple_scattering)?;
+            self.validate_layer_spectrum(c, n, l)?;
         }
         Ok(())
     }

@@ -55,6 +55,9 @@ enum Command {
         /// Write the per-bin CSV to PATH (`-` for stdout) instead of the table.
         #[arg(long, value_name = "PATH")]
         csv: Option<PathBuf>,
+        /// The receiver channel to show (default: the first).
+        #[arg(long, value_name = "NAME")]
+        channel: Option<String>,
     },
     /// S/N against altitude and accumulation time (the paper's Figs. 2–3).
     SnrMap {
@@ -69,6 +72,9 @@ enum Command {
         /// Also write the map as CSV (altitude_m, accumulation_time_s, snr).
         #[arg(long, value_name = "PATH")]
         csv: Option<PathBuf>,
+        /// The receiver channel to map (default: the first).
+        #[arg(long, value_name = "NAME")]
+        channel: Option<String>,
     },
     /// The Monte Carlo: draws photon counts and writes a raw lidar file (HDF5).
     Simulate {
@@ -132,15 +138,21 @@ fn main() -> ExitCode {
         return ExitCode::from(2);
     }
     let result = match &cli.command {
-        Command::Expect { config, set, csv } => {
-            lidarsim::commands::expect(config, set, csv.as_deref()).map(|()| true)
-        }
+        Command::Expect {
+            config,
+            set,
+            csv,
+            channel,
+        } => lidarsim::commands::expect(config, set, csv.as_deref(), channel.as_deref())
+            .map(|()| true),
         Command::SnrMap {
             config,
             set,
             png,
             csv,
-        } => lidarsim::commands::snr_map(config, set, png, csv.as_deref()).map(|()| true),
+            channel,
+        } => lidarsim::commands::snr_map(config, set, png, csv.as_deref(), channel.as_deref())
+            .map(|()| true),
         Command::Simulate {
             config,
             set,

@@ -29,6 +29,72 @@ pub struct Scenario {
     pub atmosphere: Atmosphere,
     /// The atmosphere laid along the beam.
     pub path: BeamPath,
+    /// The receiver channel this scenario computes (its name in the file).
+    pub channel_name: String,
+}
+
+/// The whole lidar: one [`Scenario`] per receiver channel (`[[instrument.channels]]`),
+/// all on the same geometry, atmosphere and seed.
+#[derive(Debug, Clone)]
+pub struct Lidar {
+    /// The channels, in the config's order.
+    pub channels: Vec<Scenario>,
+}
+
+impl Lidar {
+    /// Loads `path` with `overrides` and builds every channel.
+    pub fn load(path: &Path, overrides: &[String]) -> Result<Self> {
+        Self::from_loaded(config::load(path, overrides)?)
+            .map_err(|e| config::attribute_to_override(e, overrides))
+    }
+
+    /// Builds every channel of a loaded config.
+    pub fn from_loaded(loaded: LoadedConfig) -> Result<Self> {
+        let channels = (0..loaded.channels.len())
+            .map(|k| Scenario::from_loaded(loaded.for_channel(k)))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Lidar { channels })
+    }
+
+    /// The first channel: the config, geometry and timing every channel shares.
+    pub fn first(&self) -> &Scenario {
+        &self.channels[0]
+    }
+
+    /// The deterministic model of every channel.
+    pub fn expected(&self) -> Result<Vec<ExpectedProfile>> {
+        self.channels.iter().map(Scenario::expected).collect()
+    }
+
+    /// The channels' names.
+    pub fn channel_names(&self) -> Vec<String> {
+        self.channels
+            .iter()
+            .map(|c| c.channel_name.clone())
+            .collect()
+    }
+
+    /// The warnings of every channel (rates beyond a photon counter's range).
+    pub fn linear_range_warning(&self, expected: &[ExpectedProfile]) -> Option<String> {
+        let lines: Vec<String> = self
+            .channels
+            .iter()
+            .zip(expected)
+            .filter_map(|(c, e)| {
+                let w = c.linear_range_warning(e)?;
+                Some(if self.channels.len() > 1 {
+                    w.replacen(
+                        "warning: ",
+                        &format!("warning: channel {}: ", c.channel_name),
+                        1,
+                    )
+                } else {
+                    w
+                })
+            })
+            .collect();
+        (!lines.is_empty()).then(|| lines.join("\n"))
+    }
 }
 
 /// Expected counts per shot per bin and the atmosphere's truth at bin centres.
@@ -118,10 +184,22 @@ impl Scenario {
             .map_err(|e| config::attribute_to_override(e, overrides))
     }
 
-    /// Builds the scenario of a loaded config.
+    /// Builds the scenario of a loaded single-channel config (see [`Lidar`] for several
+    /// channels).
     pub fn from_loaded(loaded: LoadedConfig) -> Result<Self> {
-        let cfg = &loaded.config;
         let file = loaded.file_label();
+        if loaded.channels.len() != 1 {
+            return Err(Error::config(
+                &file,
+                "instrument.channels",
+                format!(
+                    "lists {} channels: build it as a Lidar, one Scenario per channel",
+                    loaded.channels.len()
+                ),
+            ));
+        }
+        let channel_name = loaded.channels[0].name.clone();
+        let cfg = &loaded.config;
         let instrument = Instrument::from_config(cfg);
         let geometry = Geometry::from_config(cfg, &file)?;
         let bins = geometry.n_bins as f64;
@@ -150,6 +228,7 @@ impl Scenario {
             geometry,
             atmosphere,
             path,
+            channel_name,
         };
         if let Some(asked) = sc.loaded.config.acquisition.background_bins {
             let available = sc.signal_free_bins().len();
@@ -255,6 +334,11 @@ impl Scenario {
                 .push(if weight > 0.0 { integral / weight } else { 0.0 });
         }
         e.recorded = match &self.instrument.dead_time {
+            Some(d) if self.instrument.pulse_energy_jitter > 0.0 => {
+                let laser = crate::laser::PulseEnergy::from_config(&self.loaded.config.instrument);
+                d.recorded_moments(&e.signal, e.background + e.dark, &laser)
+                    .0
+            }
             Some(d) => d.recorded_means(&e.total_per_shot()),
             None => e.total_per_shot(),
         };

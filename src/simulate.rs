@@ -16,13 +16,14 @@ use rayon::prelude::*;
 use crate::config::Method;
 use crate::detector::{DeadTime, dead_time};
 use crate::error::{Error, Result};
+use crate::laser::PulseEnergy;
 use crate::output::raw_file::content::{self, RunInfo};
 use crate::output::raw_file::{AttrValue, CountWidth, ProfileRecord, RawFileSpec, RawFileWriter};
 use crate::output::safe_file::{OutputId, Outputs};
 use crate::sampling::approx;
-use crate::sampling::jitter::JitteredShots;
+use crate::sampling::jitter::ModulatedShots;
 use crate::sampling::{self, ShotSampler};
-use crate::scenario::{ExpectedProfile, Scenario};
+use crate::scenario::{ExpectedProfile, Lidar};
 
 /// The method actually used for a run (after `auto` is resolved).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -71,14 +72,20 @@ pub fn fastest_within(
     shots: u64,
     aggregate_allowed: bool,
 ) -> ResolvedMethod {
+    fastest_within_totals(tolerance, &e.total_per_shot(), shots, aggregate_allowed)
+}
+
+/// [`fastest_within`] for the per-shot totals of every bin of every channel.
+pub fn fastest_within_totals(
+    tolerance: f64,
+    totals: &[f64],
+    shots: u64,
+    aggregate_allowed: bool,
+) -> ResolvedMethod {
     if !aggregate_allowed {
         return ResolvedMethod::Shot;
     }
-    let means: Vec<f64> = e
-        .total_per_shot()
-        .iter()
-        .map(|l| l * shots as f64)
-        .collect();
+    let means: Vec<f64> = totals.iter().map(|l| l * shots as f64).collect();
     let exact = |m: f64| {
         if m < 12.0 {
             cost::AGGREGATE_SMALL_NS
@@ -98,10 +105,7 @@ pub fn fastest_within(
             }
         })
         .sum();
-    let shot = ShotSampler::new(&e.total_per_shot())
-        .strategy()
-        .est_ns_per_shot
-        * shots as f64;
+    let shot = ShotSampler::new(totals).strategy().est_ns_per_shot * shots as f64;
     let candidates = [
         (shot, ResolvedMethod::Shot),
         (aggregate, ResolvedMethod::Aggregate),
@@ -116,19 +120,20 @@ pub fn fastest_within(
         .1
 }
 
-/// What the scene needs drawn shot by shot; `None` when every shot has the same
-/// expectations and the detector is linear, so that `aggregate` is exact.
-pub fn per_shot_reason(scenario: &Scenario) -> Option<&'static str> {
-    if scenario.instrument.dead_time.is_some() {
-        return Some("detector dead time makes the recorded counts non-Poisson");
-    }
-    (scenario.instrument.pulse_energy_jitter > 0.0)
-        .then_some("pulse-energy jitter varies the signal from shot to shot")
+/// What the scene needs drawn shot by shot; `None` when the profile's counts are
+/// Poisson given the emitted energies (the detector is linear), so that `aggregate` is
+/// exact: pulse-energy jitter and drift are drawn as the profile's summed energy.
+pub fn per_shot_reason(lidar: &Lidar) -> Option<&'static str> {
+    lidar
+        .channels
+        .iter()
+        .any(|c| c.instrument.dead_time.is_some())
+        .then_some("detector dead time makes the recorded counts non-Poisson")
 }
 
 /// Resolves `auto`, and refuses `aggregate` where it would not be exact.
-pub fn resolve_method(requested: Method, scenario: &Scenario) -> Result<ResolvedMethod> {
-    match (requested, per_shot_reason(scenario)) {
+pub fn resolve_method(requested: Method, lidar: &Lidar) -> Result<ResolvedMethod> {
+    match (requested, per_shot_reason(lidar)) {
         (Method::Shot, _) | (Method::Auto, Some(_)) => Ok(ResolvedMethod::Shot),
         (Method::Aggregate | Method::Auto, None) => Ok(ResolvedMethod::Aggregate),
         (Method::Aggregate, Some(why)) => Err(Error::Unsupported(format!(
@@ -220,15 +225,65 @@ fn component_seed(seed: u64, component: u64) -> u64 {
     seed ^ (component + 1).wrapping_mul(0xD1B5_4A32_D192_ED03)
 }
 
+/// Seed of channel `k`'s photons: the run's seed for the first channel (a one-channel
+/// run draws what it always drew), a distinct stream for each other.
+pub fn channel_seed(seed: u64, k: usize) -> u64 {
+    if k == 0 {
+        seed
+    } else {
+        seed ^ (k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+    }
+}
+
+/// The emitted energies of a run: their law, the run's seed (every channel sees the
+/// same pulses) and the envelope bounding every factor of the run.
+#[derive(Debug, Clone, Copy)]
+pub struct RunEnergy {
+    /// Jitter and drift.
+    pub law: PulseEnergy,
+    /// The seed the factors are drawn from (`None`: each stream's own seed).
+    pub seed: Option<u64>,
+    /// Upper bound of every factor of the run.
+    pub envelope: f64,
+}
+
+impl RunEnergy {
+    /// Energies that vary with relative jitter `jitter` only, drawn from each stream's
+    /// own seed (a single stream, as in tests and benches).
+    pub fn jitter(jitter: f64) -> Self {
+        let law = PulseEnergy {
+            jitter,
+            drift: None,
+            rep_rate_hz: 1.0,
+        };
+        RunEnergy {
+            law,
+            seed: None,
+            envelope: law.jitter_envelope(),
+        }
+    }
+}
+
 /// The sampler of one stream of counts (the total, or one component), built once per run.
 #[derive(Debug, Clone)]
 pub enum StreamSampler {
     /// One Poisson(M·λ) draw per bin.
     Aggregate(Vec<f64>),
+    /// One Poisson draw per bin of mean `(Σ_s f_s)·λ_sig + M·λ_rest`: exact given the
+    /// profile's emitted energies, which are drawn first (M factors, no photons).
+    AggregateEnergy {
+        /// Signal per shot at nominal energy.
+        signal: Vec<f64>,
+        /// Background and dark per shot.
+        rest: Vec<f64>,
+        /// The energies.
+        energy: RunEnergy,
+    },
     /// Every shot drawn with fixed means.
     Shot(Box<ShotSampler>),
-    /// Every shot drawn, the signal scaled by the shot's pulse energy.
-    Jittered(Box<JitteredShots>),
+    /// Every shot drawn, the signal scaled by the shot's pulse energy (and recorded
+    /// through dead time where the detector has it).
+    Modulated(Box<ModulatedShots>),
     /// Aggregate with the normal approximation at and above a mean threshold.
     AggregateNormal(Vec<f64>, f64),
     /// Every shot drawn and recorded through the detector's dead time.
@@ -236,8 +291,19 @@ pub enum StreamSampler {
 }
 
 impl StreamSampler {
-    /// Builds the sampler for per-shot means `signal` + `rest` (rest: background and dark).
+    /// Builds the sampler for per-shot means `signal` + `rest` (rest: background and
+    /// dark) with relative pulse-energy jitter `jitter` drawn from the stream's own seed.
     pub fn new(method: ResolvedMethod, signal: &[f64], rest: &[f64], jitter: f64) -> Self {
+        Self::with_energy(method, signal, rest, RunEnergy::jitter(jitter))
+    }
+
+    /// Builds the sampler for per-shot means `signal` + `rest` with the run's energies.
+    pub fn with_energy(
+        method: ResolvedMethod,
+        signal: &[f64],
+        rest: &[f64],
+        energy: RunEnergy,
+    ) -> Self {
         let total = || {
             signal
                 .iter()
@@ -245,23 +311,35 @@ impl StreamSampler {
                 .map(|(s, r)| s + r)
                 .collect::<Vec<f64>>()
         };
+        let constant = energy.law.is_constant();
         match method {
-            ResolvedMethod::Aggregate => StreamSampler::Aggregate(total()),
+            ResolvedMethod::Aggregate if constant => StreamSampler::Aggregate(total()),
+            ResolvedMethod::Aggregate | ResolvedMethod::AggregateNormal { .. } if !constant => {
+                StreamSampler::AggregateEnergy {
+                    signal: signal.to_vec(),
+                    rest: rest.to_vec(),
+                    energy,
+                }
+            }
             ResolvedMethod::AggregateNormal { threshold } => {
                 StreamSampler::AggregateNormal(total(), threshold)
             }
-            ResolvedMethod::Shot if jitter > 0.0 => {
-                StreamSampler::Jittered(Box::new(JitteredShots::new(signal, rest, jitter)))
-            }
-            ResolvedMethod::Shot => StreamSampler::Shot(Box::new(ShotSampler::new(&total()))),
+            ResolvedMethod::Shot if !constant => StreamSampler::Modulated(Box::new(
+                ModulatedShots::new(signal, rest, energy.law, energy.seed, energy.envelope),
+            )),
+            _ => StreamSampler::Shot(Box::new(ShotSampler::new(&total()))),
         }
     }
 
     /// The same sampler with the detector's dead time applied to every shot (a `Shot`
-    /// sampler becomes `DeadTimed`; [`check_detector`] ensures the method is `shot`).
+    /// sampler becomes `DeadTimed`, a `Modulated` one records through it; [`check_detector`]
+    /// ensures the method is `shot`).
     pub fn through_detector(self, dead: Option<DeadTime>) -> Self {
         match (self, dead) {
             (StreamSampler::Shot(s), Some(d)) => StreamSampler::DeadTimed(s, d),
+            (StreamSampler::Modulated(m), Some(d)) => {
+                StreamSampler::Modulated(Box::new(m.through_detector(Some(d))))
+            }
             (other, _) => other,
         }
     }
@@ -273,8 +351,24 @@ impl StreamSampler {
             StreamSampler::Aggregate(l) => {
                 sampling::aggregate_profile(l, seed, profile, shots, acc)
             }
+            StreamSampler::AggregateEnergy {
+                signal,
+                rest,
+                energy,
+            } => {
+                let sum = energy
+                    .law
+                    .profile_sum(energy.seed.unwrap_or(seed), profile, shots);
+                let mean_factor = sum / shots as f64;
+                let l: Vec<f64> = signal
+                    .iter()
+                    .zip(rest)
+                    .map(|(s, r)| mean_factor * s + r)
+                    .collect();
+                sampling::aggregate_profile(&l, seed, profile, shots, acc)
+            }
             StreamSampler::Shot(s) => sampling::shot_profile(s, seed, profile, shots, acc),
-            StreamSampler::Jittered(j) => j.profile(seed, profile, shots, acc),
+            StreamSampler::Modulated(j) => j.profile(seed, profile, shots, acc),
             StreamSampler::AggregateNormal(l, threshold) => {
                 approx::aggregate_approx_profile(l, seed, profile, shots, *threshold, acc)
             }
@@ -285,54 +379,50 @@ impl StreamSampler {
     }
 }
 
-/// The streams of a run with their seeds: the total, or signal, background and dark apart.
+/// The streams of one channel with their seeds: the total, or signal, background and
+/// dark apart.
 fn stream_samplers(
     e: &ExpectedProfile,
     method: ResolvedMethod,
-    jitter: f64,
+    energy: RunEnergy,
     components: bool,
     seed: u64,
     dead: Option<DeadTime>,
 ) -> Vec<(StreamSampler, u64)> {
     let n = e.n_bins();
     let zeros = vec![0.0; n];
+    let constant = RunEnergy::jitter(0.0);
     if components {
         vec![
             (
-                StreamSampler::new(method, &e.signal, &zeros, jitter),
+                StreamSampler::with_energy(method, &e.signal, &zeros, energy),
                 component_seed(seed, 0),
             ),
             (
-                StreamSampler::new(method, &zeros, &vec![e.background; n], 0.0),
+                StreamSampler::with_energy(method, &zeros, &vec![e.background; n], constant),
                 component_seed(seed, 1),
             ),
             (
-                StreamSampler::new(method, &zeros, &vec![e.dark; n], 0.0),
+                StreamSampler::with_energy(method, &zeros, &vec![e.dark; n], constant),
                 component_seed(seed, 2),
             ),
         ]
     } else {
         let rest = vec![e.background + e.dark; n];
-        let sampler = StreamSampler::new(method, &e.signal, &rest, jitter).through_detector(dead);
+        let sampler =
+            StreamSampler::with_energy(method, &e.signal, &rest, energy).through_detector(dead);
         vec![(sampler, seed)]
     }
 }
 
-/// What this version does not combine with dead time: jitter (a shot's energy and its
-/// arrival times would both have to be drawn) and component counts (a recorded count is
-/// not a sum of parts).
-pub fn check_detector(scenario: &Scenario, components: bool) -> Result<()> {
-    if scenario.instrument.dead_time.is_none() {
-        return Ok(());
-    }
-    if scenario.instrument.pulse_energy_jitter > 0.0 {
-        return Err(Error::Unsupported(
-            "instrument.detector.dead_time_s with instrument.pulse_energy_jitter is not simulated yet; \
-             set one of them to 0"
-                .into(),
-        ));
-    }
-    if components {
+/// What this version does not combine with dead time: component counts (a recorded
+/// count is not a sum of parts).
+pub fn check_detector(lidar: &Lidar, components: bool) -> Result<()> {
+    let dead = lidar
+        .channels
+        .iter()
+        .any(|c| c.instrument.dead_time.is_some());
+    if dead && components {
         return Err(Error::Unsupported(
             "--components is not available with dead time: a recorded count is not a sum of \
              signal, background and dark counts"
@@ -342,16 +432,42 @@ pub fn check_detector(scenario: &Scenario, components: bool) -> Result<()> {
     Ok(())
 }
 
-/// Runs the Monte Carlo of `scenario` and writes the raw file as output `raw` of
-/// `outputs` (the command's output set, committed here when the file is complete).
+/// The run's energies: the laser of the first channel (shared by all), its envelope over
+/// the run's `duration_s`; refuses a drift that would leave the laser dark.
+pub fn run_energy(lidar: &Lidar, seed: u64, duration_s: f64) -> Result<RunEnergy> {
+    let sc = lidar.first();
+    let law = PulseEnergy::from_config(&sc.loaded.config.instrument);
+    let lowest = law.lowest_drift(duration_s);
+    if lowest < 0.05 {
+        return Err(Error::config(
+            sc.loaded.file_label(),
+            "instrument.energy_drift",
+            format!(
+                "drifts to {:.1} % of the pulse energy within the run ({}); a laser \
+                 below 5 % is off: shorten the run or the drift",
+                100.0 * lowest,
+                crate::resources::human_duration(duration_s)
+            ),
+        ));
+    }
+    Ok(RunEnergy {
+        law,
+        seed: Some(seed),
+        envelope: law.envelope(duration_s),
+    })
+}
+
+/// Runs the Monte Carlo of every channel of `lidar` and writes the raw file as output
+/// `raw` of `outputs` (the command's output set, committed here when the file is complete).
 pub fn run(
-    scenario: &Scenario,
+    lidar: &Lidar,
     opts: &RunOptions,
     outputs: Outputs,
     raw: OutputId,
 ) -> Result<RunSummary> {
     let start = Instant::now();
-    let cfg = &scenario.loaded.config;
+    let first = lidar.first();
+    let cfg = &first.loaded.config;
     let seed = opts.seed.unwrap_or(cfg.simulation.seed);
     let profiles = opts.profiles.unwrap_or(cfg.acquisition.profiles);
     if profiles == 0 {
@@ -360,10 +476,13 @@ pub fn run(
     let components = opts.components.unwrap_or(cfg.simulation.components);
     let requested = opts.method.unwrap_or(cfg.simulation.method);
     let tolerance = opts.tolerance.or(cfg.simulation.tolerance);
-    check_detector(scenario, components)?;
-    let mut method = resolve_method(requested, scenario)?;
-    let e = scenario.expected()?;
-    let shots = scenario.shots_per_profile();
+    check_detector(lidar, components)?;
+    let mut method = resolve_method(requested, lidar)?;
+    let expected = lidar.expected()?;
+    let shots = first.shots_per_profile();
+    let profile_time_s = shots as f64 / first.instrument.rep_rate_hz;
+    let energy = run_energy(lidar, seed, profiles as f64 * profile_time_s)?;
+    let totals: Vec<f64> = expected.iter().flat_map(|e| e.total_per_shot()).collect();
     if let Some(t) = tolerance {
         if requested != Method::Auto {
             return Err(Error::Unsupported(format!(
@@ -371,11 +490,140 @@ pub fn run(
                 method.name()
             )));
         }
-        method = fastest_within(t, &e, shots, method == ResolvedMethod::Aggregate);
+        let approximable = method == ResolvedMethod::Aggregate && energy.law.is_constant();
+        method = fastest_within_totals(t, &totals, shots, approximable);
     }
-    let n_bins = e.n_bins();
-    let max_mean = e.total_per_shot().iter().fold(0.0f64, |m, &l| m.max(l)) * shots as f64;
-    check_sizes(&e, method, shots, profiles, components, opts)?;
+    let n_bins = first.geometry.n_bins;
+    check_sizes(&totals, method, shots, profiles, components, opts)?;
+    let spec = raw_file_spec(
+        lidar, &expected, method, seed, profiles, components, energy, tolerance, opts,
+    )?;
+    let mut writer = RawFileWriter::create(outputs.temp_path(raw)?, &opts.output, &spec)?;
+
+    let channels: Vec<Vec<(StreamSampler, u64)>> = lidar
+        .channels
+        .iter()
+        .zip(&expected)
+        .enumerate()
+        .map(|(k, (c, e))| {
+            let seed = channel_seed(seed, k);
+            stream_samplers(e, method, energy, components, seed, c.instrument.dead_time)
+        })
+        .collect();
+    let nominal_energy_j = cfg.instrument.pulse_energy_j;
+    let progress = progress_bar(opts.progress, profiles);
+    let streams = channels.len() * channels[0].len();
+    // batch size: bounded memory (at most 32 MiB of counts) and a lively progress bar
+    let batch = ((4 << 20) / (n_bins * streams).max(1)).clamp(1, 64);
+    let mut total_counts = 0u64;
+    let mut drawing = Duration::ZERO;
+    for first_profile in (0..profiles).step_by(batch) {
+        let last = (first_profile + batch).min(profiles);
+        let draw_start = Instant::now();
+        let drawn: Vec<DrawnProfile> = (first_profile..last)
+            .into_par_iter()
+            .map(|p| draw_profile(&channels, p as u64, shots, n_bins, components, &energy))
+            .collect();
+        drawing += draw_start.elapsed();
+        for (k, d) in drawn.iter().enumerate() {
+            total_counts += d.counts.iter().sum::<u64>();
+            let index = first_profile + k;
+            writer.write_profile(&ProfileRecord {
+                index,
+                time_s: index as f64 * profile_time_s + 0.5 * profile_time_s,
+                n_shots: shots,
+                pulse_energy_j: nominal_energy_j * d.energy_sum / shots as f64,
+                counts: &d.counts,
+                components: d
+                    .components
+                    .as_ref()
+                    .map(|[s, b, k]| [&s[..], &b[..], &k[..]]),
+            })?;
+        }
+        progress.inc((last - first_profile) as u64);
+    }
+    writer.finish()?;
+    outputs.commit()?;
+    progress.finish_and_clear();
+    Ok(RunSummary {
+        output: opts.output.clone(),
+        profiles,
+        bins: n_bins,
+        shots_per_profile: shots,
+        total_counts,
+        method,
+        seed,
+        elapsed: start.elapsed(),
+        drawing,
+        warning: lidar.linear_range_warning(&expected),
+    })
+}
+
+/// One profile of every channel, channel-major, as the file stores it.
+struct DrawnProfile {
+    counts: Vec<u64>,
+    components: Option<[Vec<u64>; 3]>,
+    /// Sum of the shots' energy factors (the energy monitor's reading × M / E0).
+    energy_sum: f64,
+}
+
+/// Draws profile `p` of every channel's streams.
+fn draw_profile(
+    channels: &[Vec<(StreamSampler, u64)>],
+    p: u64,
+    shots: u64,
+    n_bins: usize,
+    components: bool,
+    energy: &RunEnergy,
+) -> DrawnProfile {
+    let per_channel: Vec<Vec<Vec<u64>>> = channels
+        .iter()
+        .map(|streams| {
+            streams
+                .iter()
+                .map(|(sampler, stream_seed)| {
+                    let mut acc = vec![0u64; n_bins];
+                    sampler.profile_counts(*stream_seed, p, shots, &mut acc);
+                    acc
+                })
+                .collect()
+        })
+        .collect();
+    let counts: Vec<u64> = per_channel
+        .iter()
+        .flat_map(|streams| (0..n_bins).map(move |i| streams.iter().map(|s| s[i]).sum::<u64>()))
+        .collect();
+    let components = components.then(|| {
+        std::array::from_fn(|c| {
+            per_channel
+                .iter()
+                .flat_map(|s| s[c].iter().copied())
+                .collect()
+        })
+    });
+    let energy_seed = energy.seed.unwrap_or_default();
+    DrawnProfile {
+        counts,
+        components,
+        energy_sum: energy.law.profile_sum(energy_seed, p, shots),
+    }
+}
+
+/// Everything the raw file holds besides the profiles.
+#[allow(clippy::too_many_arguments)]
+fn raw_file_spec(
+    lidar: &Lidar,
+    expected: &[ExpectedProfile],
+    method: ResolvedMethod,
+    seed: u64,
+    profiles: usize,
+    components: bool,
+    energy: RunEnergy,
+    tolerance: Option<f64>,
+    opts: &RunOptions,
+) -> Result<RawFileSpec> {
+    let first = lidar.first();
+    let shots = first.shots_per_profile();
     let mut method_attributes = vec![];
     if let ResolvedMethod::AggregateNormal { threshold } = method {
         method_attributes.push((
@@ -393,88 +641,25 @@ pub fn run(
         method_attributes,
         command_line: &opts.command_line,
     };
-    let spec = RawFileSpec {
-        n_bins,
+    // the brightest bin at the brightest pulse of the run sizes the counters
+    let max_mean = expected
+        .iter()
+        .flat_map(|e| {
+            e.signal
+                .iter()
+                .map(|s| energy.envelope * s + e.background + e.dark)
+        })
+        .fold(0.0f64, f64::max)
+        * shots as f64;
+    Ok(RawFileSpec {
+        n_bins: first.geometry.n_bins,
         n_profiles: profiles,
-        channels: vec![content::channel_name(
-            scenario.instrument.wavelength_nm,
-            scenario.instrument.channel,
-        )],
+        channels: lidar.channel_names(),
         count_width: CountWidth::for_max_count(max_mean)?,
         components,
-        time_units: content::time_units(&cfg.acquisition.start_time)?,
-        variables: content::variables(scenario, &e, shots),
-        root_attributes: content::root_attributes(scenario, &run_info)?,
-    };
-    let mut writer = RawFileWriter::create(outputs.temp_path(raw)?, &opts.output, &spec)?;
-
-    let samplers = stream_samplers(
-        &e,
-        method,
-        scenario.instrument.pulse_energy_jitter,
-        components,
-        seed,
-        scenario.instrument.dead_time,
-    );
-    let profile_time_s = shots as f64 / scenario.instrument.rep_rate_hz;
-    let progress = progress_bar(opts.progress, profiles);
-    // batch size: bounded memory (at most 32 MiB of counts) and a lively progress bar
-    let batch = (4 << 20) / (n_bins * samplers.len()).max(1);
-    let batch = batch.clamp(1, 64);
-    let mut total_counts = 0u64;
-    let mut drawing = Duration::ZERO;
-    for first in (0..profiles).step_by(batch) {
-        let last = (first + batch).min(profiles);
-        let draw_start = Instant::now();
-        let drawn: Vec<Vec<Vec<u64>>> = (first..last)
-            .into_par_iter()
-            .map(|p| {
-                samplers
-                    .iter()
-                    .map(|(sampler, stream_seed)| {
-                        let mut acc = vec![0u64; n_bins];
-                        sampler.profile_counts(*stream_seed, p as u64, shots, &mut acc);
-                        acc
-                    })
-                    .collect()
-            })
-            .collect();
-        drawing += draw_start.elapsed();
-        for (k, streams) in drawn.iter().enumerate() {
-            let summed: Vec<u64>;
-            let total: &[u64] = if components {
-                summed = (0..n_bins)
-                    .map(|i| streams.iter().map(|s| s[i]).sum())
-                    .collect();
-                &summed
-            } else {
-                &streams[0]
-            };
-            total_counts += total.iter().sum::<u64>();
-            writer.write_profile(&ProfileRecord {
-                index: first + k,
-                time_s: (first + k) as f64 * profile_time_s + 0.5 * profile_time_s,
-                n_shots: shots,
-                counts: total,
-                components: components.then(|| [&streams[0][..], &streams[1][..], &streams[2][..]]),
-            })?;
-        }
-        progress.inc((last - first) as u64);
-    }
-    writer.finish()?;
-    outputs.commit()?;
-    progress.finish_and_clear();
-    Ok(RunSummary {
-        output: opts.output.clone(),
-        profiles,
-        bins: n_bins,
-        shots_per_profile: shots,
-        total_counts,
-        method,
-        seed,
-        elapsed: start.elapsed(),
-        drawing,
-        warning: scenario.linear_range_warning(&e),
+        time_units: content::time_units(&first.loaded.config.acquisition.start_time)?,
+        variables: content::variables(lidar, expected, shots),
+        root_attributes: content::root_attributes(first, &run_info)?,
     })
 }
 
@@ -496,16 +681,10 @@ const FILE_NS_PER_COUNT: f64 = 150.0;
 
 /// Estimated size of the raw file, bytes: per stored count the smaller of its width and
 /// the compressed Poisson entropy of its mean.
-pub fn estimated_file_bytes(
-    e: &ExpectedProfile,
-    shots: u64,
-    profiles: usize,
-    streams: usize,
-) -> f64 {
-    let max_mean = e.total_per_shot().iter().fold(0.0f64, |m, &l| m.max(l)) * shots as f64;
+pub fn estimated_file_bytes(totals: &[f64], shots: u64, profiles: usize, streams: usize) -> f64 {
+    let max_mean = totals.iter().fold(0.0f64, |m, &l| m.max(l)) * shots as f64;
     let width = CountWidth::for_max_count(max_mean).map_or(8.0, |w| w.bytes() as f64);
-    let per_profile: f64 = e
-        .total_per_shot()
+    let per_profile: f64 = totals
         .iter()
         .map(|l| {
             let h = crate::resources::poisson_entropy_bits(l * shots as f64) / 8.0;
@@ -513,14 +692,15 @@ pub fn estimated_file_bytes(
         })
         .sum();
     FILE_FIXED_BYTES
-        + FILE_BYTES_PER_BIN * e.n_bins() as f64
+        + FILE_BYTES_PER_BIN * totals.len() as f64
         + profiles as f64 * (per_profile * streams as f64 + FILE_BYTES_PER_PROFILE)
 }
 
 /// Refuses a run whose memory or file cannot fit, and announces a long one
-/// (interface.md: sizes checked before work starts).
+/// (interface.md: sizes checked before work starts). `totals` are the per-shot means of
+/// every bin of every channel.
 fn check_sizes(
-    e: &ExpectedProfile,
+    totals: &[f64],
     method: ResolvedMethod,
     shots: u64,
     profiles: usize,
@@ -528,19 +708,14 @@ fn check_sizes(
     opts: &RunOptions,
 ) -> Result<()> {
     let streams = if components { 4 } else { 1 };
-    let bins = e.n_bins() as f64;
+    let bins = totals.len() as f64;
     // one bit per profile (written yet?), the batch of drawn rows, the samplers' tables
     let memory = profiles as f64 / 8.0 + 64.0 * bins * 8.0 * 2.0 * streams as f64 + 64.0 * bins;
     crate::resources::require_memory(&format!("simulating {profiles} profiles"), memory)?;
-    let file = estimated_file_bytes(e, shots, profiles, streams);
+    let file = estimated_file_bytes(totals, shots, profiles, streams);
     crate::resources::require_disk("-o", &opts.output, file)?;
     let draw_ns_per_profile = match method {
-        ResolvedMethod::Shot => {
-            ShotSampler::new(&e.total_per_shot())
-                .strategy()
-                .est_ns_per_shot
-                * shots as f64
-        }
+        ResolvedMethod::Shot => ShotSampler::new(totals).strategy().est_ns_per_shot * shots as f64,
         _ => bins * cost::AGGREGATE_LARGE_NS,
     };
     let threads = rayon::current_num_threads().max(1) as f64;
@@ -548,7 +723,7 @@ fn check_sizes(
         * (draw_ns_per_profile * streams.min(3) as f64 / threads
             + bins * streams as f64 * FILE_NS_PER_COUNT);
     crate::resources::announce_duration(
-        &format!("{profiles} profiles × {} bins", e.n_bins()),
+        &format!("{profiles} profiles × {} bins", totals.len()),
         ns * 1e-9,
     );
     Ok(())

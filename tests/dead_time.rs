@@ -133,7 +133,8 @@ fn validate_checks_recorded_counts_and_rejects_the_ideal_model() {
     let source =
         SimulatorSource::new(&e, ResolvedMethod::Shot, 0.0, 5, shots).with_detector(Some(dead));
     let bg = &e.background_bin_indices;
-    let right = validate::recorded_bin_models(&e, shots, &dead);
+    let laser = lidarsim::laser::PulseEnergy::from_config(&sc.loaded.config.instrument);
+    let right = validate::recorded_bin_models(&e, shots, &dead, &laser);
     let (_, checks) = validate::validate_source(&source, &right, &e.altitude_m, 400, bg);
     assert!(checks.iter().all(|c| c.pass), "{checks:#?}");
     let ideal = validate::bin_models(&e, shots, 0.0);
@@ -142,11 +143,11 @@ fn validate_checks_recorded_counts_and_rejects_the_ideal_model() {
     assert!(!mean.pass, "{mean:#?}");
 }
 
-/// Dead time makes `aggregate` inexact (refused, `auto` draws shots); combinations this
-/// version does not simulate are refused in one line.
+/// Dead time makes `aggregate` inexact (refused, `auto` draws shots); component counts
+/// are refused in one line; jitter combines with dead time.
 #[test]
 fn dead_time_refuses_what_it_cannot_do() {
-    let sc = common::scenario(
+    let sc = common::lidar(
         "paper/scenario1.toml",
         &["instrument.detector.dead_time_s=3.5e-9"],
     );
@@ -157,14 +158,14 @@ fn dead_time_refuses_what_it_cannot_do() {
         ResolvedMethod::Shot
     );
     assert!(lidarsim::simulate::check_detector(&sc, true).is_err());
-    let jittered = common::scenario(
+    let jittered = common::lidar(
         "paper/scenario1.toml",
         &[
             "instrument.detector.dead_time_s=3.5e-9",
             "instrument.pulse_energy_jitter=0.05",
         ],
     );
-    assert!(lidarsim::simulate::check_detector(&jittered, false).is_err());
+    assert!(lidarsim::simulate::check_detector(&jittered, false).is_ok());
 }
 
 /// Without dead time, a bin beyond a photon counter's linear range is named in a

@@ -1268,7 +1268,7 @@ fn switch_jitter_thinning_bernoulli_to_binomial() {
     let f_max = 1.0 + 6.0 * sigma;
     let l = 16.0 / f_max;
     let sampler = StreamSampler::new(ResolvedMethod::Shot, &[l], &[0.0], sigma);
-    assert!(matches!(sampler, StreamSampler::Jittered(_)));
+    assert!(matches!(sampler, StreamSampler::Modulated(_)));
     // one pool thread: each profile's (single-block) parallel loop runs inline
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)

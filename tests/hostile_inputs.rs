@@ -547,7 +547,7 @@ fn cases() -> Vec<Case> {
             ]),
         ),
         c(
-            "--method aggregate with jitter",
+            "--method aggregate with dead time",
             Refused("aggregate"),
             args(&[
                 "simulate",
@@ -557,7 +557,7 @@ fn cases() -> Vec<Case> {
                 "--method",
                 "aggregate",
                 "--set",
-                "instrument.pulse_energy_jitter=0.05",
+                "instrument.detector.dead_time_s=3.5e-9",
             ]),
         ),
         c(

@@ -171,15 +171,15 @@ fn bad_input_leaves_no_file() {
 }
 
 #[test]
-fn aggregate_is_refused_where_shots_differ() {
-    let dir = scratch("jitter");
+fn aggregate_is_refused_where_counts_are_not_poisson() {
+    let dir = scratch("dead");
     let out = dir.join("j.h5");
     let o = simulate(
         "paper/scenario1.toml",
         &out,
         &[
             "--set",
-            "instrument.pulse_energy_jitter=0.05",
+            "instrument.detector.dead_time_s=3.5e-9",
             "--method",
             "aggregate",
         ],
@@ -187,9 +187,26 @@ fn aggregate_is_refused_where_shots_differ() {
     );
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("aggregate") && err.contains("jitter"), "{err}");
+    assert!(
+        err.contains("aggregate") && err.contains("dead time"),
+        "{err}"
+    );
     assert!(!out.exists());
-    // auto falls back to the shot path and says so in the file
+    // auto falls back to the shot path and says so in the summary
+    let o = simulate(
+        "paper/scenario1.toml",
+        &out,
+        &[
+            "--set",
+            "instrument.detector.dead_time_s=3.5e-9",
+            "--profiles",
+            "2",
+        ],
+        None,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("method shot"));
+    // jitter alone keeps the exact aggregate: the profile's energies are drawn first
     let o = simulate(
         "paper/scenario1.toml",
         &out,
@@ -202,7 +219,7 @@ fn aggregate_is_refused_where_shots_differ() {
         None,
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("method shot"));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("method aggregate"));
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -91,7 +91,7 @@ fn per_shot_gof_rejects_a_mean_off_by_one_percent() {
 }
 
 fn validate_paper(n: usize, radiance: &str, method: Method) -> validate::Report {
-    let sc = scenario(
+    let sc = common::lidar(
         &format!("paper/scenario{n}.toml"),
         &[&format!("background.radiance={radiance}")],
     );

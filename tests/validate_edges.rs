@@ -150,7 +150,10 @@ fn the_fewest_realizations_keep_the_false_alarm_rate() {
             seed: None,
             json: None,
         };
-        let e = validate::run(&sc, &opts).unwrap_err().to_string();
+        let lidar = lidarsim::scenario::Lidar {
+            channels: vec![sc.clone()],
+        };
+        let e = validate::run(&lidar, &opts).unwrap_err().to_string();
         assert!(e.contains("--realizations"), "{e}");
     }
 }

@@ -150,6 +150,8 @@ pub struct Atmosphere {
     pub grid_m: f64,
     /// Receiver channel (weights each species' backscatter by its depolarization).
     pub channel: Channel,
+    /// The channel's polarization cross-talk.
+    pub crosstalk: f64,
 }
 
 impl Atmosphere {
@@ -196,6 +198,7 @@ impl Atmosphere {
             layers: layers(cfg),
             grid_m: m.grid_m,
             channel: cfg.instrument.channel,
+            crosstalk: cfg.instrument.crosstalk,
         })
     }
 
@@ -207,14 +210,17 @@ impl Atmosphere {
         o.beta_mol = alpha_mol / self.molecules.lidar_ratio_sr;
         o.alpha_total = alpha_mol;
         o.alpha_effective = alpha_mol;
-        o.beta_channel = o.beta_mol * self.channel.share(self.molecules.depolarization);
+        o.beta_channel = o.beta_mol
+            * self
+                .channel
+                .share(self.molecules.depolarization, self.crosstalk);
         if let Some(a) = &self.aerosol {
             let alpha = a.extinction_per_m(z_m);
             let beta = alpha / a.lidar_ratio_sr;
             o.beta_aer += beta;
             o.alpha_total += alpha;
             o.alpha_effective += alpha;
-            o.beta_channel += beta * self.channel.share(a.depolarization);
+            o.beta_channel += beta * self.channel.share(a.depolarization, self.crosstalk);
         }
         for l in self.layers.iter().filter(|l| l.contains(z_m)) {
             let beta = l.extinction_per_m / l.lidar_ratio_sr;
@@ -224,7 +230,7 @@ impl Atmosphere {
             }
             o.alpha_total += l.extinction_per_m;
             o.alpha_effective += l.extinction_per_m * l.multiple_scattering;
-            o.beta_channel += beta * self.channel.share(l.depolarization);
+            o.beta_channel += beta * self.channel.share(l.depolarization, self.crosstalk);
         }
         o
     }
@@ -304,14 +310,18 @@ fn layers(cfg: &ScenarioConfig) -> Vec<Layer> {
     cfg.atmosphere
         .layers
         .iter()
-        .map(|l| Layer {
-            kind: l.kind,
-            base_m: l.base_km * 1e3,
-            top_m: l.top_km * 1e3,
-            extinction_per_m: l.extinction_per_km * 1e-3,
-            lidar_ratio_sr: l.lidar_ratio_sr,
-            depolarization: l.depolarization,
-            multiple_scattering: l.multiple_scattering,
+        .map(|l| {
+            let wl = cfg.instrument.wavelength_nm;
+            let (extinction_per_km, lidar_ratio_sr) = l.at_wavelength(wl, wl);
+            Layer {
+                kind: l.kind,
+                base_m: l.base_km * 1e3,
+                top_m: l.top_km * 1e3,
+                extinction_per_m: extinction_per_km * 1e-3,
+                lidar_ratio_sr,
+                depolarization: l.depolarization,
+                multiple_scattering: l.multiple_scattering,
+            }
         })
         .collect()
 }

@@ -36,7 +36,7 @@ use rayon::prelude::*;
 use crate::sampling::{SHOT_BLOCK, ShotCounts, ShotSampler, stream_rng};
 
 /// Seed offset of the arrival-time streams.
-const ARRIVAL_STREAM: u64 = 0xA441_7A1E_0000_0001;
+pub const ARRIVAL_STREAM: u64 = 0xA441_7A1E_0000_0001;
 /// Most grid steps of the mean-rate solver; beyond, the stationary formulas per bin.
 pub const MAX_GRID_STEPS: f64 = 5e7;
 /// Grid steps per dead time (and at least per bin).
@@ -112,6 +112,32 @@ impl DeadTime {
                 recorded
             })
             .collect()
+    }
+
+    /// Mean and variance of each bin's recorded count per shot when the signal varies
+    /// from shot to shot with the laser's jitter (`energy`, drift excluded): by the law
+    /// of total variance over the shot's energy factor f,
+    /// `E[m(f)]` and `E[v(f)] + Var[m(f)]`, with m from [`recorded_means`](Self::recorded_means)
+    /// and v from [`recorded_variance`](Self::recorded_variance) at `f·signal + rest`.
+    pub fn recorded_moments(
+        &self,
+        signal: &[f64],
+        rest: f64,
+        energy: &crate::laser::PulseEnergy,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let n = signal.len();
+        let m = energy.jitter_expectation(|f| {
+            let lambda: Vec<f64> = signal.iter().map(|s| f * s + rest).collect();
+            let mean = self.recorded_means(&lambda);
+            let var = lambda.iter().map(|&l| self.recorded_variance(l));
+            let square = mean.iter().map(|x| x * x).collect::<Vec<f64>>();
+            mean.iter().copied().chain(var).chain(square).collect()
+        });
+        let mean = m[..n].to_vec();
+        let var = (0..n)
+            .map(|i| m[n + i] + (m[2 * n + i] - m[i] * m[i]).max(0.0))
+            .collect();
+        (mean, var)
     }
 
     /// Variance of a bin's recorded count per shot (renewal theory, module docs), for the

@@ -1,78 +1,116 @@
-//! Shots whose signal varies: pulse-energy jitter, drawn exactly by thinning.
+//! Shots whose signal varies with the emitted energy (jitter, drift: [`crate::laser`]),
+//! drawn exactly by thinning, optionally through the detector's dead time.
 //!
-//! **Model.** Shot `s` emits `f_s·E0` with `f_s = clamp(1 + σ·g_s, 0, f_max)`,
-//! `g_s ~ N(0, 1)` i.i.d., `f_max = 1 + 6σ` (the clamps change the law with
-//! probability below 2·10⁻⁹ for σ ≤ 0.2). Its signal counts are Poisson(`f_s·λ_sig,i`),
-//! background and dark unchanged.
+//! **Model.** Shot `s` emits `f_s·E0`; its signal counts are Poisson(`f_s·λ_sig,i`),
+//! background and dark unchanged; the factors `f_s` come from the laser's own stream
+//! ([`PulseEnergy::block_factors`]), shared by every channel.
 //!
 //! **Algorithm (exact thinning).** The signal sampler is built once at the envelope
-//! `f_max·λ_sig`; each shot's draw is thinned, every count kept with probability
-//! `f_s/f_max` (a binomial thinning of a Poisson(μ) count is Poisson(p·μ); Lewis &
-//! Shedler 1979, Naval Res. Logist. Q. 26, 403). The cost per shot is that of the
-//! envelope draw plus one Bernoulli per signal count, with no per-shot rebuild.
-//! Blocks of [`SHOT_BLOCK`] shots use [`stream_rng`]`(seed, profile, block)`, as in
-//! [`super::shot_profile`], so results depend on the seed only.
+//! `f_max·λ_sig` (`f_max` bounds every factor of the run); each shot's draw is thinned,
+//! every count kept with probability `f_s/f_max` (a binomial thinning of a Poisson(μ)
+//! count is Poisson(p·μ); Lewis & Shedler 1979, Naval Res. Logist. Q. 26, 403). The cost
+//! per shot is that of the envelope draw plus one Bernoulli per signal count, with no
+//! per-shot rebuild. With dead time the shot's photons (thinned signal and the rest) are
+//! collected and recorded by [`DeadTime::record_shot`]. Blocks of [`SHOT_BLOCK`] shots
+//! use [`stream_rng`]`(seed, profile, block)`, as in [`super::shot_profile`], so results
+//! depend on the seed only.
 
 use rand::Rng;
-use rand_distr::{Binomial, Distribution, StandardNormal};
+use rand_distr::{Binomial, Distribution};
 use rayon::prelude::*;
 
-use super::{SHOT_BLOCK, ShotCounts, ShotSampler, stream_rng};
+use super::{CountSink, SHOT_BLOCK, ShotCounts, ShotSampler, stream_rng};
+use crate::detector::DeadTime;
+use crate::detector::dead_time::{ARRIVAL_STREAM, Scratch};
+use crate::laser::PulseEnergy;
 
 /// Largest relative rms pulse-energy jitter supported.
 pub const MAX_JITTER: f64 = 0.2;
 
-/// Envelope factor `f_max = 1 + 6σ`.
-pub fn envelope(jitter: f64) -> f64 {
-    1.0 + 6.0 * jitter
-}
-
-/// One shot's energy factor `f = clamp(1 + σ·g, 0, f_max)`.
-pub fn energy_factor<R: Rng + ?Sized>(rng: &mut R, jitter: f64) -> f64 {
-    let g: f64 = StandardNormal.sample(rng);
-    (1.0 + jitter * g).clamp(0.0, envelope(jitter))
-}
-
-/// Samplers for a jittered scene: the signal at its envelope, the rest unchanged.
+/// Samplers for shots of varying energy: the signal at its envelope, the rest unchanged.
 #[derive(Debug, Clone)]
-pub struct JitteredShots {
+pub struct ModulatedShots {
     signal_envelope: ShotSampler,
     rest: ShotSampler,
-    jitter: f64,
+    energy: PulseEnergy,
+    /// The run's seed, from which the energy factors are drawn (`None`: the stream's own).
+    energy_seed: Option<u64>,
+    /// `f_max`: no factor of the run exceeds it.
+    envelope: f64,
+    dead: Option<DeadTime>,
 }
 
-impl JitteredShots {
-    /// `signal` and `rest` (background + dark) are per-shot means per bin at nominal energy.
-    pub fn new(signal: &[f64], rest: &[f64], jitter: f64) -> Self {
-        let f_max = envelope(jitter);
-        let env: Vec<f64> = signal.iter().map(|s| s * f_max).collect();
-        JitteredShots {
+/// Reusable buffers of one block.
+struct Buffers {
+    envelope: ShotCounts,
+    shot: ShotCounts,
+    factors: Vec<f64>,
+    scratch: Scratch,
+}
+
+impl ModulatedShots {
+    /// `signal` and `rest` (background + dark) are per-shot means per bin at the nominal
+    /// energy; `envelope` bounds every energy factor of the run
+    /// ([`PulseEnergy::envelope`]); `energy_seed` is the run's seed.
+    pub fn new(
+        signal: &[f64],
+        rest: &[f64],
+        energy: PulseEnergy,
+        energy_seed: Option<u64>,
+        envelope: f64,
+    ) -> Self {
+        let env: Vec<f64> = signal.iter().map(|s| s * envelope).collect();
+        ModulatedShots {
             signal_envelope: ShotSampler::new(&env),
             rest: ShotSampler::new(rest),
-            jitter,
+            energy,
+            energy_seed,
+            envelope,
+            dead: None,
         }
     }
 
-    fn add_shots<R: Rng + ?Sized>(
+    /// The same sampler recording every shot through `dead`.
+    pub fn through_detector(mut self, dead: Option<DeadTime>) -> Self {
+        self.dead = dead;
+        self
+    }
+
+    /// Draws block `block` (shots `factors.len()`) into `acc`.
+    fn add_block<R: Rng + ?Sized>(
         &self,
         rng: &mut R,
-        shots: u64,
+        arrivals: &mut R,
         acc: &mut [u64],
-        buf: &mut ShotCounts,
+        buf: &mut Buffers,
     ) {
-        let f_max = envelope(self.jitter);
-        for _ in 0..shots {
-            let keep = energy_factor(rng, self.jitter) / f_max;
-            buf.clear();
-            self.signal_envelope.sample_shot(rng, buf);
-            for (bin, n) in buf.nonzero() {
-                acc[bin] += thin(rng, n, keep);
+        for &f in &buf.factors {
+            let keep = f / self.envelope;
+            buf.envelope.clear();
+            self.signal_envelope.sample_shot(rng, &mut buf.envelope);
+            match &self.dead {
+                None => {
+                    for (bin, n) in buf.envelope.nonzero() {
+                        acc[bin] += thin(rng, n, keep);
+                    }
+                    self.rest.sample_shot(rng, acc);
+                }
+                Some(dead) => {
+                    buf.shot.clear();
+                    for (bin, n) in buf.envelope.nonzero() {
+                        let kept = thin(rng, n, keep);
+                        if kept > 0 {
+                            buf.shot.add(bin, kept as u32);
+                        }
+                    }
+                    self.rest.sample_shot(rng, &mut buf.shot);
+                    dead.record_shot(arrivals, &buf.shot, &mut buf.scratch, acc);
+                }
             }
-            self.rest.sample_shot(rng, acc);
         }
     }
 
-    /// Accumulates one profile of `shots` jittered shots into `acc`.
+    /// Accumulates one profile of `shots` shots into `acc`.
     pub fn profile(&self, seed: u64, profile: u64, shots: u64, acc: &mut [u64]) {
         let bins = acc.len();
         let nblocks = shots.div_ceil(SHOT_BLOCK);
@@ -80,9 +118,22 @@ impl JitteredShots {
             .into_par_iter()
             .map(|b| {
                 let mut part = vec![0u64; bins];
-                let mut buf = ShotCounts::new(bins);
-                let n = SHOT_BLOCK.min(shots - b * SHOT_BLOCK);
-                self.add_shots(&mut stream_rng(seed, profile, b), n, &mut part, &mut buf);
+                let mut buf = Buffers {
+                    envelope: ShotCounts::new(bins),
+                    shot: ShotCounts::new(bins),
+                    factors: Vec::new(),
+                    scratch: Scratch::default(),
+                };
+                let energy_seed = self.energy_seed.unwrap_or(seed);
+                self.energy
+                    .block_factors(energy_seed, profile, shots, b, &mut buf.factors);
+                let mut arrivals = stream_rng(seed ^ ARRIVAL_STREAM, profile, b);
+                self.add_block(
+                    &mut stream_rng(seed, profile, b),
+                    &mut arrivals,
+                    &mut part,
+                    &mut buf,
+                );
                 part
             })
             .reduce(
@@ -117,13 +168,21 @@ fn thin<R: Rng + ?Sized>(rng: &mut R, n: u32, p: f64) -> u64 {
 mod tests {
     use super::*;
 
+    fn laser(jitter: f64) -> PulseEnergy {
+        PulseEnergy {
+            jitter,
+            drift: None,
+            rep_rate_hz: 10.0,
+        }
+    }
+
     /// Mean and variance of a jittered bin: E = M·λ, Var = M·λ + M·σ²·λ² (law of total
     /// variance over the shots' energies). 4000 profiles; |z| < 5 is a false-alarm rate
     /// below 1e-6 per check.
     #[test]
     fn jitter_adds_the_expected_variance() {
         let (lambda, sigma, m, profiles) = (2.0, 0.1, 50u64, 4000u64);
-        let js = JitteredShots::new(&[lambda], &[0.0], sigma);
+        let js = ModulatedShots::new(&[lambda], &[0.0], laser(sigma), None, 1.0 + 6.0 * sigma);
         let draws: Vec<f64> = (0..profiles)
             .map(|p| {
                 let mut acc = [0u64];
@@ -151,7 +210,13 @@ mod tests {
 
     #[test]
     fn zero_jitter_is_plain_poisson_and_deterministic() {
-        let js = JitteredShots::new(&[0.3, 0.0, 1e-300], &[1e-3, 1e-3, 0.0], 0.0);
+        let js = ModulatedShots::new(
+            &[0.3, 0.0, 1e-300],
+            &[1e-3, 1e-3, 0.0],
+            laser(0.0),
+            None,
+            1.0,
+        );
         let mut a = vec![0u64; 3];
         let mut b = vec![0u64; 3];
         js.profile(3, 1, 70_000, &mut a);

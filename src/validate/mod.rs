@@ -39,8 +39,9 @@ use statrs::distribution::{ContinuousCDF, DiscreteCDF, Normal, Poisson};
 use crate::config::Method;
 use crate::detector::DeadTime;
 use crate::error::{Error, Result};
-use crate::scenario::{ExpectedProfile, Scenario};
-use crate::simulate::{self, ResolvedMethod, StreamSampler};
+use crate::laser::PulseEnergy;
+use crate::scenario::{ExpectedProfile, Lidar};
+use crate::simulate::{self, ResolvedMethod, RunEnergy, StreamSampler};
 
 pub mod calibration;
 
@@ -168,7 +169,9 @@ pub struct Stat {
 /// Everything measured in one bin.
 #[derive(Debug, Clone, Serialize)]
 pub struct BinReport {
-    /// Bin index.
+    /// The receiver channel.
+    pub channel: String,
+    /// Bin index within the channel.
     pub bin: usize,
     /// Bin-centre altitude, m.
     pub altitude_m: f64,
@@ -197,6 +200,8 @@ pub struct Report {
     pub shots_per_profile: u64,
     /// Signal-free bins used to estimate the background.
     pub background_bins: usize,
+    /// The receiver channels validated.
+    pub channels: Vec<String>,
     /// Per-bin results.
     pub bins: Vec<BinReport>,
     /// Verdicts per statistic.
@@ -215,15 +220,16 @@ pub trait RealizationSource: Sync {
     fn draw(&self, p: u64, counts: &mut [u64]);
 }
 
-/// The simulator's own realizations (what `simulate` writes for the same seed).
+/// The simulator's own realizations (what `simulate` writes for the same seed): every
+/// channel's counts, channel-major.
 pub struct SimulatorSource {
-    sampler: StreamSampler,
-    seed: u64,
+    channels: Vec<(StreamSampler, u64)>,
     shots: u64,
 }
 
 impl SimulatorSource {
-    /// The sampler of `method` for the expectations `e`, pulse-energy `jitter`.
+    /// The sampler of `method` for the expectations `e`, pulse-energy `jitter` (one
+    /// channel, ideal detector).
     pub fn new(
         e: &ExpectedProfile,
         method: ResolvedMethod,
@@ -233,60 +239,121 @@ impl SimulatorSource {
     ) -> Self {
         let rest = vec![e.background + e.dark; e.n_bins()];
         SimulatorSource {
-            sampler: StreamSampler::new(method, &e.signal, &rest, jitter),
-            seed,
+            channels: vec![(StreamSampler::new(method, &e.signal, &rest, jitter), seed)],
             shots,
         }
     }
-}
 
-impl SimulatorSource {
     /// The same source with the detector's dead time applied (method `shot`).
     pub fn with_detector(mut self, dead: Option<DeadTime>) -> Self {
-        self.sampler = self.sampler.through_detector(dead);
+        self.channels = self
+            .channels
+            .into_iter()
+            .map(|(s, seed)| (s.through_detector(dead), seed))
+            .collect();
         self
+    }
+
+    /// Every channel of `lidar`, as `simulate` draws them.
+    pub fn for_lidar(
+        lidar: &Lidar,
+        expected: &[ExpectedProfile],
+        method: ResolvedMethod,
+        energy: RunEnergy,
+        seed: u64,
+    ) -> Self {
+        let channels = lidar
+            .channels
+            .iter()
+            .zip(expected)
+            .enumerate()
+            .map(|(k, (c, e))| {
+                let rest = vec![e.background + e.dark; e.n_bins()];
+                let sampler = StreamSampler::with_energy(method, &e.signal, &rest, energy)
+                    .through_detector(c.instrument.dead_time);
+                (sampler, simulate::channel_seed(seed, k))
+            })
+            .collect();
+        SimulatorSource {
+            channels,
+            shots: lidar.first().shots_per_profile(),
+        }
     }
 }
 
 impl RealizationSource for SimulatorSource {
     fn draw(&self, p: u64, counts: &mut [u64]) {
-        self.sampler
-            .profile_counts(self.seed, p, self.shots, counts);
+        let n = counts.len() / self.channels.len();
+        for ((sampler, seed), part) in self.channels.iter().zip(counts.chunks_mut(n)) {
+            sampler.profile_counts(*seed, p, self.shots, part);
+        }
+    }
+}
+
+/// The bins of one channel within the concatenated profile, and the signal-free bins
+/// (absolute indices) its background is estimated from.
+#[derive(Debug, Clone)]
+pub struct ChannelBins {
+    /// The channel's name.
+    pub name: String,
+    /// Its bins, `offset..offset + n_bins` of the concatenated profile.
+    pub bins: std::ops::Range<usize>,
+    /// Its signal-free bins, absolute indices.
+    pub background: Vec<usize>,
+}
+
+impl ChannelBins {
+    /// One channel holding every bin.
+    pub fn single(n_bins: usize, background: &[usize]) -> Vec<ChannelBins> {
+        vec![ChannelBins {
+            name: String::new(),
+            bins: 0..n_bins,
+            background: background.to_vec(),
+        }]
     }
 }
 
 /// Draws `n` realizations from `source` and accumulates the per-bin sums (in a fixed
 /// order: the result does not depend on the thread count). The background estimate of
-/// a profile is the mean of its own counts in the `background` bins (signal-free bins
-/// of the window, as a retrieval would take them from the file).
+/// a profile is, per channel, the mean of its own counts in the channel's signal-free
+/// bins (as a retrieval would take them from the file).
 fn accumulate(
     source: &dyn RealizationSource,
     n: usize,
     bins: usize,
-    background: &[usize],
+    channels: &[ChannelBins],
 ) -> Vec<BinSums> {
     let mut sums = vec![BinSums::default(); bins];
     let batch = ((8 << 20) / bins.max(1)).clamp(1, 4096);
     for first in (0..n).step_by(batch) {
         let last = (first + batch).min(n);
-        let drawn: Vec<(Vec<u64>, f64)> = (first..last)
+        let drawn: Vec<(Vec<u64>, Vec<f64>)> = (first..last)
             .into_par_iter()
             .map(|p| {
                 let mut c = vec![0u64; bins];
                 source.draw(p as u64, &mut c);
-                let b_hat = if background.is_empty() {
-                    0.0
-                } else {
-                    background.iter().map(|&i| c[i]).sum::<u64>() as f64 / background.len() as f64
-                };
+                let b_hat = channels
+                    .iter()
+                    .map(|ch| {
+                        if ch.background.is_empty() {
+                            0.0
+                        } else {
+                            ch.background.iter().map(|&i| c[i]).sum::<u64>() as f64
+                                / ch.background.len() as f64
+                        }
+                    })
+                    .collect();
                 (c, b_hat)
             })
             .collect();
         for (c, b_hat) in &drawn {
-            for (s, &v) in sums.iter_mut().zip(c) {
-                s.total += u128::from(v);
-                s.x.push(v as f64);
-                s.y.push(v as f64 - b_hat);
+            for (ch, b) in channels.iter().zip(b_hat) {
+                for i in ch.bins.clone() {
+                    let (s, v) = (&mut sums[i], c[i]);
+                    s.total += u128::from(v);
+                    s.x.push(v as f64);
+                    s.y.push(v as f64 - b);
+                }
             }
         }
     }
@@ -320,21 +387,23 @@ fn mean_z(total: u128, n: f64, m: &BinModel) -> Option<f64> {
     }
 }
 
-/// Compares the accumulated sums with the model, bin by bin. `background` are the
-/// bins the background is estimated from (not tested for the estimated-background S/N).
+/// Compares the accumulated sums with the model, bin by bin; each channel's signal-free
+/// bins are not tested for the estimated-background S/N.
 fn bin_reports(
     sums: &[BinSums],
     models: &[BinModel],
     altitudes: &[f64],
     n: usize,
-    background: &[usize],
+    channels: &[ChannelBins],
 ) -> Vec<BinReport> {
     let nf = n as f64;
-    let n_b = background.len();
-    sums.par_iter()
-        .zip(models)
-        .enumerate()
-        .map(|(i, (s, m))| {
+    channels
+        .iter()
+        .flat_map(|ch| ch.bins.clone().map(move |i| (ch, i)))
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .map(|(ch, i)| {
+            let (s, m) = (&sums[i], &models[i]);
             let [k1, k2, k3, k4] = m.cumulants;
             let enough = nf * k1 >= MIN_TOTAL_COUNTS;
             let mean = Stat {
@@ -347,7 +416,8 @@ fn bin_reports(
             let variance = variance_stat(s, m, nf, enough);
             let snr_known = snr_stat(&s.x, m, m.rest, (mu2, mu3, mu4), nf, enough);
             // y = c − b̂: cumulants of c plus (−1)^n those of b̂ (mean of n_b Poisson(rest))
-            let snr_est = if n_b > 0 && !background.contains(&i) {
+            let n_b = ch.background.len();
+            let snr_est = if n_b > 0 && !ch.background.contains(&i) {
                 let nb = n_b as f64;
                 let (b2, b3, b4) = (m.rest / nb, -m.rest / (nb * nb), m.rest / (nb * nb * nb));
                 let y = central_moments(k2 + b2, k3 + b3, k4 + b4);
@@ -361,7 +431,8 @@ fn bin_reports(
                 }
             };
             BinReport {
-                bin: i,
+                channel: ch.name.clone(),
+                bin: i - ch.bins.start,
                 altitude_m: altitudes[i],
                 mean,
                 variance,
@@ -430,15 +501,20 @@ pub fn bin_models(e: &ExpectedProfile, shots: u64, jitter: f64) -> Vec<BinModel>
         .collect()
 }
 
-/// The per-bin models of the counts a dead-time detector records.
-pub fn recorded_bin_models(e: &ExpectedProfile, shots: u64, dead: &DeadTime) -> Vec<BinModel> {
+/// The per-bin models of the counts a dead-time detector records (with the laser's
+/// jitter where it has one, [`DeadTime::recorded_moments`]).
+pub fn recorded_bin_models(
+    e: &ExpectedProfile,
+    shots: u64,
+    dead: &DeadTime,
+    energy: &PulseEnergy,
+) -> Vec<BinModel> {
     let rest = e.background + e.dark;
+    let (mean, var) = dead.recorded_moments(&e.signal, rest, energy);
     e.signal
         .iter()
-        .zip(&e.recorded)
-        .map(|(&s, &m)| {
-            BinModel::recorded(s, rest, m, dead.recorded_variance(s + rest), shots as f64)
-        })
+        .zip(mean.iter().zip(&var))
+        .map(|(&s, (&m, &v))| BinModel::recorded(s, rest, m, v, shots as f64))
         .collect()
 }
 
@@ -451,8 +527,21 @@ pub fn validate_source(
     realizations: usize,
     background: &[usize],
 ) -> (Vec<BinReport>, Vec<Check>) {
-    let sums = accumulate(source, realizations, models.len(), background);
-    let bins = bin_reports(&sums, models, altitudes, realizations, background);
+    let channels = ChannelBins::single(models.len(), background);
+    validate_channels(source, models, altitudes, realizations, &channels)
+}
+
+/// As [`validate_source`] for profiles of several channels: `models` and `altitudes`
+/// are concatenated channel by channel as `channels` lays them out.
+pub fn validate_channels(
+    source: &dyn RealizationSource,
+    models: &[BinModel],
+    altitudes: &[f64],
+    realizations: usize,
+    channels: &[ChannelBins],
+) -> (Vec<BinReport>, Vec<Check>) {
+    let sums = accumulate(source, realizations, models.len(), channels);
+    let bins = bin_reports(&sums, models, altitudes, realizations, channels);
     let verdict = |name: &str, f: fn(&BinReport) -> &Stat| {
         let (zs, shapes): (Vec<f64>, Vec<Shape>) = bins
             .iter()
@@ -483,35 +572,56 @@ pub struct ValidateOptions {
     pub json: Option<PathBuf>,
 }
 
-/// Runs the validation of a scenario.
-pub fn run(sc: &Scenario, opts: &ValidateOptions) -> Result<Report> {
+/// Runs the validation of every channel of a lidar.
+pub fn run(lidar: &Lidar, opts: &ValidateOptions) -> Result<Report> {
     if opts.realizations < MIN_REALIZATIONS {
         return Err(Error::Unsupported(format!(
             "--realizations must be at least {MIN_REALIZATIONS}: fewer leave the verdicts' \
              stated false-alarm rate (validation/README.md)"
         )));
     }
-    let cfg = &sc.loaded.config;
+    let first = lidar.first();
+    let cfg = &first.loaded.config;
+    if cfg.instrument.energy_drift.is_some() {
+        return Err(Error::config(
+            first.loaded.file_label(),
+            "instrument.energy_drift",
+            "makes every profile's law its own, and validate checks profiles of one law: \
+             validate the scene without the drift",
+        ));
+    }
     let seed = opts.seed.unwrap_or(cfg.simulation.seed);
-    let method = simulate::resolve_method(opts.method.unwrap_or(cfg.simulation.method), sc)?;
-    let e = sc.expected()?;
-    let shots = sc.shots_per_profile();
-    let jitter = sc.instrument.pulse_energy_jitter;
-    crate::simulate::check_detector(sc, false)?;
-    let dead = sc.instrument.dead_time;
-    let source = SimulatorSource::new(&e, method, jitter, seed, shots).with_detector(dead);
-    let models = match &dead {
-        Some(d) => recorded_bin_models(&e, shots, d),
-        None => bin_models(&e, shots, jitter),
-    };
-    check_sizes(&e, method, shots, opts.realizations)?;
-    let (bins, checks) = validate_source(
-        &source,
-        &models,
-        &e.altitude_m,
-        opts.realizations,
-        &e.background_bin_indices,
-    );
+    let method = simulate::resolve_method(opts.method.unwrap_or(cfg.simulation.method), lidar)?;
+    simulate::check_detector(lidar, false)?;
+    let expected = lidar.expected()?;
+    let shots = first.shots_per_profile();
+    let laser = PulseEnergy::from_config(&cfg.instrument);
+    let energy = simulate::run_energy(lidar, seed, 0.0)?;
+    let source = SimulatorSource::for_lidar(lidar, &expected, method, energy, seed);
+    let mut models = Vec::new();
+    let mut altitudes = Vec::new();
+    let mut channels = Vec::new();
+    for (c, e) in lidar.channels.iter().zip(&expected) {
+        let offset = models.len();
+        models.extend(match &c.instrument.dead_time {
+            Some(d) => recorded_bin_models(e, shots, d, &laser),
+            None => bin_models(e, shots, laser.jitter),
+        });
+        altitudes.extend_from_slice(&e.altitude_m);
+        channels.push(ChannelBins {
+            name: c.channel_name.clone(),
+            bins: offset..models.len(),
+            background: e
+                .background_bin_indices
+                .iter()
+                .map(|i| i + offset)
+                .collect(),
+        });
+    }
+    let totals: Vec<f64> = expected.iter().flat_map(|e| e.total_per_shot()).collect();
+    check_sizes(&totals, method, shots, opts.realizations)?;
+    let (bins, checks) =
+        validate_channels(&source, &models, &altitudes, opts.realizations, &channels);
     let consistent = checks.iter().all(|c| c.pass);
     Ok(Report {
         scenario: cfg.name.clone(),
@@ -519,11 +629,12 @@ pub fn run(sc: &Scenario, opts: &ValidateOptions) -> Result<Report> {
         seed,
         realizations: opts.realizations,
         shots_per_profile: shots,
-        background_bins: e.background_bins,
+        background_bins: expected[0].background_bins,
+        channels: lidar.channel_names(),
         bins,
         checks,
         consistent,
-        warning: sc.linear_range_warning(&e),
+        warning: lidar.linear_range_warning(&expected),
     })
 }
 
@@ -597,16 +708,17 @@ pub fn write_table(w: &mut dyn Write, r: &Report) -> std::io::Result<()> {
 /// Memory held per bin: the running sums and the report (measured order of magnitude).
 const BYTES_PER_BIN: f64 = 400.0;
 
-/// Refuses a validation whose memory cannot fit and announces a long one.
-fn check_sizes(e: &ExpectedProfile, method: ResolvedMethod, shots: u64, n: usize) -> Result<()> {
-    let bins = e.n_bins() as f64;
+/// Refuses a validation whose memory cannot fit and announces a long one; `totals` are
+/// the per-shot means of every bin of every channel.
+fn check_sizes(totals: &[f64], method: ResolvedMethod, shots: u64, n: usize) -> Result<()> {
+    let bins = totals.len() as f64;
     crate::resources::require_memory(
         &format!("validating {} bins", crate::error::compact(bins)),
         bins * BYTES_PER_BIN + (8 << 20) as f64 * 8.0,
     )?;
     let per_profile_ns = match method {
         ResolvedMethod::Shot => {
-            crate::sampling::ShotSampler::new(&e.total_per_shot())
+            crate::sampling::ShotSampler::new(totals)
                 .strategy()
                 .est_ns_per_shot
                 * shots as f64
@@ -615,7 +727,7 @@ fn check_sizes(e: &ExpectedProfile, method: ResolvedMethod, shots: u64, n: usize
     } / rayon::current_num_threads().max(1) as f64
         + bins * 20.0;
     crate::resources::announce_duration(
-        &format!("validating {n} realizations of {} bins", e.n_bins()),
+        &format!("validating {n} realizations of {} bins", totals.len()),
         n as f64 * per_profile_ns * 1e-9,
     );
     Ok(())

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use lidarsim::scenario::Scenario;
+use lidarsim::scenario::{Lidar, Scenario};
 
 /// Path of a shipped config, e.g. `config_path("paper/scenario1.toml")`.
 pub fn config_path(rel: &str) -> PathBuf {
@@ -16,6 +16,12 @@ pub fn config_path(rel: &str) -> PathBuf {
 pub fn scenario(rel: &str, overrides: &[&str]) -> Scenario {
     let ov: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
     Scenario::load(&config_path(rel), &ov).unwrap_or_else(|e| panic!("{rel}: {e}"))
+}
+
+/// Loads a shipped config with overrides, every channel.
+pub fn lidar(rel: &str, overrides: &[&str]) -> Lidar {
+    let ov: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    Lidar::load(&config_path(rel), &ov).unwrap_or_else(|e| panic!("{rel}: {e}"))
 }
 
 /// Brute-force signal of every bin, independent of the slab machinery: midpoint rule

@@ -5,9 +5,8 @@
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use super::{AttrValue, CONVENTIONS, Dims, FORMAT_VERSION, Variable};
-use crate::config::Channel;
 use crate::error::{Error, Result};
-use crate::scenario::{ExpectedProfile, Scenario};
+use crate::scenario::{ExpectedProfile, Lidar, Scenario};
 
 /// The environment variable that fixes `date_created` and `history` (the
 /// reproducible-builds convention): seconds since 1970-01-01 UTC.
@@ -24,16 +23,6 @@ pub struct RunInfo<'a> {
     pub method_attributes: Vec<(String, AttrValue)>,
     /// The command line, recorded in `history`.
     pub command_line: &'a str,
-}
-
-/// The channel's name: wavelength and polarization, e.g. `532_total`.
-pub fn channel_name(wavelength_nm: f64, channel: Channel) -> String {
-    let pol = match channel {
-        Channel::Total => "total",
-        Channel::Parallel => "parallel",
-        Channel::Perpendicular => "perpendicular",
-    };
-    format!("{wavelength_nm}_{pol}")
 }
 
 /// CF units of `time`: `seconds since 2004-03-21 00:00:00` from an RFC 3339 start time
@@ -86,20 +75,39 @@ fn var(
     }
 }
 
-/// The variables of interface.md (format version 2) for one channel: coordinates, the
-/// expectations, the instrument constant and the atmosphere's truth.
-pub fn variables(sc: &Scenario, e: &ExpectedProfile, shots: u64) -> Vec<Variable> {
+/// The values of `f` for every channel, channel-major.
+fn per_channel(expected: &[ExpectedProfile], f: impl Fn(&ExpectedProfile) -> Vec<f64>) -> Vec<f64> {
+    expected.iter().flat_map(f).collect()
+}
+
+/// The variables of interface.md (format version 2) for every channel of `lidar`:
+/// coordinates, the expectations, the instrument constants and the atmosphere's truth.
+/// The point truth is (bin) when every channel sees one wavelength, (channel, bin) when
+/// the wavelengths differ.
+pub fn variables(lidar: &Lidar, expected: &[ExpectedProfile], shots: u64) -> Vec<Variable> {
     use Dims::{Bin, Channel, ChannelBin};
-    let n = e.n_bins();
-    let expected_counts: Vec<f64> = e.recorded.clone();
-    vec![
+    let e0 = &expected[0];
+    let channels = &lidar.channels;
+    let instrument = |f: fn(&Scenario) -> f64| channels.iter().map(f).collect::<Vec<f64>>();
+    let one_wavelength = channels
+        .iter()
+        .all(|c| c.instrument.wavelength_nm == channels[0].instrument.wavelength_nm);
+    let truth_dims = if one_wavelength { Bin } else { ChannelBin };
+    let truth = |f: fn(&ExpectedProfile) -> &Vec<f64>| {
+        if one_wavelength {
+            f(e0).clone()
+        } else {
+            per_channel(expected, |e| f(e).clone())
+        }
+    };
+    let mut vars = vec![
         var(
             "altitude",
             Bin,
             "bin-centre altitude above sea level",
             "m",
             &[("standard_name", "altitude"), ("positive", "up")],
-            e.altitude_m.clone(),
+            e0.altitude_m.clone(),
         ),
         var(
             "range",
@@ -107,7 +115,7 @@ pub fn variables(sc: &Scenario, e: &ExpectedProfile, shots: u64) -> Vec<Variable
             "bin-centre range from the instrument",
             "m",
             &[],
-            e.range_m.clone(),
+            e0.range_m.clone(),
         ),
         var(
             "range_weight",
@@ -115,7 +123,7 @@ pub fn variables(sc: &Scenario, e: &ExpectedProfile, shots: u64) -> Vec<Variable
             "range weight of the bin: integral of overlap / range^2 over the bin",
             "m-1",
             &[],
-            e.range_weight.clone(),
+            e0.range_weight.clone(),
         ),
         var(
             "lidar_constant",
@@ -123,15 +131,39 @@ pub fn variables(sc: &Scenario, e: &ExpectedProfile, shots: u64) -> Vec<Variable
             "lidar constant C = K E0 (lambda/hc) A TR TF Q: expected_signal = C attenuated_backscatter range_weight",
             "m2 sr",
             &[],
-            vec![sc.instrument.signal_constant],
+            instrument(|c| c.instrument.signal_constant),
+        ),
+        var(
+            "wavelength",
+            Channel,
+            "detected wavelength of the channel",
+            "nm",
+            &[("standard_name", "radiation_wavelength")],
+            instrument(|c| c.instrument.wavelength_nm),
+        ),
+        var(
+            "nominal_pulse_energy",
+            Channel,
+            "nominal emitted pulse energy E0 of the channel's wavelength (expected_* and lidar_constant are at this energy)",
+            "J",
+            &[],
+            instrument(|c| c.loaded.config.instrument.pulse_energy_j),
+        ),
+        var(
+            "dead_time",
+            Channel,
+            "detector dead time (0 = ideal linear detector)",
+            "s",
+            &[],
+            instrument(|c| c.instrument.dead_time.map_or(0.0, |d| d.tau_s)),
         ),
         var(
             "expected_signal",
             ChannelBin,
-            "expected signal counts per shot (exact bin integral of Eq. 2)",
+            "expected signal counts per shot at the nominal pulse energy (exact bin integral of Eq. 2)",
             "count",
             &[],
-            e.signal.clone(),
+            per_channel(expected, |e| e.signal.clone()),
         ),
         var(
             "expected_background",
@@ -139,7 +171,7 @@ pub fn variables(sc: &Scenario, e: &ExpectedProfile, shots: u64) -> Vec<Variable
             "expected sky-background counts per shot (Eq. 3)",
             "count",
             &[],
-            vec![e.background; n],
+            per_channel(expected, |e| vec![e.background; e.n_bins()]),
         ),
         var(
             "expected_dark",
@@ -147,7 +179,7 @@ pub fn variables(sc: &Scenario, e: &ExpectedProfile, shots: u64) -> Vec<Variable
             "expected dark counts per shot",
             "count",
             &[],
-            vec![e.dark; n],
+            per_channel(expected, |e| vec![e.dark; e.n_bins()]),
         ),
         var(
             "expected_counts",
@@ -155,7 +187,7 @@ pub fn variables(sc: &Scenario, e: &ExpectedProfile, shots: u64) -> Vec<Variable
             "expected recorded counts per shot after the detector (dead time); signal + background + dark for an ideal detector",
             "count",
             &[],
-            expected_counts,
+            per_channel(expected, |e| e.recorded.clone()),
         ),
         var(
             "snr_eq4",
@@ -163,7 +195,7 @@ pub fn variables(sc: &Scenario, e: &ExpectedProfile, shots: u64) -> Vec<Variable
             "Eq. 4 signal-to-noise ratio of one profile",
             "1",
             &[],
-            e.snr_eq4(shots as f64),
+            per_channel(expected, |e| e.snr_eq4(shots as f64)),
         ),
         var(
             "attenuated_backscatter",
@@ -174,49 +206,45 @@ pub fn variables(sc: &Scenario, e: &ExpectedProfile, shots: u64) -> Vec<Variable
                 "standard_name",
                 "volume_attenuated_backwards_scattering_function_in_air",
             )],
-            e.attenuated_backscatter.clone(),
+            per_channel(expected, |e| e.attenuated_backscatter.clone()),
         ),
-        var(
+    ];
+    let point_truth: [(&str, &str, &str, fn(&ExpectedProfile) -> &Vec<f64>); 5] = [
+        (
             "beta_mol",
-            Bin,
             "molecular backscatter coefficient at the bin centre",
             "m-1 sr-1",
-            &[],
-            e.beta_mol.clone(),
+            |e| &e.beta_mol,
         ),
-        var(
+        (
             "beta_aer",
-            Bin,
             "aerosol backscatter coefficient at the bin centre",
             "m-1 sr-1",
-            &[],
-            e.beta_aer.clone(),
+            |e| &e.beta_aer,
         ),
-        var(
+        (
             "beta_cld",
-            Bin,
             "cloud backscatter coefficient at the bin centre",
             "m-1 sr-1",
-            &[],
-            e.beta_cld.clone(),
+            |e| &e.beta_cld,
         ),
-        var(
+        (
             "alpha_total",
-            Bin,
             "total extinction coefficient at the bin centre",
             "m-1",
-            &[],
-            e.alpha_total.clone(),
+            |e| &e.alpha_total,
         ),
-        var(
+        (
             "t2",
-            Bin,
             "two-way transmission to the bin centre (multiple-scattering factors applied)",
             "1",
-            &[],
-            e.t2.clone(),
+            |e| &e.t2,
         ),
-    ]
+    ];
+    for (name, long_name, units, f) in point_truth {
+        vars.push(var(name, truth_dims, long_name, units, &[], truth(f)));
+    }
+    vars
 }
 
 /// The root attributes of interface.md: conventions, provenance, the resolved config,
@@ -270,15 +298,5 @@ mod tests {
             "seconds since 2004-03-21 06:30:00"
         );
         assert!(time_units("yesterday").is_err());
-    }
-
-    #[test]
-    fn channel_names_read_like_the_field() {
-        assert_eq!(channel_name(532.0, Channel::Total), "532_total");
-        assert_eq!(
-            channel_name(1064.0, Channel::Perpendicular),
-            "1064_perpendicular"
-        );
-        assert_eq!(channel_name(354.7, Channel::Parallel), "354.7_parallel");
     }
 }

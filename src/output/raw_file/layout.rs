@@ -44,6 +44,7 @@ pub struct OpenFile {
     pub components: Option<[Dataset; 3]>,
     pub time: Dataset,
     pub n_shots: Dataset,
+    pub pulse_energy: Dataset,
 }
 
 impl OpenFile {
@@ -55,8 +56,9 @@ impl OpenFile {
             components,
             time,
             n_shots,
+            pulse_energy,
         } = self;
-        drop((counts, components, time, n_shots));
+        drop((counts, components, time, n_shots, pulse_energy));
         file.close()
     }
 }
@@ -268,6 +270,20 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
     )?;
     attach_scales(&n_shots, &[&profile])?;
 
+    let pulse_energy = create_var::<f64>(&file, "pulse_energy", &[spec.n_profiles])?;
+    write_attrs(
+        &pulse_energy,
+        &[
+            (
+                "long_name",
+                "mean emitted pulse energy of the profile's shots (energy monitor)",
+            ),
+            ("units", "J"),
+            ("coordinates", "time"),
+        ],
+    )?;
+    attach_scales(&pulse_energy, &[&profile])?;
+
     for var in &spec.variables {
         let (shape, scales, coords): (Vec<usize>, Vec<&Dataset>, Option<&str>) = match var.dims {
             Dims::Bin => (vec![spec.n_bins], vec![&bin], Some(COORDS_BIN)),
@@ -297,5 +313,6 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
         components,
         time,
         n_shots,
+        pulse_energy,
     })
 }

@@ -9,6 +9,7 @@
 //! | `signal_counts`, `background_counts`, `dark_counts` | (profile, channel, bin) | as `counts`, only with [`RawFileSpec::components`] |
 //! | `time` | (profile) | f64, CF time (`seconds since <start>`) |
 //! | `n_shots` | (profile) | u64 |
+//! | `pulse_energy` | (profile) | f64, J |
 //! | one per [`Variable`] | (bin), (channel) or (channel, bin) | f64 |
 //!
 //! The modules: [`layout`] creates the file and everything known up front,
@@ -42,13 +43,14 @@ pub const BIN_DIM: &str = "bin";
 /// [`ProfileRecord::components`]: signal, background, dark.
 pub const COMPONENT_NAMES: [&str; 3] = ["signal_counts", "background_counts", "dark_counts"];
 /// Variable names the layout itself defines; a [`Variable`] may not use them.
-pub const RESERVED_NAMES: [&str; 9] = [
+pub const RESERVED_NAMES: [&str; 10] = [
     PROFILE_DIM,
     CHANNEL_DIM,
     BIN_DIM,
     "counts",
     "time",
     "n_shots",
+    "pulse_energy",
     COMPONENT_NAMES[0],
     COMPONENT_NAMES[1],
     COMPONENT_NAMES[2],
@@ -202,6 +204,8 @@ pub struct ProfileRecord<'a> {
     pub time_s: f64,
     /// Shots accumulated in this profile.
     pub n_shots: u64,
+    /// Mean emitted pulse energy of the profile's shots, J (the energy monitor's reading).
+    pub pulse_energy_j: f64,
     /// Accumulated raw counts, channel-major: `counts[c·n_bins + b]`.
     pub counts: &'a [u64],
     /// Signal, background and dark counts laid out as `counts`; present exactly when the

@@ -108,6 +108,8 @@ impl RawFileWriter {
             }
             open.time.write_slice(&[rec.time_s][..], row..row + 1)?;
             open.n_shots.write_slice(&[rec.n_shots][..], row..row + 1)?;
+            open.pulse_energy
+                .write_slice(&[rec.pulse_energy_j][..], row..row + 1)?;
             Ok(())
         })();
         result.map_err(|e| {
@@ -163,6 +165,12 @@ impl RawFileWriter {
         }
         if self.written[i / 64] & (1 << (i % 64)) != 0 {
             return Err(format!("profile {i} written twice"));
+        }
+        if !rec.pulse_energy_j.is_finite() || rec.pulse_energy_j < 0.0 {
+            return Err(format!(
+                "profile {i}: pulse energy {} J is not a finite non-negative number",
+                rec.pulse_energy_j
+            ));
         }
         if !rec.time_s.is_finite() {
             return Err(format!("profile {i}: time {} s is not finite", rec.time_s));
