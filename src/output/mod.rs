@@ -5,4 +5,5 @@
 pub mod expect;
 pub mod raw_file;
 pub mod safe_file;
+pub mod scc;
 pub mod snr_map;

@@ -1,0 +1,340 @@
+//! What goes into the SCC file: every value derived from a [`RawRun`], with the choices
+//! documented in the parent module (`super`) and in `docs/scc.md`.
+
+use std::path::Path;
+use std::time::{Duration, SystemTime, UNIX_EPOCH};
+
+use super::SccOptions;
+use super::read::{RawRun, bad};
+use crate::constants::SPEED_OF_LIGHT_M_PER_S;
+use crate::error::{Error, Result};
+
+/// `Molecular_Calc` written: 4 = US Standard Atmosphere 1976 (SCC netCDF input format
+/// after its 2021 revision; 0 = automatic, 1 = radiosounding, 2 = model).
+pub const MOLECULAR_CALC_US_STANDARD: i32 = 4;
+/// `Acquisition_Mode` written: 1 = photon counting (0 = analog).
+pub const ACQUISITION_PHOTON_COUNTING: i32 = 1;
+/// `Background_Mode` written: 1 = atmospheric background from the far range given by
+/// `Background_Low`/`Background_High` in m (as in the `atmospheric_lidar` examples).
+pub const BACKGROUND_MODE_FAR_RANGE: i32 = 1;
+/// `LR_Input` written: 1, as in every `atmospheric_lidar` parameter example.
+pub const LR_INPUT: i32 = 1;
+/// A far bin is "signal-free" when its expected signal is at most this share of its
+/// expected background + dark counts.
+pub const SIGNAL_FREE_SHARE: f64 = 0.01;
+/// Fewest signal-free bins accepted as the background window (else the far 10 %).
+pub const MIN_BACKGROUND_BINS: usize = 10;
+
+/// One SCC channel's parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SccChannel {
+    /// lidarsim channel name, e.g. `532_total`.
+    pub name: String,
+    /// `channel_ID`.
+    pub id: i32,
+    /// `Laser_Repetition_Rate`, Hz.
+    pub rep_rate_hz: i32,
+    /// `Emitted_Wavelength` = `Detected_Wavelength` (elastic), nm.
+    pub wavelength_nm: f64,
+    /// `Raw_Data_Range_Resolution`, m.
+    pub range_resolution_m: f64,
+    /// `Background_Low`, `Background_High`: range window, m.
+    pub background_m: (f64, f64),
+    /// `Dead_Time`, ns.
+    pub dead_time_ns: f64,
+    /// `Dead_Time_Corr_Type`: 0 non-paralyzable, 1 paralyzable.
+    pub dead_time_type: i32,
+    /// `Trigger_Delay`, ns.
+    pub trigger_delay_ns: f64,
+}
+
+/// Everything the SCC file holds.
+#[derive(Debug, Clone)]
+pub struct SccContent {
+    /// Length of `time`.
+    pub n_profiles: usize,
+    /// Length of `points`.
+    pub n_bins: usize,
+    /// One per `channels`.
+    pub channels: Vec<SccChannel>,
+    /// Counts (time, channels, points), row-major.
+    pub counts: Vec<u64>,
+    /// `Laser_Shots` (time, channels).
+    pub laser_shots: Vec<i32>,
+    /// `Raw_Data_Start_Time` (time), s after the measurement start.
+    pub start_s: Vec<i32>,
+    /// `Raw_Data_Stop_Time` (time), s after the measurement start.
+    pub stop_s: Vec<i32>,
+    /// `Laser_Pointing_Angle`, degrees from zenith.
+    pub pointing_angle_deg: f64,
+    /// `Pressure_at_Lidar_Station`, hPa.
+    pub pressure_hpa: f64,
+    /// `Temperature_at_Lidar_Station`, °C.
+    pub temperature_c: f64,
+    /// Global text attributes, in order.
+    pub text_attributes: Vec<(&'static str, String)>,
+    /// `Altitude_meter_asl`.
+    pub altitude_m_asl: f64,
+}
+
+/// Derives the SCC content of `raw` (read from `path`).
+pub fn scc_content(path: &Path, raw: RawRun, opts: &SccOptions) -> Result<SccContent> {
+    let platform = table(&raw.config, "platform");
+    let kind = platform
+        .and_then(|p| p.get("kind"))
+        .and_then(|k| k.as_str());
+    match kind {
+        Some("ground") => {}
+        Some("spaceborne") => {
+            return Err(bad(
+                path,
+                "a spaceborne run: the SCC processes ground-based stations only",
+            ));
+        }
+        _ => return Err(bad(path, "the `config` attribute has no `platform.kind`")),
+    }
+    let altitude_m = num(platform, "altitude_km").unwrap_or(0.0) * 1e3;
+    let (start_s, stop_s, t0) = time_scale(path, &raw)?;
+    let channels = channels(path, &raw, opts)?;
+    let state = crate::atmosphere::us76::state(altitude_m).ok_or_else(|| {
+        bad(
+            path,
+            &format!("station altitude {altitude_m} m is outside the US Standard Atmosphere"),
+        )
+    })?;
+    let stop = t0 + Duration::from_secs(stop_s.iter().copied().max().unwrap_or(0) as u64);
+    let text_attributes = text_attributes(&raw, opts, t0, stop)?;
+    Ok(SccContent {
+        n_profiles: raw.n_profiles,
+        n_bins: raw.n_bins,
+        laser_shots: laser_shots(path, &raw)?,
+        counts: raw.counts,
+        channels,
+        start_s,
+        stop_s,
+        pointing_angle_deg: num(platform, "off_nadir_deg").unwrap_or(0.0),
+        pressure_hpa: state.pressure_pa / 100.0,
+        temperature_c: state.temperature_k - 273.15,
+        text_attributes,
+        altitude_m_asl: altitude_m,
+    })
+}
+
+fn table<'a>(t: &'a toml::Table, key: &str) -> Option<&'a toml::Table> {
+    t.get(key).and_then(|v| v.as_table())
+}
+
+/// A number (float or integer) under `key` of `t`.
+fn num(t: Option<&toml::Table>, key: &str) -> Option<f64> {
+    match t?.get(key)? {
+        toml::Value::Float(x) => Some(*x),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
+}
+
+/// Per-profile start and stop seconds after the measurement start, and that start
+/// (whole seconds): profile `p` spans `time[p] ± accumulation_time_s / 2`.
+fn time_scale(path: &Path, raw: &RawRun) -> Result<(Vec<i32>, Vec<i32>, SystemTime)> {
+    let origin = raw
+        .time_units
+        .strip_prefix("seconds since ")
+        .and_then(|s| humantime::parse_rfc3339_weak(s.trim()).ok())
+        .ok_or_else(|| {
+            bad(
+                path,
+                &format!(
+                    "`time` units `{}` are not `seconds since <date>`",
+                    raw.time_units
+                ),
+            )
+        })?;
+    let origin_s = origin
+        .duration_since(UNIX_EPOCH)
+        .map_err(|_| bad(path, "the measurement starts before 1970"))?
+        .as_secs_f64();
+    let half = raw.accumulation_time_s / 2.0;
+    let first = raw.time_s.iter().copied().fold(f64::INFINITY, f64::min);
+    let t0 = (origin_s + first - half).floor();
+    if !t0.is_finite() || t0 < 0.0 {
+        return Err(bad(path, "`time` holds a value that is not a finite time"));
+    }
+    let rel = |t: f64| (origin_s + t - t0).round();
+    let to_i32 = |x: f64| {
+        i32::try_from(x as i64).map_err(|_| {
+            bad(
+                path,
+                &format!("a profile {x} s after the start overflows int"),
+            )
+        })
+    };
+    let start = raw.time_s.iter().map(|&t| to_i32(rel(t - half)));
+    let stop = raw.time_s.iter().map(|&t| to_i32(rel(t + half)));
+    Ok((
+        start.collect::<Result<_>>()?,
+        stop.collect::<Result<_>>()?,
+        UNIX_EPOCH + Duration::from_secs(t0 as u64),
+    ))
+}
+
+fn laser_shots(path: &Path, raw: &RawRun) -> Result<Vec<i32>> {
+    let n_channels = raw.channels.len();
+    let mut out = Vec::with_capacity(raw.n_profiles * n_channels);
+    for &n in &raw.n_shots {
+        let n = i32::try_from(n).map_err(|_| {
+            bad(
+                path,
+                &format!("{n} shots in a profile do not fit `Laser_Shots` (int)"),
+            )
+        })?;
+        out.extend(std::iter::repeat_n(n, n_channels));
+    }
+    Ok(out)
+}
+
+fn channels(path: &Path, raw: &RawRun, opts: &SccOptions) -> Result<Vec<SccChannel>> {
+    let n = raw.channels.len();
+    let ids: Vec<i32> = match &opts.channel_ids {
+        Some(ids) if ids.len() != n => {
+            return Err(bad(
+                path,
+                &format!(
+                    "{} SCC channel IDs given for {n} channels ({})",
+                    ids.len(),
+                    raw.channels.join(", ")
+                ),
+            ));
+        }
+        Some(ids) => ids.clone(),
+        None => (1..=n as i32).collect(),
+    };
+    raw.channels
+        .iter()
+        .enumerate()
+        .map(|(c, name)| channel(path, raw, c, name, ids[c]))
+        .collect()
+}
+
+/// The entry of `instrument.channels` named `name`, if the config has one.
+fn channel_table<'a>(cfg: &'a toml::Table, name: &str) -> Option<&'a toml::Table> {
+    let list = table(cfg, "instrument")?.get("channels")?.as_array()?;
+    list.iter()
+        .filter_map(|v| v.as_table())
+        .find(|t| t.get("name").and_then(|n| n.as_str()) == Some(name))
+}
+
+fn channel(path: &Path, raw: &RawRun, c: usize, name: &str, id: i32) -> Result<SccChannel> {
+    let own = channel_table(&raw.config, name);
+    let instrument = table(&raw.config, "instrument");
+    let detector = own
+        .and_then(|t| table(t, "detector"))
+        .or_else(|| instrument.and_then(|t| table(t, "detector")));
+    let (dead_time_ns, dead_time_type) = dead_time(path, detector)?;
+    let res = SPEED_OF_LIGHT_M_PER_S * raw.bin_width_s / 2.0;
+    let first_bin_start_m = raw.range_m[0] - res / 2.0;
+    let bins = c * raw.n_bins..(c + 1) * raw.n_bins;
+    Ok(SccChannel {
+        name: name.to_string(),
+        id,
+        rep_rate_hz: raw.rep_rate_hz.round() as i32,
+        wavelength_nm: num(own, "wavelength_nm").unwrap_or(raw.wavelength_nm),
+        range_resolution_m: res,
+        background_m: background_window(
+            &raw.expected_signal[bins.clone()],
+            &raw.expected_noise[bins],
+            &raw.range_m,
+            res,
+        ),
+        dead_time_ns,
+        dead_time_type,
+        trigger_delay_ns: 2.0 * first_bin_start_m / SPEED_OF_LIGHT_M_PER_S * 1e9,
+    })
+}
+
+/// `Dead_Time` (ns) and `Dead_Time_Corr_Type` of a `detector` table; an absent detector
+/// is an ideal counter (0 ns, type 0).
+fn dead_time(path: &Path, detector: Option<&toml::Table>) -> Result<(f64, i32)> {
+    let tau_s = num(detector, "dead_time_s").unwrap_or(0.0);
+    let model = detector
+        .and_then(|d| d.get("dead_time_model"))
+        .and_then(|m| m.as_str())
+        .unwrap_or("nonparalyzable");
+    let kind = match model {
+        "nonparalyzable" => 0,
+        "paralyzable" => 1,
+        other => {
+            return Err(bad(
+                path,
+                &format!("unknown `dead_time_model` `{other}` in the `config` attribute"),
+            ));
+        }
+    };
+    Ok((tau_s * 1e9, kind))
+}
+
+/// Range window (m) of the far bins free of signal: the longest run at the far end
+/// where the expected signal is at most [`SIGNAL_FREE_SHARE`] of the expected
+/// background + dark; when fewer than [`MIN_BACKGROUND_BINS`] qualify, the far 10 % of
+/// the bins (at least one).
+pub fn background_window(signal: &[f64], noise: &[f64], range_m: &[f64], res: f64) -> (f64, f64) {
+    let n = signal.len();
+    let mut b0 = n;
+    while b0 > 0 && signal[b0 - 1] <= SIGNAL_FREE_SHARE * noise[b0 - 1] {
+        b0 -= 1;
+    }
+    if n - b0 < MIN_BACKGROUND_BINS.min(n) {
+        b0 = n - (n / 10).max(1);
+    }
+    (range_m[b0] - res / 2.0, range_m[n - 1] + res / 2.0)
+}
+
+fn text_attributes(
+    raw: &RawRun,
+    opts: &SccOptions,
+    start: SystemTime,
+    stop: SystemTime,
+) -> Result<Vec<(&'static str, String)>> {
+    let s = humantime::format_rfc3339_seconds(start).to_string(); // 2004-03-21T06:30:00Z
+    let e = humantime::format_rfc3339_seconds(stop).to_string();
+    let date = s[0..10].replace('-', "");
+    let hms = |t: &str| t[11..19].replace(':', "");
+    let id = measurement_id(opts, &date)?;
+    let system = raw
+        .config
+        .get("name")
+        .and_then(|v| v.as_str())
+        .map_or_else(|| "lidarsim".to_string(), |n| format!("lidarsim: {n}"));
+    Ok(vec![
+        ("Measurement_ID", id),
+        ("RawData_Start_Date", date),
+        ("RawData_Start_Time_UT", hms(&s)),
+        ("RawData_Stop_Time_UT", hms(&e)),
+        ("System", system),
+    ])
+}
+
+/// `Measurement_ID`: the one given (checked against `YYYYMMDDccNN`), else the start
+/// date, the station ID and `00`.
+fn measurement_id(opts: &SccOptions, date: &str) -> Result<String> {
+    let station = &opts.station_id;
+    let ok_station = station.len() == 2 && station.bytes().all(|b| b.is_ascii_alphanumeric());
+    if !ok_station {
+        return Err(Error::Unsupported(format!(
+            "SCC station ID `{station}`: must be two letters or digits (the EARLINET call sign)"
+        )));
+    }
+    let Some(id) = &opts.measurement_id else {
+        return Ok(format!("{date}{station}00"));
+    };
+    let b = id.as_bytes();
+    let ok = b.len() == 12
+        && b[..8].iter().all(u8::is_ascii_digit)
+        && b[8..10].iter().all(u8::is_ascii_alphanumeric)
+        && b[10..].iter().all(u8::is_ascii_digit);
+    if !ok {
+        return Err(Error::Unsupported(format!(
+            "SCC measurement ID `{id}`: must be YYYYMMDDccNN (date, 2-character station ID, 2 digits)"
+        )));
+    }
+    Ok(id.clone())
+}

@@ -1,0 +1,219 @@
+//! Reading what the SCC export needs from a lidarsim raw file (format version 2,
+//! `docs/file-format.md`). Every failure is an [`Error::Output`] naming the raw file.
+
+use std::path::Path;
+
+use hdf5::types::VarLenUnicode;
+
+use crate::error::{Error, Result};
+use crate::output::raw_file::{BIN_DIM, CHANNEL_DIM, FORMAT_VERSION, PROFILE_DIM};
+
+/// The parts of a raw file the SCC export uses, as read (no SCC meaning yet).
+#[derive(Debug, Clone)]
+pub struct RawRun {
+    /// Channel names (`channel` coordinate), e.g. `532_parallel`.
+    pub channels: Vec<String>,
+    /// Profiles (length of `profile`).
+    pub n_profiles: usize,
+    /// Bins per profile (length of `bin`).
+    pub n_bins: usize,
+    /// `counts(profile, channel, bin)`, row-major.
+    pub counts: Vec<u64>,
+    /// `time(profile)`: profile centre, s since the origin in [`RawRun::time_units`].
+    pub time_s: Vec<f64>,
+    /// `units` of `time`, e.g. `seconds since 2000-01-01 00:00:00`.
+    pub time_units: String,
+    /// `n_shots(profile)`.
+    pub n_shots: Vec<u64>,
+    /// `range(bin)`: bin-centre range, m.
+    pub range_m: Vec<f64>,
+    /// `expected_signal(channel, bin)`, counts per shot.
+    pub expected_signal: Vec<f64>,
+    /// `expected_background + expected_dark` (channel, bin), counts per shot.
+    pub expected_noise: Vec<f64>,
+    /// Root attribute `wavelength_nm`.
+    pub wavelength_nm: f64,
+    /// Root attribute `rep_rate_hz`.
+    pub rep_rate_hz: f64,
+    /// Root attribute `bin_width_s`.
+    pub bin_width_s: f64,
+    /// Root attribute `accumulation_time_s`.
+    pub accumulation_time_s: f64,
+    /// Root attribute `config`, parsed.
+    pub config: toml::Table,
+}
+
+/// Reads `path`, refusing a file that is not a lidarsim raw file of format version 2.
+pub fn read_raw(path: &Path) -> Result<RawRun> {
+    std::fs::metadata(path).map_err(|e| Error::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
+    let f = hdf5::File::open(path).map_err(|_| {
+        bad(
+            path,
+            "not a lidarsim raw file (not an HDF5 / netCDF-4 file)",
+        )
+    })?;
+    check_version(path, &f)?;
+    let counts_ds = dataset(path, &f, "counts")?;
+    let shape = counts_ds.shape();
+    let [n_profiles, n_channels, n_bins] = shape[..] else {
+        return Err(bad(
+            path,
+            &format!("`counts` has {} dimensions, not 3", shape.len()),
+        ));
+    };
+    let time_ds = dataset(path, &f, "time")?;
+    let run = RawRun {
+        channels: read_channels(path, &f)?,
+        n_profiles,
+        n_bins,
+        counts: counts_ds
+            .read_raw::<u64>()
+            .map_err(|e| bad(path, &format!("cannot read `counts`: {e}")))?,
+        time_s: f64s(path, &f, "time")?,
+        time_units: str_attr(path, &time_ds, "time", "units")?,
+        n_shots: dataset(path, &f, "n_shots")?
+            .read_raw::<u64>()
+            .map_err(|e| bad(path, &format!("cannot read `n_shots`: {e}")))?,
+        range_m: f64s(path, &f, "range")?,
+        expected_signal: f64s(path, &f, "expected_signal")?,
+        expected_noise: sum(
+            &f64s(path, &f, "expected_background")?,
+            &f64s(path, &f, "expected_dark")?,
+        ),
+        wavelength_nm: f64_attr(path, &f, "wavelength_nm")?,
+        rep_rate_hz: f64_attr(path, &f, "rep_rate_hz")?,
+        bin_width_s: f64_attr(path, &f, "bin_width_s")?,
+        accumulation_time_s: f64_attr(path, &f, "accumulation_time_s")?,
+        config: read_config(path, &f)?,
+    };
+    check_shapes(path, &run, n_channels)?;
+    Ok(run)
+}
+
+/// An [`Error::Output`] about the raw file.
+pub(super) fn bad(path: &Path, reason: &str) -> Error {
+    Error::output(path, reason)
+}
+
+fn check_version(path: &Path, f: &hdf5::File) -> Result<()> {
+    let attr = f.attr("lidarsim_format_version").map_err(|_| {
+        bad(
+            path,
+            "not a lidarsim raw file (no `lidarsim_format_version` attribute)",
+        )
+    })?;
+    let v: i32 = attr
+        .read_scalar()
+        .map_err(|e| bad(path, &format!("cannot read `lidarsim_format_version`: {e}")))?;
+    if v != FORMAT_VERSION {
+        return Err(bad(
+            path,
+            &format!(
+                "lidarsim raw file format version {v}; the SCC export reads version \
+                 {FORMAT_VERSION} only (re-run `lidarsim simulate` with this version)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn dataset(path: &Path, f: &hdf5::File, name: &str) -> Result<hdf5::Dataset> {
+    f.dataset(name)
+        .map_err(|_| bad(path, &format!("missing variable `{name}`")))
+}
+
+fn f64s(path: &Path, f: &hdf5::File, name: &str) -> Result<Vec<f64>> {
+    dataset(path, f, name)?
+        .read_raw::<f64>()
+        .map_err(|e| bad(path, &format!("cannot read `{name}`: {e}")))
+}
+
+fn f64_attr(path: &Path, f: &hdf5::File, name: &str) -> Result<f64> {
+    let a = f
+        .attr(name)
+        .map_err(|_| bad(path, &format!("missing root attribute `{name}`")))?;
+    let x: f64 = a
+        .read_scalar()
+        .map_err(|e| bad(path, &format!("cannot read root attribute `{name}`: {e}")))?;
+    if !x.is_finite() || x <= 0.0 {
+        return Err(bad(
+            path,
+            &format!("root attribute `{name}` is {x}, not a positive number"),
+        ));
+    }
+    Ok(x)
+}
+
+fn str_attr(path: &Path, loc: &hdf5::Location, owner: &str, name: &str) -> Result<String> {
+    let a = loc
+        .attr(name)
+        .map_err(|_| bad(path, &format!("`{owner}` has no attribute `{name}`")))?;
+    let v: VarLenUnicode = a.read_scalar().map_err(|e| {
+        bad(
+            path,
+            &format!("cannot read `{owner}` attribute `{name}`: {e}"),
+        )
+    })?;
+    Ok(v.as_str().to_string())
+}
+
+fn read_channels(path: &Path, f: &hdf5::File) -> Result<Vec<String>> {
+    let v: Vec<VarLenUnicode> = dataset(path, f, CHANNEL_DIM)?
+        .read_raw()
+        .map_err(|e| bad(path, &format!("cannot read `{CHANNEL_DIM}`: {e}")))?;
+    Ok(v.iter().map(|s| s.as_str().to_string()).collect())
+}
+
+fn read_config(path: &Path, f: &hdf5::File) -> Result<toml::Table> {
+    let text = str_attr(path, f, "the root group", "config")?;
+    text.parse::<toml::Table>().map_err(|e| {
+        let first = e.to_string();
+        let first = first.lines().next().unwrap_or("").to_string();
+        bad(
+            path,
+            &format!("root attribute `config` is not TOML: {first}"),
+        )
+    })
+}
+
+fn sum(a: &[f64], b: &[f64]) -> Vec<f64> {
+    a.iter().zip(b).map(|(x, y)| x + y).collect()
+}
+
+/// Every variable the export uses must agree with `counts(profile, channel, bin)`.
+fn check_shapes(path: &Path, r: &RawRun, n_channels: usize) -> Result<()> {
+    let per_channel_bin = n_channels * r.n_bins;
+    let checks = [
+        ("channel", r.channels.len(), n_channels, CHANNEL_DIM),
+        ("time", r.time_s.len(), r.n_profiles, PROFILE_DIM),
+        ("n_shots", r.n_shots.len(), r.n_profiles, PROFILE_DIM),
+        ("range", r.range_m.len(), r.n_bins, BIN_DIM),
+        (
+            "expected_signal",
+            r.expected_signal.len(),
+            per_channel_bin,
+            "channel × bin",
+        ),
+        (
+            "expected_background/dark",
+            r.expected_noise.len(),
+            per_channel_bin,
+            "channel × bin",
+        ),
+    ];
+    for (name, got, want, dims) in checks {
+        if got != want {
+            return Err(bad(
+                path,
+                &format!("`{name}` has {got} values, `counts` implies {want} ({dims})"),
+            ));
+        }
+    }
+    if r.n_profiles == 0 || r.n_bins == 0 || n_channels == 0 {
+        return Err(bad(path, "`counts` is empty"));
+    }
+    Ok(())
+}
