@@ -3,10 +3,10 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use crate::config::MolecularModel;
+use crate::config::{MolecularModel, PlatformKind};
 use crate::error::{Error, Result};
-use crate::output::safe_file::{Outputs, Stream};
-use crate::output::{expect, snr_map};
+use crate::output::safe_file::{Outputs, ScratchFile, Stream};
+use crate::output::{expect, scc, snr_map};
 use crate::resources;
 use crate::scenario::{ExpectedProfile, Lidar, Scenario};
 use crate::simulate;
@@ -209,6 +209,16 @@ pub fn snr_map(
     outputs.commit()
 }
 
+/// The file `simulate` writes.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum OutputFormat {
+    /// The raw lidar file (HDF5, netCDF-4 readable; `docs/file-format.md`).
+    #[default]
+    Raw,
+    /// The EARLINET Single Calculus Chain raw NetCDF (`docs/scc.md`), ground runs.
+    Scc,
+}
+
 /// `lidarsim simulate`: the Monte Carlo run, then a one-paragraph summary on stderr.
 pub fn simulate(
     config: &Path,
@@ -216,22 +226,83 @@ pub fn simulate(
     opts: &simulate::RunOptions,
     threads: Option<usize>,
 ) -> Result<()> {
+    simulate_as(config, overrides, opts, threads, OutputFormat::Raw)
+}
+
+/// `lidarsim simulate --format F`: as [`simulate`], writing `format`. For SCC the raw
+/// file is an intermediate scratch file beside the output, exported then deleted.
+pub fn simulate_as(
+    config: &Path,
+    overrides: &[String],
+    opts: &simulate::RunOptions,
+    threads: Option<usize>,
+    format: OutputFormat,
+) -> Result<()> {
     let lidar = Lidar::load(config, overrides)?;
+    let first = &lidar.first().loaded;
+    if format == OutputFormat::Scc && first.config.platform.kind != PlatformKind::Ground {
+        return Err(Error::config(
+            first.file_label(),
+            "platform.kind",
+            "is spaceborne: --format scc writes the EARLINET SCC format, which processes \
+             ground-based stations only",
+        ));
+    }
     let mut outputs = outputs_for(lidar.first());
-    let raw = outputs.add("-o", &opts.output, Stream::Binary)?;
-    let summary = match threads {
+    let out = outputs.add("-o", &opts.output, Stream::Binary)?;
+    let pool = match threads {
         Some(0) => return Err(Error::Unsupported("--threads must be at least 1".into())),
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .map_err(|e| Error::Unsupported(format!("cannot start {n} threads: {e}")))?
-            .install(|| simulate::run(&lidar, opts, outputs, raw))?,
-        None => simulate::run(&lidar, opts, outputs, raw)?,
+        Some(n) => Some(
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .map_err(|e| Error::Unsupported(format!("cannot start {n} threads: {e}")))?,
+        ),
+        None => None,
+    };
+    let run = |opts: &simulate::RunOptions, set: Outputs, id| match &pool {
+        Some(p) => p.install(|| simulate::run(&lidar, opts, set, id)),
+        None => simulate::run(&lidar, opts, set, id),
+    };
+    let summary = match format {
+        OutputFormat::Raw => run(opts, outputs, out)?,
+        OutputFormat::Scc => {
+            let scratch = ScratchFile::beside(&opts.output, "raw.h5");
+            let mut raw_set = outputs_for(lidar.first());
+            let raw = raw_set.add("-o", scratch.path(), Stream::Binary)?;
+            let raw_opts = simulate::RunOptions {
+                output: scratch.path().to_path_buf(),
+                ..opts.clone()
+            };
+            let mut summary = run(&raw_opts, raw_set, raw)?;
+            scc::export_scc(
+                scratch.path(),
+                outputs.temp_path(out)?,
+                &scc::SccOptions::default(),
+            )?;
+            outputs.commit()?;
+            summary.output = opts.output.clone();
+            summary
+        }
     };
     eprintln!("{summary}");
     if let Some(w) = &summary.warning {
         eprintln!("{w}");
     }
+    Ok(())
+}
+
+/// `lidarsim export-scc RAW.h5 OUT.nc`: a raw file to the SCC raw NetCDF format.
+pub fn export_scc(raw: &Path, out: &Path, opts: &scc::SccOptions) -> Result<()> {
+    let mut outputs = Outputs::new([raw]);
+    let id = outputs.add("OUT.nc", out, Stream::Binary)?;
+    scc::export_scc(raw, outputs.temp_path(id)?, opts)?;
+    outputs.commit()?;
+    eprintln!(
+        "Wrote {} (SCC raw NetCDF) from {}.",
+        out.display(),
+        raw.display()
+    );
     Ok(())
 }
 

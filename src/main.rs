@@ -105,6 +105,25 @@ enum Command {
         /// Worker threads, 1 to 1024 (default: all cores); results do not depend on it.
         #[arg(long, allow_negative_numbers = true, value_parser = cli_values::threads)]
         threads: Option<usize>,
+        /// raw (HDF5 raw lidar file) or scc (EARLINET SCC raw NetCDF, ground runs).
+        #[arg(long, value_enum, default_value_t = lidarsim::commands::OutputFormat::Raw)]
+        format: lidarsim::commands::OutputFormat,
+    },
+    /// Converts a raw file (ground run) to the EARLINET SCC raw NetCDF format.
+    ExportScc {
+        /// The raw lidar file (`simulate -o`).
+        raw: PathBuf,
+        /// Output SCC NetCDF file.
+        out: PathBuf,
+        /// Measurement_ID, YYYYMMDDccNN (default: start date, station, 00).
+        #[arg(long, value_name = "ID")]
+        measurement_id: Option<String>,
+        /// Two-letter EARLINET station call sign.
+        #[arg(long, default_value = "ls", value_name = "CC")]
+        station: String,
+        /// SCC channel IDs of the file's channels, in order (e.g. 1023,1024).
+        #[arg(long, value_delimiter = ',', value_name = "ID,...")]
+        channel_ids: Option<Vec<i32>>,
     },
     /// Statistical check of the simulator against Eq. 4; exit 0 when consistent, 1 when not.
     Validate {
@@ -163,6 +182,7 @@ fn main() -> ExitCode {
             components,
             tolerance,
             threads,
+            format,
         } => {
             let opts = lidarsim::simulate::RunOptions {
                 output: output.clone(),
@@ -174,7 +194,21 @@ fn main() -> ExitCode {
                 progress: std::io::IsTerminal::is_terminal(&std::io::stderr()),
                 command_line: std::env::args().collect::<Vec<_>>().join(" "),
             };
-            lidarsim::commands::simulate(config, set, &opts, *threads).map(|()| true)
+            lidarsim::commands::simulate_as(config, set, &opts, *threads, *format).map(|()| true)
+        }
+        Command::ExportScc {
+            raw,
+            out,
+            measurement_id,
+            station,
+            channel_ids,
+        } => {
+            let opts = lidarsim::output::scc::SccOptions {
+                measurement_id: measurement_id.clone(),
+                station_id: station.clone(),
+                channel_ids: channel_ids.clone(),
+            };
+            lidarsim::commands::export_scc(raw, out, &opts).map(|()| true)
         }
         Command::Validate {
             config,

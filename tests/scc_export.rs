@@ -11,6 +11,15 @@ use lidarsim::output::scc::{SCC_VARIABLES, SccOptions, SccType, export_scc};
 use lidarsim::simulate::RunOptions;
 use netcdf3::{DataType, FileReader};
 
+/// The tests of this file run one at a time: files written, read and deleted by
+/// concurrent tests in one process can reuse an inode that the HDF5 library still
+/// associates with a file it had open (seen once as a failed open of a valid file).
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 fn scratch(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("lidarsim-scc-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
@@ -80,6 +89,7 @@ fn text(r: &FileReader, name: &str) -> String {
 
 #[test]
 fn a_ground_run_exports_with_the_scc_layout_and_its_counts() {
+    let _serial = serial();
     let dir = scratch("ground");
     let raw = ground_run(&dir);
     let out = dir.join("out.nc");
@@ -152,6 +162,7 @@ fn python_check(out: &Path) {
 
 #[test]
 fn options_are_checked() {
+    let _serial = serial();
     let dir = scratch("opts");
     let raw = ground_run(&dir);
     let out = dir.join("out.nc");
@@ -181,6 +192,7 @@ fn options_are_checked() {
 
 #[test]
 fn a_spaceborne_run_is_refused() {
+    let _serial = serial();
     let dir = scratch("space");
     let raw = dir.join("space.h5");
     simulate("paper/scenario1.toml", &raw, &[], 1);
@@ -196,6 +208,7 @@ fn a_spaceborne_run_is_refused() {
 
 #[test]
 fn files_that_are_not_lidarsim_raw_files_are_refused() {
+    let _serial = serial();
     let dir = scratch("bad");
     let out = dir.join("out.nc");
     let text_file = dir.join("notes.h5");

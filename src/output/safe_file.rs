@@ -460,6 +460,36 @@ pub fn describe_hdf5_error(message: &str) -> String {
     }
 }
 
+/// An intermediate file of a command (e.g. the raw file an SCC export is made from):
+/// hidden beside an output, deleted when dropped and if a signal ends the process.
+pub struct ScratchFile {
+    path: PathBuf,
+}
+
+impl ScratchFile {
+    /// A scratch path `.NAME.SUFFIX-PID` beside `output` (nothing is created).
+    pub fn beside(output: &Path, suffix: &str) -> ScratchFile {
+        let name = output
+            .file_name()
+            .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
+        let path = parent_dir(output).join(format!(".{name}.{suffix}-{}", std::process::id()));
+        register(&path);
+        ScratchFile { path }
+    }
+
+    /// Its path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for ScratchFile {
+    fn drop(&mut self) {
+        let _ = fs::remove_file(&self.path);
+        unregister(&self.path);
+    }
+}
+
 /// Files this process deletes if a signal ends it: temporary outputs and lock files.
 static CLEANUP: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
