@@ -642,8 +642,18 @@ pub fn run(lidar: &Lidar, opts: &ValidateOptions) -> Result<Report> {
 pub fn write_table(w: &mut dyn Write, r: &Report) -> std::io::Result<()> {
     writeln!(
         w,
-        "{} — {} realizations of {} shots, method {}, seed {}, {} background bins",
-        r.scenario, r.realizations, r.shots_per_profile, r.method, r.seed, r.background_bins
+        "{} — {} realizations of {} shots, method {}, seed {}, {} background bins{}",
+        r.scenario,
+        r.realizations,
+        r.shots_per_profile,
+        r.method,
+        r.seed,
+        r.background_bins,
+        if r.channels.len() > 1 {
+            format!(", channels {}", r.channels.join(", "))
+        } else {
+            String::new()
+        }
     )?;
     writeln!(w)?;
     writeln!(
@@ -665,10 +675,28 @@ pub fn write_table(w: &mut dyn Write, r: &Report) -> std::io::Result<()> {
         )?;
     }
     writeln!(w)?;
+    let several = r.channels.len() > 1;
+    let width = r.channels.iter().map(String::len).max().unwrap_or(0);
+    let label = |c: &str| {
+        if several {
+            format!("{c:<width$} ")
+        } else {
+            String::new()
+        }
+    };
     writeln!(
         w,
-        "{:>9} {:>12} {:>12} {:>8} {:>12} {:>8} {:>9} {:>9} {:>7}",
-        "alt (km)", "mean", "model", "z", "variance", "z", "S/N", "Eq. 4", "z"
+        "{}{:>9} {:>12} {:>12} {:>8} {:>12} {:>8} {:>9} {:>9} {:>7}",
+        label("channel"),
+        "alt (km)",
+        "mean",
+        "model",
+        "z",
+        "variance",
+        "z",
+        "S/N",
+        "Eq. 4",
+        "z"
     )?;
     let z = |s: &Stat| {
         s.z.map(|z| format!("{z:8.2}"))
@@ -678,7 +706,8 @@ pub fn write_table(w: &mut dyn Write, r: &Report) -> std::io::Result<()> {
     for b in r.bins.iter().step_by(step) {
         writeln!(
             w,
-            "{:9.3} {:12.5e} {:12.5e} {} {:12.5e} {} {:9.3} {:9.3} {}",
+            "{}{:9.3} {:12.5e} {:12.5e} {} {:12.5e} {} {:9.3} {:9.3} {}",
+            label(&b.channel),
             b.altitude_m / 1e3,
             b.mean.empirical,
             b.mean.model,
