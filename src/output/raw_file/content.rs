@@ -75,6 +75,9 @@ fn var(
     }
 }
 
+/// A per-bin field of the expected profile.
+type Field = fn(&ExpectedProfile) -> &Vec<f64>;
+
 /// The values of `f` for every channel, channel-major.
 fn per_channel(expected: &[ExpectedProfile], f: impl Fn(&ExpectedProfile) -> Vec<f64>) -> Vec<f64> {
     expected.iter().flat_map(f).collect()
@@ -93,7 +96,7 @@ pub fn variables(lidar: &Lidar, expected: &[ExpectedProfile], shots: u64) -> Vec
         .iter()
         .all(|c| c.instrument.wavelength_nm == channels[0].instrument.wavelength_nm);
     let truth_dims = if one_wavelength { Bin } else { ChannelBin };
-    let truth = |f: fn(&ExpectedProfile) -> &Vec<f64>| {
+    let truth = |f: Field| {
         if one_wavelength {
             f(e0).clone()
         } else {
@@ -209,7 +212,7 @@ pub fn variables(lidar: &Lidar, expected: &[ExpectedProfile], shots: u64) -> Vec
             per_channel(expected, |e| e.attenuated_backscatter.clone()),
         ),
     ];
-    let point_truth: [(&str, &str, &str, fn(&ExpectedProfile) -> &Vec<f64>); 5] = [
+    let point_truth: [(&str, &str, &str, Field); 5] = [
         (
             "beta_mol",
             "molecular backscatter coefficient at the bin centre",
