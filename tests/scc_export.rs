@@ -249,3 +249,42 @@ fn files_that_are_not_lidarsim_raw_files_are_refused() {
     assert!(!out.exists());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `simulate --format scc` on the two-polarization preset: one SCC file with both
+/// channels, each with its own wavelength and dead time from the receiver's config, and
+/// no scratch file left beside it. A spaceborne config is refused before any work.
+#[test]
+fn simulate_writes_scc_for_every_channel() {
+    let _serial = serial();
+    let dir = scratch("format");
+    let out = dir.join("depol.nc");
+    let run = |cfg: &str, out: &Path| {
+        Command::new(env!("CARGO_BIN_EXE_lidarsim"))
+            .args(["simulate", config_path(cfg).to_str().unwrap(), "-o"])
+            .arg(out)
+            .args(["--profiles", "2", "--format", "scc"])
+            .args(["--set", "acquisition.accumulation_time_s=0.2"])
+            .output()
+            .unwrap()
+    };
+    let o = run("ground/ground_532_depol.toml", &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut r = FileReader::open(&out).unwrap();
+    assert_eq!(r.data_set().dim_size("channels"), Some(2));
+    assert_eq!(r.read_var_f64("Dead_Time").unwrap(), vec![3.5, 3.5]);
+    assert_eq!(
+        r.read_var_f64("Emitted_Wavelength").unwrap(),
+        vec![532.0, 532.0]
+    );
+    assert_eq!(r.read_var_i32("Laser_Shots").unwrap(), vec![500; 4]);
+    let left: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left, vec![std::ffi::OsString::from("depol.nc")], "{left:?}");
+    let o = run("paper/scenario1.toml", &dir.join("space.nc"));
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("platform.kind"));
+    assert!(!dir.join("space.nc").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}

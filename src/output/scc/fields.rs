@@ -6,8 +6,11 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use super::SccOptions;
 use super::read::{RawRun, bad};
+use crate::config::DetectorConfig;
 use crate::constants::SPEED_OF_LIGHT_M_PER_S;
+use crate::detector::DeadTimeModel;
 use crate::error::{Error, Result};
+use crate::receiver::ChannelConfig;
 
 /// `Molecular_Calc` written: 4 = US Standard Atmosphere 1976 (SCC netCDF input format
 /// after its 2021 revision; 0 = automatic, 1 = radiosounding, 2 = model).
@@ -208,36 +211,44 @@ fn channels(path: &Path, raw: &RawRun, opts: &SccOptions) -> Result<Vec<SccChann
         Some(ids) => ids.clone(),
         None => (1..=n as i32).collect(),
     };
+    let receiver = receiver_channels(path, raw)?;
     raw.channels
         .iter()
         .enumerate()
-        .map(|(c, name)| channel(path, raw, c, name, ids[c]))
+        .map(|(c, name)| {
+            let cfg = receiver.iter().find(|r| &r.name == name).ok_or_else(|| {
+                bad(
+                    path,
+                    &format!("channel `{name}` is not a channel of the `config` attribute"),
+                )
+            })?;
+            channel(raw, c, cfg, ids[c])
+        })
         .collect()
 }
 
-/// The entry of `instrument.channels` named `name`, if the config has one.
-fn channel_table<'a>(cfg: &'a toml::Table, name: &str) -> Option<&'a toml::Table> {
-    let list = table(cfg, "instrument")?.get("channels")?.as_array()?;
-    list.iter()
-        .filter_map(|v| v.as_table())
-        .find(|t| t.get("name").and_then(|n| n.as_str()) == Some(name))
+/// The receiver's channels as the simulation saw them: the `config` attribute expanded
+/// by the same code ([`crate::receiver::expand`]), so each channel's wavelength and
+/// detector are exactly those its counts were drawn with.
+fn receiver_channels(path: &Path, raw: &RawRun) -> Result<Vec<ChannelConfig>> {
+    let text = toml::to_string(&raw.config)
+        .map_err(|e| bad(path, &format!("the `config` attribute: {e}")))?;
+    let loaded = crate::config::load_str(&text, path, &[])
+        .map_err(|e| bad(path, &format!("the `config` attribute: {e}")))?;
+    Ok(loaded.channels)
 }
 
-fn channel(path: &Path, raw: &RawRun, c: usize, name: &str, id: i32) -> Result<SccChannel> {
-    let own = channel_table(&raw.config, name);
-    let instrument = table(&raw.config, "instrument");
-    let detector = own
-        .and_then(|t| table(t, "detector"))
-        .or_else(|| instrument.and_then(|t| table(t, "detector")));
-    let (dead_time_ns, dead_time_type) = dead_time(path, detector)?;
+fn channel(raw: &RawRun, c: usize, cfg: &ChannelConfig, id: i32) -> Result<SccChannel> {
+    let instrument = &cfg.config.instrument;
+    let (dead_time_ns, dead_time_type) = dead_time(instrument.detector.as_ref());
     let res = SPEED_OF_LIGHT_M_PER_S * raw.bin_width_s / 2.0;
     let first_bin_start_m = raw.range_m[0] - res / 2.0;
     let bins = c * raw.n_bins..(c + 1) * raw.n_bins;
     Ok(SccChannel {
-        name: name.to_string(),
+        name: cfg.name.clone(),
         id,
         rep_rate_hz: raw.rep_rate_hz.round() as i32,
-        wavelength_nm: num(own, "wavelength_nm").unwrap_or(raw.wavelength_nm),
+        wavelength_nm: instrument.wavelength_nm,
         range_resolution_m: res,
         background_m: background_window(
             &raw.expected_signal[bins.clone()],
@@ -251,25 +262,19 @@ fn channel(path: &Path, raw: &RawRun, c: usize, name: &str, id: i32) -> Result<S
     })
 }
 
-/// `Dead_Time` (ns) and `Dead_Time_Corr_Type` of a `detector` table; an absent detector
-/// is an ideal counter (0 ns, type 0).
-fn dead_time(path: &Path, detector: Option<&toml::Table>) -> Result<(f64, i32)> {
-    let tau_s = num(detector, "dead_time_s").unwrap_or(0.0);
-    let model = detector
-        .and_then(|d| d.get("dead_time_model"))
-        .and_then(|m| m.as_str())
-        .unwrap_or("nonparalyzable");
-    let kind = match model {
-        "nonparalyzable" => 0,
-        "paralyzable" => 1,
-        other => {
-            return Err(bad(
-                path,
-                &format!("unknown `dead_time_model` `{other}` in the `config` attribute"),
-            ));
-        }
-    };
-    Ok((tau_s * 1e9, kind))
+/// `Dead_Time` (ns) and `Dead_Time_Corr_Type` (0 non-paralyzable, 1 paralyzable) of a
+/// detector; an absent detector is an ideal counter (0 ns, type 0).
+fn dead_time(detector: Option<&DetectorConfig>) -> (f64, i32) {
+    match detector {
+        None => (0.0, 0),
+        Some(d) => (
+            d.dead_time_s * 1e9,
+            match d.dead_time_model {
+                DeadTimeModel::Nonparalyzable => 0,
+                DeadTimeModel::Paralyzable => 1,
+            },
+        ),
+    }
 }
 
 /// Range window (m) of the far bins free of signal: the longest run at the far end
