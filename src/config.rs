@@ -207,6 +207,9 @@ pub struct PlatformConfig {
     /// Beam angle from nadir (space-borne) or from zenith (ground), degrees.
     #[serde(default)]
     pub off_nadir_deg: f64,
+    /// A spherical Earth (default) or the paper's flat Earth for slanted beams.
+    #[serde(default = "yes")]
+    pub earth_curvature: bool,
 }
 
 /// Range window and accumulation.
@@ -443,6 +446,9 @@ pub struct SimulationConfig {
     pub tolerance: Option<f64>,
 }
 
+fn yes() -> bool {
+    true
+}
 fn one() -> f64 {
     1.0
 }

@@ -1,8 +1,14 @@
 //! Viewing geometry (model.md §3): range ↔ altitude, the range-bin grid, the overlap
 //! function η(r) and the ground-track speed.
 //!
-//! Flat-Earth geometry as in model.md: space-borne `r = (H − z)/cos φ` (φ off nadir),
-//! ground-based `r = (z − z0)/cos φ` (φ from zenith, z0 the station height).
+//! **Spherical Earth** (model.md §7, default): from a platform at radius `P = R+H`, a
+//! beam off nadir by φ reaches altitude z at range r with
+//! `(R+z)² = P² + r² − 2rP·cos φ`, so `r(z) = P·cos φ − sqrt((R+z)² − P²·sin²φ)` (the
+//! near intersection); it misses the Earth when `sin φ > R/P`. From a station at radius
+//! `S = R+z0`, a beam at φ from zenith: `(R+z)² = S² + r² + 2rS·cos φ`. At φ = 0 both
+//! reduce exactly to the flat formulas, which are used there (nadir and zenith results
+//! do not change). **Flat Earth** (`platform.earth_curvature = false`, the paper's
+//! model.md §3): space-borne `r = (H − z)/cos φ`, ground-based `r = (z − z0)/cos φ`.
 
 use crate::config::{OverlapConfig, PlatformKind, ScenarioConfig};
 use crate::constants::{EARTH_GM_M3_PER_S2, EARTH_RADIUS_M, SPEED_OF_LIGHT_M_PER_S};
@@ -37,6 +43,10 @@ pub struct Geometry {
     pub platform_altitude_m: f64,
     /// cos φ of the beam angle from nadir (space-borne) or zenith (ground).
     pub cos_angle: f64,
+    /// sin φ; 0 for a nadir or zenith beam.
+    pub sin_angle: f64,
+    /// Whether the Earth is a sphere (else flat, the paper's geometry).
+    pub spherical: bool,
     /// Range width of one bin, m.
     pub bin_range_m: f64,
     /// Range at the start of bin 0, m.
@@ -51,11 +61,29 @@ impl Geometry {
     pub fn from_config(cfg: &ScenarioConfig, file: &str) -> Result<Self> {
         let p = &cfg.platform;
         let a = &cfg.acquisition;
-        let cos_angle = p.off_nadir_deg.to_radians().cos();
-        let bin_range_m = bin_range_m(cfg.instrument.bin_width_s);
-        let platform_altitude_m = p.altitude_km * 1e3;
+        let angle = p.off_nadir_deg.to_radians();
+        let sin_angle = if p.off_nadir_deg == 0.0 {
+            0.0
+        } else {
+            angle.sin()
+        };
+        let mut g = Geometry {
+            kind: p.kind,
+            platform_altitude_m: p.altitude_km * 1e3,
+            cos_angle: angle.cos(),
+            sin_angle,
+            spherical: p.earth_curvature,
+            bin_range_m: bin_range_m(cfg.instrument.bin_width_s),
+            first_bin_range_m: 0.0,
+            n_bins: 1,
+        };
         let (top_m, bottom_m) = (a.top_altitude_km * 1e3, a.bottom_altitude_km * 1e3);
-        let n = ((top_m - bottom_m) / (bin_range_m * cos_angle) - 1e-9).ceil();
+        g.check_reach(bottom_m, p.off_nadir_deg, file)?;
+        let (near_m, far_m) = match p.kind {
+            PlatformKind::Spaceborne => (g.range_at_altitude(top_m), g.range_at_altitude(bottom_m)),
+            PlatformKind::Ground => (g.range_at_altitude(bottom_m), g.range_at_altitude(top_m)),
+        };
+        let n = ((far_m - near_m) / g.bin_range_m - 1e-9).ceil();
         if n > MAX_BINS as f64 {
             return Err(Error::config(
                 file,
@@ -63,34 +91,98 @@ impl Geometry {
                 format!("the window needs {n} bins, more than the {MAX_BINS} allowed"),
             ));
         }
-        let first_bin_range_m = match p.kind {
-            PlatformKind::Spaceborne => (platform_altitude_m - top_m) / cos_angle,
-            PlatformKind::Ground => (bottom_m - platform_altitude_m) / cos_angle,
-        };
-        Ok(Geometry {
-            kind: p.kind,
-            platform_altitude_m,
-            cos_angle,
-            bin_range_m,
-            first_bin_range_m,
-            n_bins: (n as usize).max(1),
-        })
+        g.first_bin_range_m = near_m;
+        g.n_bins = (n as usize).max(1);
+        Ok(g)
+    }
+
+    /// Refuses a space-borne beam that misses the Earth or never reaches the window's
+    /// bottom `bottom_m` (model.md §7: it misses when `sin φ > R/(R+H)`).
+    fn check_reach(&self, bottom_m: f64, angle_deg: f64, file: &str) -> Result<()> {
+        if !self.spherical || self.kind == PlatformKind::Ground || self.sin_angle == 0.0 {
+            return Ok(());
+        }
+        let p = EARTH_RADIUS_M + self.platform_altitude_m;
+        let limit_deg = (EARTH_RADIUS_M / p).asin().to_degrees();
+        let tangent_m = p * self.sin_angle - EARTH_RADIUS_M;
+        if angle_deg > limit_deg {
+            return Err(Error::config(
+                file,
+                "platform.off_nadir_deg",
+                format!(
+                    "{angle_deg}° off nadir from {} km misses the Earth (it passes {:.0} km above \
+                     the ground); the limit is {limit_deg:.2}°",
+                    self.platform_altitude_m / 1e3,
+                    tangent_m / 1e3
+                ),
+            ));
+        }
+        if tangent_m > bottom_m {
+            return Err(Error::config(
+                file,
+                "acquisition.bottom_altitude_km",
+                format!(
+                    "the beam {angle_deg}° off nadir never descends below {:.3} km; raise the \
+                     window's bottom",
+                    tangent_m / 1e3
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The platform's (space-borne) or station's (ground) distance from the Earth's centre, m.
+    fn origin_radius_m(&self) -> f64 {
+        EARTH_RADIUS_M + self.platform_altitude_m
+    }
+
+    /// Whether the spherical formulas apply (a sphere and a slanted beam); a nadir or
+    /// zenith beam uses the flat formulas, which are then exact.
+    fn curved(&self) -> bool {
+        self.spherical && self.sin_angle != 0.0
     }
 
     /// Altitude of the beam at range `r_m`.
     pub fn altitude_at_range(&self, r_m: f64) -> f64 {
+        let sign = match self.kind {
+            PlatformKind::Spaceborne => -1.0,
+            PlatformKind::Ground => 1.0,
+        };
+        if !self.curved() {
+            return self.platform_altitude_m + sign * r_m * self.cos_angle;
+        }
+        let p = self.origin_radius_m();
+        (p * p + r_m * r_m + sign * 2.0 * r_m * p * self.cos_angle).sqrt() - EARTH_RADIUS_M
+    }
+
+    /// Range at which the beam reaches altitude `z_m` (may be negative when the beam never
+    /// does; a space-borne beam above its tangent altitude only).
+    pub fn range_at_altitude(&self, z_m: f64) -> f64 {
+        if !self.curved() {
+            return match self.kind {
+                PlatformKind::Spaceborne => (self.platform_altitude_m - z_m) / self.cos_angle,
+                PlatformKind::Ground => (z_m - self.platform_altitude_m) / self.cos_angle,
+            };
+        }
+        let p = self.origin_radius_m();
+        let rz = EARTH_RADIUS_M + z_m;
+        let reach = (rz * rz - p * p * self.sin_angle * self.sin_angle)
+            .max(0.0)
+            .sqrt();
         match self.kind {
-            PlatformKind::Spaceborne => self.platform_altitude_m - r_m * self.cos_angle,
-            PlatformKind::Ground => self.platform_altitude_m + r_m * self.cos_angle,
+            PlatformKind::Spaceborne => p * self.cos_angle - reach,
+            PlatformKind::Ground => reach - p * self.cos_angle,
         }
     }
 
-    /// Range at which the beam reaches altitude `z_m` (may be negative when the beam never does).
-    pub fn range_at_altitude(&self, z_m: f64) -> f64 {
-        match self.kind {
-            PlatformKind::Spaceborne => (self.platform_altitude_m - z_m) / self.cos_angle,
-            PlatformKind::Ground => (z_m - self.platform_altitude_m) / self.cos_angle,
+    /// cos of the angle between the beam and the local vertical at altitude `z_m`
+    /// (`cos φ` on a flat Earth; on a sphere `sin θ_z = P·sin φ/(R+z)`).
+    pub fn local_cos_at(&self, z_m: f64) -> f64 {
+        if !self.curved() {
+            return self.cos_angle;
         }
+        let s = (self.origin_radius_m() * self.sin_angle / (EARTH_RADIUS_M + z_m)).min(1.0);
+        (1.0 - s * s).sqrt()
     }
 
     /// Range interval `[start, end)` of bin `i`, m.

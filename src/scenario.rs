@@ -209,9 +209,10 @@ impl Scenario {
         )?;
         let mut atmosphere = Atmosphere::from_config(&loaded)?;
         // at least four slabs per bin, so that the piecewise representation resolves every bin
+        let lowest = cfg.acquisition.bottom_altitude_km * 1e3;
         atmosphere.grid_m = atmosphere
             .grid_m
-            .min(geometry.bin_range_m * geometry.cos_angle / 4.0);
+            .min(geometry.bin_range_m * geometry.local_cos_at(lowest) / 4.0);
         let overlap = Overlap::from_config(cfg);
         if overlap.sees_zero_range() && geometry.first_bin_range_m <= 0.0 {
             return Err(Error::config(

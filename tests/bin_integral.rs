@@ -223,7 +223,13 @@ fn ground_lidar_seeing_range_zero_is_a_config_error() {
 #[test]
 fn extreme_off_nadir_60_degrees_follows_the_slant_path() {
     let nadir = scenario("paper/scenario6.toml", &[]).expected().unwrap();
-    let sc = scenario("paper/scenario6.toml", &["platform.off_nadir_deg=60"]);
+    let sc = scenario(
+        "paper/scenario6.toml",
+        &[
+            "platform.off_nadir_deg=60",
+            "platform.earth_curvature=false",
+        ],
+    );
     let slant = sc.expected().unwrap();
     assert!(slant.signal.iter().all(|s| s.is_finite()));
     // T² to the same altitude: optical depth doubles at 60°, T²_slant = T²_nadir²
@@ -240,4 +246,45 @@ fn extreme_off_nadir_60_degrees_follows_the_slant_path() {
         t2_nadir * t2_nadir
     );
     assert!(slant.n_bins() > nadir.n_bins());
+}
+
+/// Earth curvature (model.md §7): from 600 km at 30° off nadir the beam meets the ground
+/// at ~704 km (flat Earth: 693 km); the range-altitude mapping inverts itself; nadir is
+/// the flat formula exactly; an angle whose beam misses the Earth is refused with the
+/// limit in the message.
+#[test]
+fn a_spherical_earth_lengthens_slant_paths() {
+    let curved = scenario("paper/scenario1.toml", &["platform.off_nadir_deg=30"]);
+    let flat = scenario(
+        "paper/scenario1.toml",
+        &[
+            "platform.off_nadir_deg=30",
+            "platform.earth_curvature=false",
+        ],
+    );
+    let ground = curved.geometry.range_at_altitude(0.0);
+    assert!((ground - 704.1e3).abs() < 0.5e3, "{ground}");
+    assert!((flat.geometry.range_at_altitude(0.0) - 692.8e3).abs() < 0.5e3);
+    for z in [-500.0, 0.0, 10e3, 86e3, 500e3] {
+        let r = curved.geometry.range_at_altitude(z);
+        assert!(
+            (curved.geometry.altitude_at_range(r) - z).abs() < 1e-6,
+            "{z}"
+        );
+    }
+    // the local zenith angle grows towards the ground: sin θ = (R+H) sin φ/(R+z)
+    assert!(curved.geometry.local_cos_at(0.0) < 30f64.to_radians().cos());
+    let nadir = scenario("paper/scenario1.toml", &[]);
+    let nadir_flat = scenario("paper/scenario1.toml", &["platform.earth_curvature=false"]);
+    assert_eq!(
+        nadir.expected().unwrap().signal,
+        nadir_flat.expected().unwrap().signal
+    );
+    let e = lidarsim::scenario::Scenario::load(
+        &common::config_path("paper/scenario1.toml"),
+        &["platform.off_nadir_deg=70".to_string()],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("misses the Earth") && e.contains("66.05"), "{e}");
 }

@@ -956,7 +956,7 @@ fn a_layer_thinner_than_a_bin() {
 
 // ------------------------------------------------------------------ 60° off nadir
 
-/// 60° off nadir: ceil(40 km/(ΔR cos 60°)) = 267 bins, bin-centre altitudes ΔR·cos 60° =
+/// 60° off nadir over a flat Earth (the paper's geometry): ceil(40 km/(ΔR cos 60°)) = 267 bins, bin-centre altitudes ΔR·cos 60° =
 /// 149.9 m apart (ranges ΔR apart), T² to every bin the square of the nadir T² to the same
 /// altitude, and both Monte Carlo methods give every bin's mean over 400 profiles within
 /// |z| < 5.5 of M·λ_i. False alarm: 2 × 267 × 3.8e-8 = 2e-5.
@@ -964,6 +964,7 @@ fn a_layer_thinner_than_a_bin() {
 fn sixty_degrees_off_nadir() {
     let ov = strings(&[
         "platform.off_nadir_deg=60",
+        "platform.earth_curvature=false",
         "acquisition.top_altitude_km=40",
     ]);
     let nadir = scenario("paper/scenario1.toml", &["acquisition.top_altitude_km=40"]);
