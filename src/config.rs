@@ -31,6 +31,9 @@ pub struct ScenarioConfig {
     pub atmosphere: AtmosphereConfig,
     /// Sky background.
     pub background: BackgroundConfig,
+    /// The surface below a space-borne lidar; absent = no surface echo.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surface: Option<SurfaceConfig>,
     /// Monte Carlo settings.
     #[serde(default)]
     pub simulation: SimulationConfig,
@@ -390,6 +393,34 @@ impl LayerConfig {
             .map_or(self.lidar_ratio_sr, |(_, v)| *v);
         (extinction, lidar_ratio)
     }
+}
+
+/// A Lambertian surface (model.md §7, `src/surface.rs`).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceConfig {
+    /// What the surface is (sets the default albedo).
+    #[serde(default)]
+    pub kind: SurfaceKind,
+    /// Lambertian reflectance ρ at the laser wavelength; absent = the kind's.
+    #[serde(default)]
+    pub albedo: Option<f64>,
+    /// Altitude of the surface above sea level, km.
+    #[serde(default)]
+    pub altitude_km: f64,
+}
+
+/// Surface presets.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SurfaceKind {
+    /// Open ocean.
+    Ocean,
+    /// Vegetated land (default).
+    #[default]
+    Land,
+    /// Fresh snow.
+    Snow,
 }
 
 /// Which efficiencies the detected sky background carries (model.md §1).
@@ -807,6 +838,21 @@ impl ScenarioConfig {
         Ok(())
     }
 
+    /// The surface: an albedo in [0, 1], within the window's reach, space-borne only.
+    fn validate_surface(&self, c: &Checker, s: &SurfaceConfig) -> Result<()> {
+        if self.platform.kind == PlatformKind::Ground {
+            return Err(c.fail(
+                "surface",
+                "a ground-based lidar looks up and sees no surface; remove [surface]",
+            ));
+        }
+        if let Some(a) = s.albedo {
+            c.range("surface.albedo", a, 0.0, 1.0)?;
+        }
+        c.range("surface.altitude_km", s.altitude_km, -0.5, 9.0)?;
+        Ok(())
+    }
+
     /// Checks every field: finite, in range, consistent. `file` names the source in errors.
     pub fn validate(&self, file: &str) -> Result<()> {
         let c = Checker { file };
@@ -814,6 +860,9 @@ impl ScenarioConfig {
         self.validate_geometry(&c)?;
         self.validate_atmosphere(&c)?;
         c.range("background.radiance", self.background.radiance, 0.0, 1e25)?;
+        if let Some(surface) = &self.surface {
+            self.validate_surface(&c, surface)?;
+        }
         if let Some(t) = self.simulation.tolerance {
             c.positive(
                 "simulation.tolerance",

@@ -21,4 +21,5 @@ pub mod scenario;
 pub mod signal;
 pub mod simulate;
 pub mod snr;
+pub mod surface;
 pub mod validate;

@@ -222,7 +222,11 @@ impl Scenario {
                  or set instrument.overlap (e.g. { model = \"full_range\", full_overlap_m = 300 })",
             ));
         }
-        let path = BeamPath::new(&atmosphere, &geometry, overlap);
+        let surface = cfg
+            .surface
+            .as_ref()
+            .map(crate::surface::Surface::from_config);
+        let path = BeamPath::new(&atmosphere, &geometry, overlap, surface);
         let sc = Scenario {
             loaded,
             instrument,

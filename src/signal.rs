@@ -22,6 +22,7 @@ use crate::atmosphere::Atmosphere;
 use crate::config::PlatformKind;
 use crate::error::{Error, Result};
 use crate::geometry::{Geometry, Overlap};
+use crate::surface::Surface;
 
 /// Degree of the interpolant of `η/r²` on a piece, plus one.
 const NODES: usize = 6;
@@ -45,24 +46,50 @@ pub struct Segment {
     pub tau_start: f64,
 }
 
+/// The surface's echo on the beam: where it is and its integrated backscatter.
+#[derive(Debug, Clone, Copy)]
+pub struct SurfaceEcho {
+    /// Range of the surface from the instrument, m.
+    pub range_m: f64,
+    /// `ρ·cos θ/π`, sr⁻¹ (`crate::surface`).
+    pub integrated_backscatter_sr: f64,
+}
+
 /// The beam path from the instrument out to the last bin.
 #[derive(Debug, Clone)]
 pub struct BeamPath {
     segments: Vec<Segment>,
     overlap: Overlap,
+    /// The surface echo, if the scene has a surface within the window.
+    surface: Option<SurfaceEcho>,
     /// Range below which η ≡ 0 (0 when the receiver sees from r = 0).
     zero_overlap_until_m: f64,
 }
 
 impl BeamPath {
-    /// Lays the atmosphere's slabs along the beam of `geometry`, out to its last bin.
-    pub fn new(atmosphere: &Atmosphere, geometry: &Geometry, overlap: Overlap) -> Self {
+    /// Lays the atmosphere's slabs along the beam of `geometry`, out to its last bin; a
+    /// space-borne beam stops at the `surface` (at sea level when there is none), whose
+    /// echo is added to the bin that holds it.
+    pub fn new(
+        atmosphere: &Atmosphere,
+        geometry: &Geometry,
+        overlap: Overlap,
+        surface: Option<Surface>,
+    ) -> Self {
         let r_max = geometry.max_range_m();
         let z_far = geometry.altitude_at_range(r_max);
+        let ground_m = surface.map_or(0.0, |s| s.altitude_m);
+        let surface = surface
+            .filter(|s| geometry.kind == PlatformKind::Spaceborne && s.altitude_m >= z_far)
+            .map(|s| SurfaceEcho {
+                range_m: geometry.range_at_altitude(s.altitude_m),
+                integrated_backscatter_sr: s
+                    .integrated_backscatter_sr(geometry.local_cos_at(s.altitude_m)),
+            });
         let (z_lo, z_hi) = match geometry.kind {
             // The beam stops at the surface.
             PlatformKind::Spaceborne => (
-                z_far.max(0.0),
+                z_far.max(ground_m),
                 geometry.platform_altitude_m.min(atmosphere.top_m()),
             ),
             PlatformKind::Ground => (geometry.platform_altitude_m, z_far.min(atmosphere.top_m())),
@@ -106,8 +133,14 @@ impl BeamPath {
         BeamPath {
             segments,
             overlap,
+            surface,
             zero_overlap_until_m,
         }
+    }
+
+    /// The surface's echo, if any.
+    pub fn surface(&self) -> Option<SurfaceEcho> {
+        self.surface
     }
 
     /// The segments, ordered by range.
@@ -161,6 +194,12 @@ impl BeamPath {
                 break; // beyond here T² underflows: nothing more reaches the receiver
             }
             total += s.beta * t2_a * self.attenuated_range_integral(a, b, 2.0 * s.alpha);
+        }
+        if let Some(echo) = self.surface.filter(|e| e.range_m >= r_a && e.range_m < r_b) {
+            let r = echo.range_m;
+            total +=
+                self.overlap.eta(r) * echo.integrated_backscatter_sr * self.two_way_transmission(r)
+                    / (r * r);
         }
         Ok(total)
     }

@@ -1,0 +1,51 @@
+//! The surface below a space-borne lidar (model.md §7): a Lambertian reflector of albedo
+//! ρ at the ground altitude, whose echo lands in the bin that holds it.
+//!
+//! **Echo.** A Lambertian surface lit at local incidence θ reflects the radiance
+//! `L = ρ·E/π` with `E = P·cos θ/A_beam`; the receiver sees the spot's projected area
+//! `A_beam`, so the received power is `P·T²·ρ·cos θ·A/(π r²)`: in the lidar equation
+//! (Eq. 2) the surface is a backscatter that integrates to `ρ·cos θ/π` sr⁻¹ across it,
+//! and it adds `C·η(r_s)·(ρ cos θ/π)·T²(r_s)/r_s²` counts per shot to the bin holding
+//! the surface range r_s (nadir: cos θ = 1, the form of model.md §7). The beam stops at
+//! the surface: nothing below it is seen. Specular glint (ocean at nadir) is not
+//! modelled: the ocean's albedo here is its Lambertian equivalent.
+
+use crate::config::{SurfaceConfig, SurfaceKind};
+
+/// A Lambertian surface.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Surface {
+    /// Reflectance ρ at the laser wavelength.
+    pub albedo: f64,
+    /// Altitude of the surface above sea level, m.
+    pub altitude_m: f64,
+}
+
+impl SurfaceKind {
+    /// A typical Lambertian albedo at 532 nm (documented in `docs/config.md`): open ocean
+    /// 0.05 (its diffuse reflectance with foam and whitecaps, no glint), vegetated land
+    /// 0.15, fresh snow 0.9.
+    pub fn albedo(self) -> f64 {
+        match self {
+            SurfaceKind::Ocean => 0.05,
+            SurfaceKind::Land => 0.15,
+            SurfaceKind::Snow => 0.9,
+        }
+    }
+}
+
+impl Surface {
+    /// The surface of a validated config: its albedo, or its kind's.
+    pub fn from_config(s: &SurfaceConfig) -> Self {
+        Surface {
+            albedo: s.albedo.unwrap_or_else(|| s.kind.albedo()),
+            altitude_m: s.altitude_km * 1e3,
+        }
+    }
+
+    /// The surface's integrated backscatter `ρ·cos θ/π` (sr⁻¹) for a beam meeting it at
+    /// local incidence cos θ = `local_cos`.
+    pub fn integrated_backscatter_sr(&self, local_cos: f64) -> f64 {
+        self.albedo * local_cos / std::f64::consts::PI
+    }
+}
