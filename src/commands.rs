@@ -117,6 +117,9 @@ pub fn expect(
         }
         None => to_stdout(|w| expect::write_table(w, &sc, &e))?,
     }
+    if let Some(note) = sc.atmosphere.molecules.continuation_note() {
+        eprintln!("{note}");
+    }
     if let Some(w) = sc.linear_range_warning(&e) {
         eprintln!("{w}");
     }

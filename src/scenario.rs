@@ -74,25 +74,23 @@ impl Lidar {
             .collect()
     }
 
-    /// The warnings of every channel (rates beyond a photon counter's range).
-    pub fn linear_range_warning(&self, expected: &[ExpectedProfile]) -> Option<String> {
-        let lines: Vec<String> = self
-            .channels
-            .iter()
-            .zip(expected)
-            .filter_map(|(c, e)| {
-                let w = c.linear_range_warning(e)?;
-                Some(if self.channels.len() > 1 {
-                    w.replacen(
-                        "warning: ",
-                        &format!("warning: channel {}: ", c.channel_name),
-                        1,
-                    )
-                } else {
-                    w
-                })
+    /// What a run tells after it succeeds: the model's notes (a profile file continued
+    /// with US76) and every channel's warning (rates beyond a photon counter's range).
+    pub fn run_notes(&self, expected: &[ExpectedProfile]) -> Option<String> {
+        let note = self.first().atmosphere.molecules.continuation_note();
+        let warnings = self.channels.iter().zip(expected).filter_map(|(c, e)| {
+            let w = c.linear_range_warning(e)?;
+            Some(if self.channels.len() > 1 {
+                w.replacen(
+                    "warning: ",
+                    &format!("warning: channel {}: ", c.channel_name),
+                    1,
+                )
+            } else {
+                w
             })
-            .collect();
+        });
+        let lines: Vec<String> = note.into_iter().chain(warnings).collect();
         (!lines.is_empty()).then(|| lines.join("\n"))
     }
 }

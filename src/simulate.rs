@@ -555,7 +555,7 @@ pub fn run(
         seed,
         elapsed: start.elapsed(),
         drawing,
-        warning: lidar.linear_range_warning(&expected),
+        warning: lidar.run_notes(&expected),
     })
 }
 

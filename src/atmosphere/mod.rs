@@ -39,6 +39,10 @@ pub struct Molecules {
     /// Linear depolarization ratio of that part's backscatter: `γ = ρn/(2−ρn)` for the
     /// whole line, `3ε/(180+4ε)` for the Cabannes line.
     pub depolarization: f64,
+    /// For a profile file that ends below the US76 top (86 km): the factor by which US76
+    /// continues it above its top row, `N_file(top)/N_US76(top)`, so that the density is
+    /// continuous there.
+    pub us76_above_scale: Option<f64>,
 }
 
 impl Molecules {
@@ -47,8 +51,25 @@ impl Molecules {
         match &self.source {
             MolecularSource::None => 0.0,
             MolecularSource::Us76 => us76::number_density_m3(z_m),
-            MolecularSource::Profile(p) => p.number_density_m3(z_m),
+            MolecularSource::Profile(p) => match self.us76_above_scale {
+                Some(scale) if z_m > p.top_altitude_m() => scale * us76::number_density_m3(z_m),
+                _ => p.number_density_m3(z_m),
+            },
         }
+    }
+
+    /// A note for the run summary when a profile file is continued with US76 above its
+    /// top.
+    pub fn continuation_note(&self) -> Option<String> {
+        let (MolecularSource::Profile(p), Some(scale)) = (&self.source, self.us76_above_scale)
+        else {
+            return None;
+        };
+        Some(format!(
+            "lidarsim: note: the molecular profile ends at {:.1} km; above it the US Standard \
+             Atmosphere 1976 continues it (to 86 km), scaled by {scale:.4} to match at the junction",
+            p.top_altitude_m() / 1e3
+        ))
     }
 
     /// Altitude above which there are no molecules, m.
@@ -56,7 +77,10 @@ impl Molecules {
         match &self.source {
             MolecularSource::None => f64::NEG_INFINITY,
             MolecularSource::Us76 => us76::TOP_ALTITUDE_M,
-            MolecularSource::Profile(p) => p.top_altitude_m(),
+            MolecularSource::Profile(p) => match self.us76_above_scale {
+                Some(_) => us76::TOP_ALTITUDE_M,
+                None => p.top_altitude_m(),
+            },
         }
     }
 
@@ -186,7 +210,15 @@ impl Atmosphere {
         } else {
             (1.0, rayleigh::gamma(rho_n))
         };
+        let us76_above_scale = match &source {
+            MolecularSource::Profile(p) if p.top_altitude_m() < us76::TOP_ALTITUDE_M => {
+                let top = p.top_altitude_m();
+                Some(p.number_density_m3(top) / us76::number_density_m3(top))
+            }
+            _ => None,
+        };
         let molecules = Molecules {
+            us76_above_scale,
             source,
             cross_section_m2: rayleigh::cross_section_m2(wl),
             lidar_ratio_sr: rayleigh::lidar_ratio_sr(rho_n) / share,

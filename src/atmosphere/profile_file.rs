@@ -22,9 +22,11 @@
 //! 1.0, 898.76, 281.65
 //! ```
 //!
-//! Between rows the number density is interpolated linearly in ln N; above the
-//! top row it is 0 (no molecules: combine with another model if the lidar sees
-//! higher), below the bottom row it is held at the bottom value.
+//! Between rows the number density is interpolated linearly in ln N; below the
+//! bottom row it is held at the bottom value. Above the top row this type gives 0;
+//! the atmosphere (`super::Molecules`) continues a profile that ends below 86 km
+//! with the US Standard Atmosphere 1976, scaled to match at the top row, and says so
+//! in the run's notes.
 
 use std::path::Path;
 

@@ -634,7 +634,7 @@ pub fn run(lidar: &Lidar, opts: &ValidateOptions) -> Result<Report> {
         bins,
         checks,
         consistent,
-        warning: lidar.linear_range_warning(&expected),
+        warning: lidar.run_notes(&expected),
     })
 }
 
