@@ -538,6 +538,7 @@ pub fn run(
                     .components
                     .as_ref()
                     .map(|[s, b, k]| [&s[..], &b[..], &k[..]]),
+                values: &[],
             })?;
         }
         progress.inc((last - first_profile) as u64);

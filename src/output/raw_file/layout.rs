@@ -45,6 +45,8 @@ pub struct OpenFile {
     pub time: Dataset,
     pub n_shots: Dataset,
     pub pulse_energy: Dataset,
+    /// The per-profile variables, in the spec's order.
+    pub per_profile: Vec<Dataset>,
 }
 
 impl OpenFile {
@@ -57,8 +59,9 @@ impl OpenFile {
             time,
             n_shots,
             pulse_energy,
+            per_profile,
         } = self;
-        drop((counts, components, time, n_shots, pulse_energy));
+        drop((counts, components, time, n_shots, pulse_energy, per_profile));
         file.close()
     }
 }
@@ -89,6 +92,7 @@ pub fn validate_spec(spec: &RawFileSpec) -> Result<(), String> {
             Dims::Bin => spec.n_bins,
             Dims::Channel => spec.channels.len(),
             Dims::ChannelBin => spec.counts_per_profile(),
+            Dims::Profile | Dims::ProfileChannelBin => 0,
         };
         if var.data.len() != want {
             return Err(format!(
@@ -124,6 +128,19 @@ fn create_count_var(file: &File, name: &str, spec: &RawFileSpec) -> hdf5::Result
         CountWidth::U64 => builder.empty::<u64>(),
     };
     builder
+        .shape((spec.n_profiles, c, b))
+        .chunk((chunk_rows(spec), c, b))
+        .shuffle()
+        .deflate(DEFLATE_LEVEL)
+        .obj_track_times(false)
+        .attr_creation_order(AttrCreationOrder::Indexed)
+        .create(name)
+}
+
+/// Creates a (profile, channel, bin) f64 variable, chunked and compressed as the counts.
+fn create_profile_var(file: &File, name: &str, spec: &RawFileSpec) -> hdf5::Result<Dataset> {
+    let (c, b) = (spec.channels.len(), spec.n_bins);
+    file.new_dataset::<f64>()
         .shape((spec.n_profiles, c, b))
         .chunk((chunk_rows(spec), c, b))
         .shuffle()
@@ -284,6 +301,7 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
     )?;
     attach_scales(&pulse_energy, &[&profile])?;
 
+    let mut per_profile = Vec::new();
     for var in &spec.variables {
         let (shape, scales, coords): (Vec<usize>, Vec<&Dataset>, Option<&str>) = match var.dims {
             Dims::Bin => (vec![spec.n_bins], vec![&bin], Some(COORDS_BIN)),
@@ -293,9 +311,20 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
                 vec![&channel, &bin],
                 Some(COORDS_BIN),
             ),
+            Dims::Profile => (vec![spec.n_profiles], vec![&profile], Some("time")),
+            Dims::ProfileChannelBin => (
+                vec![spec.n_profiles, spec.channels.len(), spec.n_bins],
+                vec![&profile, &channel, &bin],
+                Some(COORDS_PROFILE_BIN),
+            ),
         };
-        let ds = create_var::<f64>(&file, &var.name, &shape)?;
-        ds.write_raw(&var.data[..])?;
+        let ds = match var.dims {
+            Dims::ProfileChannelBin => create_profile_var(&file, &var.name, spec)?,
+            _ => create_var::<f64>(&file, &var.name, &shape)?,
+        };
+        if !var.dims.per_profile() {
+            ds.write_raw(&var.data[..])?;
+        }
         write_attrs(&ds, &[("long_name", &var.long_name), ("units", &var.units)])?;
         for (k, v) in &var.attributes {
             write_str_attr(&ds, k, v)?;
@@ -305,6 +334,9 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
             write_str_attr(&ds, "coordinates", c)?;
         }
         attach_scales(&ds, &scales)?;
+        if var.dims.per_profile() {
+            per_profile.push(ds);
+        }
     }
 
     Ok(OpenFile {
@@ -314,5 +346,6 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
         time,
         n_shots,
         pulse_energy,
+        per_profile,
     })
 }

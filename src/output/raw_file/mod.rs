@@ -133,6 +133,18 @@ pub enum Dims {
     Channel,
     /// (channel, bin), channel-major: e.g. `expected_signal`, `attenuated_backscatter`.
     ChannelBin,
+    /// (profile): written with each profile ([`ProfileRecord::values`]), e.g. `latitude`.
+    Profile,
+    /// (profile, channel, bin): written with each profile, e.g. the expectations of a
+    /// scene that changes along the track.
+    ProfileChannelBin,
+}
+
+impl Dims {
+    /// Whether the variable has a profile dimension (its values come with each profile).
+    pub fn per_profile(self) -> bool {
+        matches!(self, Dims::Profile | Dims::ProfileChannelBin)
+    }
 }
 
 /// A f64 variable written at creation beside the counts.
@@ -148,7 +160,8 @@ pub struct Variable {
     pub units: String,
     /// Further text attributes (`standard_name`, `positive`, `comment`, ...).
     pub attributes: Vec<(String, String)>,
-    /// The values, channel-major for (channel, bin).
+    /// The values, channel-major for (channel, bin); empty for a per-profile variable,
+    /// whose rows come with each profile.
     pub data: Vec<f64>,
 }
 
@@ -211,4 +224,7 @@ pub struct ProfileRecord<'a> {
     /// Signal, background and dark counts laid out as `counts`; present exactly when the
     /// spec asked for components, and then summing to `counts`.
     pub components: Option<[&'a [u64]; 3]>,
+    /// This profile's row of every per-profile variable of the spec, in the spec's order
+    /// (one value for (profile), channels × bins channel-major for (profile, channel, bin)).
+    pub values: &'a [&'a [f64]],
 }

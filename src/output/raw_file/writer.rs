@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use hdf5::Dataset;
 
 use super::layout::{self, OpenFile};
-use super::{COMPONENT_NAMES, CountWidth, ProfileRecord, RawFileSpec};
+use super::{COMPONENT_NAMES, CountWidth, Dims, ProfileRecord, RawFileSpec};
 use crate::error::{Error, Result};
 use crate::output::safe_file::describe_hdf5_error;
 
@@ -33,6 +33,8 @@ pub struct RawFileWriter {
     n_profiles: usize,
     count_width: CountWidth,
     components: bool,
+    /// Dimensions and values per profile of each per-profile variable, in the spec's order.
+    per_profile_sizes: Vec<(Dims, usize)>,
     /// One bit per profile: written yet?
     written: Vec<u64>,
     n_written: usize,
@@ -68,6 +70,15 @@ impl RawFileWriter {
             n_profiles: spec.n_profiles,
             count_width: spec.count_width,
             components: spec.components,
+            per_profile_sizes: spec
+                .variables
+                .iter()
+                .filter(|v| v.dims.per_profile())
+                .map(|v| match v.dims {
+                    Dims::Profile => (v.dims, 1),
+                    _ => (v.dims, spec.counts_per_profile()),
+                })
+                .collect(),
             written,
             n_written: 0,
             buf: match spec.count_width {
@@ -110,6 +121,17 @@ impl RawFileWriter {
             open.n_shots.write_slice(&[rec.n_shots][..], row..row + 1)?;
             open.pulse_energy
                 .write_slice(&[rec.pulse_energy_j][..], row..row + 1)?;
+            for ((ds, v), (dims, _)) in open
+                .per_profile
+                .iter()
+                .zip(rec.values)
+                .zip(&self.per_profile_sizes)
+            {
+                match dims {
+                    Dims::Profile => ds.write_slice(&v[..], row..row + 1)?,
+                    _ => ds.write_slice(ndarray_view(v, shape)?, (row, .., ..))?,
+                }
+            }
             Ok(())
         })();
         result.map_err(|e| {
@@ -171,6 +193,21 @@ impl RawFileWriter {
                 "profile {i}: pulse energy {} J is not a finite non-negative number",
                 rec.pulse_energy_j
             ));
+        }
+        if rec.values.len() != self.per_profile_sizes.len() {
+            return Err(format!(
+                "profile {i}: {} per-profile variables given, the file has {}",
+                rec.values.len(),
+                self.per_profile_sizes.len()
+            ));
+        }
+        for (k, (v, &(_, want))) in rec.values.iter().zip(&self.per_profile_sizes).enumerate() {
+            if v.len() != want || v.iter().any(|x| !x.is_finite()) {
+                return Err(format!(
+                    "profile {i}: per-profile variable {k} has {} values (want {want}) or a non-finite one",
+                    v.len()
+                ));
+            }
         }
         if !rec.time_s.is_finite() {
             return Err(format!("profile {i}: time {} s is not finite", rec.time_s));
