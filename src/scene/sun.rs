@@ -116,7 +116,7 @@ pub fn earth_sun_distance_au(unix_time_s: f64) -> f64 {
 
 /// Daylight radiance seen looking down on a Lambertian reflector (model.md §7),
 /// photons m⁻² s⁻¹ sr⁻¹ nm⁻¹ (the unit of the irradiance, per steradian):
-/// `L = ρ·F_λ·cos θ_s/π · T` for θ_s < 90°, 0 otherwise.
+/// `L = ρ·F_λ·cos θ_s/π · T` for |θ_s| < 90°, 0 otherwise (NaN for a NaN angle).
 ///
 /// `albedo` is ρ, `solar_irradiance_photons_m2_s_nm` the top-of-atmosphere F_λ (for the
 /// day of year: [`solar_spectral_irradiance_photons`] divided by
@@ -128,10 +128,10 @@ pub fn reflected_radiance(
     solar_zenith_deg: f64,
     two_way_transmission: f64,
 ) -> f64 {
-    let cos_zenith = solar_zenith_deg.to_radians().cos();
-    if cos_zenith <= 0.0 {
+    if solar_zenith_deg.abs() >= 90.0 {
         return 0.0;
     }
+    let cos_zenith = solar_zenith_deg.to_radians().cos();
     albedo * solar_irradiance_photons_m2_s_nm * cos_zenith / PI * two_way_transmission
 }
 
@@ -206,12 +206,14 @@ mod tests {
     const UNIX_2024: f64 = 1_704_067_200.0;
 
     /// Independent check: Spencer (1971, Search 2, 172) Fourier series for the
-    /// declination (±0.035°) and the equation of time (±0.5 min), as restated in NOAA's
-    /// "General Solar Position Calculations"; fractional year γ of a 366-day 2024.
+    /// declination and the equation of time, as restated in NOAA's "General Solar
+    /// Position Calculations" (fractional year γ over 365 days). Against the Meeus
+    /// equations it is off by up to 0.24° in declination and 0.6 min (0.15°) in the
+    /// equation of time over 2024, hence the 0.5° tolerance.
     fn spencer_zenith_deg(unix_time_s: f64, lat_deg: f64, lon_deg: f64) -> f64 {
         let day = (unix_time_s - UNIX_2024) / SECONDS_PER_DAY; // 0 at Jan 1, 0h
         let hour = day.fract() * 24.0;
-        let g = 2.0 * PI / 366.0 * (day.floor() + (hour - 12.0) / 24.0);
+        let g = 2.0 * PI / 365.0 * (day.floor() + (hour - 12.0) / 24.0);
         let decl = 0.006918 - 0.399912 * g.cos() + 0.070257 * g.sin() - 0.006758 * (2.0 * g).cos()
             + 0.000907 * (2.0 * g).sin()
             - 0.002697 * (3.0 * g).cos()
@@ -274,7 +276,7 @@ mod tests {
                 }
             }
         }
-        assert!(worst < 0.25, "worst difference {worst}°");
+        assert!(worst < 0.5, "worst difference {worst}°");
     }
 
     #[test]
@@ -313,14 +315,16 @@ mod tests {
 
     #[test]
     fn table_integral_is_near_the_solar_constant_share() {
-        // ∫ 300–2000 nm of E-490 holds ~ 1190 of its 1366 W m⁻² (87 %)
+        // E-490 totals 1366.1 W m⁻²; about 11 W m⁻² lie below 300 nm and 78 W m⁻²
+        // beyond 2000 nm (its tail ≈ 117 W m⁻² µm⁻¹ at 2 µm falling as λ⁻⁴), so
+        // ∫ 300–2000 nm ≈ 1277 W m⁻²
         let mut sum = 0.0;
         let mut l = 300.0;
         while l < 2000.0 {
             sum += solar_spectral_irradiance_w_m2_nm(l + 0.5);
             l += 1.0;
         }
-        assert!((sum - 1190.0).abs() < 30.0, "{sum}");
+        assert!((sum - 1277.0).abs() < 15.0, "{sum}");
     }
 
     #[test]
