@@ -60,8 +60,8 @@ fn julian_century(unix_time_s: f64) -> f64 {
 
 /// The NOAA / Meeus ch. 25 low-accuracy solar coordinates at Julian century `t`.
 fn solar_coordinates(t: f64) -> SolarCoordinates {
-    let l0 = (280.46646 + t * (36_000.76983 + t * 0.000_303_2)).rem_euclid(360.0);
-    let m = 357.52911 + t * (35_999.05029 - 0.000_153_7 * t);
+    let l0 = (280.46646 + t * (36000.76983 + t * 0.000_303_2)).rem_euclid(360.0);
+    let m = 357.52911 + t * (35999.05029 - 0.000_153_7 * t);
     let e = 0.016_708_634 - t * (0.000_042_037 + 0.000_000_126_7 * t);
     let mr = m.to_radians();
     let c = mr.sin() * (1.914_602 - t * (0.004_817 + 0.000_014 * t))
