@@ -21,7 +21,8 @@
 //! (model.md: ≈ 2.8e-21). Beyond 840 nm the table ends and σ = 0: the Wulf bands
 //! there (σ ≲ 1e-22 cm², two-way optical depth ≲ 2e-3 for 344 DU) are neglected, so
 //! 1064 nm sees no ozone. Below 360 nm the Huggins band rises steeply: 350–360 nm gets
-//! the 360–370 nm value (an underestimate of a two-way optical depth below ~1e-3),
+//! the 360–370 nm value (an underestimate, not checked against data here, of a
+//! two-way optical depth that is 2e-4 at the 360–370 nm value),
 //! and below 350 nm σ is NaN (not modelled).
 
 use crate::constants::DOBSON_UNIT_PER_M2;
@@ -98,8 +99,8 @@ fn n_levels() -> usize {
     AFGL_US_STANDARD.len()
 }
 
-/// Ozone number density at altitude `z_m`, m⁻³ (≈ 6.8e17 at the surface, peak 4.8e18
-/// near 22 km): log-linear between the AFGL levels, the surface value below 0 m, zero
+/// Ozone number density at altitude `z_m`, m⁻³ (≈ 6.8e17 at the surface, peak 4.9e18
+/// at 22 km): log-linear between the AFGL levels, the surface value below 0 m, zero
 /// above [`TOP_ALTITUDE_M`]; NaN for NaN.
 pub fn number_density_m3(z_m: f64) -> f64 {
     if z_m.is_nan() {
