@@ -11,3 +11,9 @@ pub const BOLTZMANN_J_PER_K: f64 = 1.380_649e-23;
 pub const EARTH_RADIUS_M: f64 = 6_371_008.8;
 /// Geocentric gravitational constant G·M_E, m³ s⁻² (WGS 84).
 pub const EARTH_GM_M3_PER_S2: f64 = 3.986_004_418e14;
+/// Earth's sidereal rotation rate ω_E, rad s⁻¹: 2π per sidereal day of 86 164.0905 s
+/// (7.29211586e-5), rounded to the customary 8 digits.
+pub const EARTH_ROTATION_RAD_PER_S: f64 = 7.292_115_9e-5;
+/// One Dobson unit as a column number density, m⁻² (0.01 mm of pure ozone at
+/// 273.15 K and 101 325 Pa: 2.6868e20 molecules per m²).
+pub const DOBSON_UNIT_PER_M2: f64 = 2.6868e20;

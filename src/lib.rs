@@ -18,6 +18,7 @@ pub mod receiver;
 pub mod resources;
 pub mod sampling;
 pub mod scenario;
+pub mod scene;
 pub mod signal;
 pub mod simulate;
 pub mod snr;

@@ -1,0 +1,264 @@
+//! Ozone: a standard number-density profile and the Chappuis-band absorption
+//! cross-section (model.md §7 "Ozone"): `α_O3(z, λ) = n_O3(z)·σ_O3(λ)`, part of T².
+//!
+//! **Profile.** The AFGL U.S. Standard ozone profile: Anderson, Clough, Kneizys,
+//! Chetwynd & Shettle (1986), *AFGL Atmospheric Constituent Profiles (0–120 km)*,
+//! AFGL-TR-86-0110, Table 1f (the U.S. Standard Atmosphere 1976 column of the
+//! report): ozone volume mixing ratio (ppmv) and total number density (cm⁻³) at 1 km
+//! steps to 25 km, 2.5 km to 50 km and 5 km to 60 km, transcribed here as the report
+//! prints them. `n_O3 = vmr·n_air`, interpolated linearly in ln n_O3 between the levels
+//! (exact for a locally exponential profile); the surface value below 0 km, and zero
+//! above 60 km (the ≈0.1 DU above 60 km is dropped). The column integrates
+//! exactly over the log-linear segments: 344 DU.
+//!
+//! **Cross-section.** Serdyuchenko et al. (2014), *Atmos. Meas. Tech.* 7, 625–636, and
+//! Gorshelev et al. (2014), *Atmos. Meas. Tech.* 7, 609–624 (IUP Bremen, 0.02 nm
+//! resolution), at 233 K, averaged over 10-nm bins [360, 370), …, [830, 840) nm, as
+//! tabulated in Bruneton's precomputed-atmospheric-scattering reference implementation
+//! (2017). σ(λ) is the average of the bin holding λ: the band's vibrational structure
+//! within a bin (±10 %) is not resolved, nor its temperature dependence (a few %
+//! between 203 K and 293 K in the Chappuis band). σ(532 nm) = 2.76e-21 cm²
+//! (model.md: ≈ 2.8e-21). Beyond 840 nm the table ends and σ = 0: the Wulf bands
+//! there (σ ≲ 1e-22 cm², two-way optical depth ≲ 2e-3 for 344 DU) are neglected, so
+//! 1064 nm sees no ozone. Below 360 nm the Huggins band rises steeply: 350–360 nm gets
+//! the 360–370 nm value (an underestimate, not checked against data here, of a
+//! two-way optical depth that is 2e-4 at the 360–370 nm value),
+//! and below 350 nm σ is NaN (not modelled).
+
+use crate::constants::DOBSON_UNIT_PER_M2;
+
+/// AFGL 1986 Table 1f (U.S. Standard): (altitude km, O3 ppmv, air number density cm⁻³).
+const AFGL_US_STANDARD: [(f64, f64, f64); 38] = [
+    (0.0, 2.66e-2, 2.548e19),
+    (1.0, 2.93e-2, 2.313e19),
+    (2.0, 3.24e-2, 2.094e19),
+    (3.0, 3.32e-2, 1.891e19),
+    (4.0, 3.39e-2, 1.704e19),
+    (5.0, 3.77e-2, 1.532e19),
+    (6.0, 4.11e-2, 1.373e19),
+    (7.0, 5.01e-2, 1.228e19),
+    (8.0, 5.97e-2, 1.094e19),
+    (9.0, 9.17e-2, 9.719e18),
+    (10.0, 1.31e-1, 8.602e18),
+    (11.0, 2.15e-1, 7.589e18),
+    (12.0, 3.10e-1, 6.489e18),
+    (13.0, 3.85e-1, 5.546e18),
+    (14.0, 5.03e-1, 4.739e18),
+    (15.0, 6.51e-1, 4.050e18),
+    (16.0, 8.70e-1, 3.462e18),
+    (17.0, 1.19, 2.960e18),
+    (18.0, 1.59, 2.530e18),
+    (19.0, 2.03, 2.163e18),
+    (20.0, 2.58, 1.849e18),
+    (21.0, 3.03, 1.575e18),
+    (22.0, 3.65, 1.342e18),
+    (23.0, 4.17, 1.144e18),
+    (24.0, 4.63, 9.765e17),
+    (25.0, 5.12, 8.337e17),
+    (27.5, 5.80, 5.640e17),
+    (30.0, 6.55, 3.830e17),
+    (32.5, 7.37, 2.524e17),
+    (35.0, 7.84, 1.761e17),
+    (37.5, 7.80, 1.238e17),
+    (40.0, 7.30, 8.310e16),
+    (42.5, 6.20, 5.803e16),
+    (45.0, 5.25, 4.090e16),
+    (47.5, 4.10, 2.920e16),
+    (50.0, 3.10, 2.136e16),
+    (55.0, 1.80, 1.181e16),
+    (60.0, 1.10, 6.426e15),
+];
+
+/// Highest altitude of the profile, m; zero ozone above.
+pub const TOP_ALTITUDE_M: f64 = 60_000.0;
+
+/// First bin's lower edge, nm.
+const CROSS_SECTION_START_NM: f64 = 360.0;
+/// Bin width, nm.
+const CROSS_SECTION_BIN_NM: f64 = 10.0;
+/// Lowest wavelength served (with the first bin's value), nm.
+const CROSS_SECTION_MIN_NM: f64 = 350.0;
+/// Serdyuchenko et al. (2014) at 233 K, bin averages over [360 + 10k, 370 + 10k) nm, m².
+const CROSS_SECTION_M2: [f64; 48] = [
+    1.18e-27, 2.182e-28, 2.818e-28, 6.636e-28, 1.527e-27, 2.763e-27, 5.52e-27, 8.451e-27,
+    1.582e-26, 2.316e-26, 3.669e-26, 4.924e-26, 7.752e-26, 9.016e-26, 1.48e-25, 1.602e-25,
+    2.139e-25, 2.755e-25, 3.091e-25, 3.5e-25, 4.266e-25, 4.672e-25, 4.398e-25, 4.701e-25,
+    5.019e-25, 4.305e-25, 3.74e-25, 3.215e-25, 2.662e-25, 2.238e-25, 1.852e-25, 1.473e-25,
+    1.209e-25, 9.423e-26, 7.455e-26, 6.566e-26, 5.105e-26, 4.15e-26, 4.228e-26, 3.237e-26,
+    2.451e-26, 2.801e-26, 2.534e-26, 1.624e-26, 1.465e-26, 2.078e-26, 1.383e-26, 7.105e-27,
+];
+
+/// Profile level `k` as (altitude m, ozone number density m⁻³).
+fn level(k: usize) -> (f64, f64) {
+    let (z_km, ppmv, n_air_cm3) = AFGL_US_STANDARD[k];
+    (z_km * 1e3, ppmv * 1e-6 * n_air_cm3 * 1e6)
+}
+
+/// Number of profile levels.
+fn n_levels() -> usize {
+    AFGL_US_STANDARD.len()
+}
+
+/// Ozone number density at altitude `z_m`, m⁻³ (≈ 6.8e17 at the surface, peak 4.9e18
+/// at 22 km): log-linear between the AFGL levels, the surface value below 0 m, zero
+/// above [`TOP_ALTITUDE_M`]; NaN for NaN.
+pub fn number_density_m3(z_m: f64) -> f64 {
+    if z_m.is_nan() {
+        return f64::NAN;
+    }
+    if z_m > TOP_ALTITUDE_M {
+        return 0.0;
+    }
+    if z_m <= 0.0 {
+        return level(0).1;
+    }
+    let k = (1..n_levels())
+        .find(|&k| z_m <= level(k).0)
+        .unwrap_or(n_levels() - 1);
+    let ((z0, n0), (z1, n1)) = (level(k - 1), level(k));
+    n0 * (n1 / n0).powf((z_m - z0) / (z1 - z0))
+}
+
+/// Ozone column between altitudes `z_lo_m` and `z_hi_m` (in either order), m⁻²: the
+/// exact integral of [`number_density_m3`] (each log-linear piece integrates to
+/// `(n0 − n1)·Δz/ln(n0/n1)`; below 0 m at the surface density).
+pub fn column_m2(z_lo_m: f64, z_hi_m: f64) -> f64 {
+    let (lo, hi) = (z_lo_m.min(z_hi_m), z_lo_m.max(z_hi_m).min(TOP_ALTITUDE_M));
+    if hi <= lo {
+        return 0.0;
+    }
+    let mut column = if lo < 0.0 {
+        level(0).1 * (hi.min(0.0) - lo)
+    } else {
+        0.0
+    };
+    for k in 1..n_levels() {
+        let (za, zb) = (level(k - 1).0.max(lo), level(k).0.min(hi));
+        if zb > za {
+            column += segment_integral(za, zb);
+        }
+    }
+    column
+}
+
+/// `∫ n dz` over `[za, zb]` inside one log-linear segment.
+fn segment_integral(za: f64, zb: f64) -> f64 {
+    let (na, nb) = (number_density_m3(za), number_density_m3(zb));
+    let ratio = na / nb;
+    if (ratio - 1.0).abs() < 1e-12 {
+        return na * (zb - za);
+    }
+    (na - nb) * (zb - za) / ratio.ln()
+}
+
+/// Total ozone column of the profile, Dobson units (344 DU).
+pub fn column_du() -> f64 {
+    column_m2(0.0, TOP_ALTITUDE_M) / DOBSON_UNIT_PER_M2
+}
+
+/// Ozone absorption cross-section at `wavelength_nm`, m² per molecule: the 10-nm bin
+/// average of Serdyuchenko et al. (2014) at 233 K holding λ for 360 ≤ λ < 840 nm,
+/// the first bin's value for 350 ≤ λ < 360, 0 from 840 nm on, NaN below 350 nm or for NaN.
+pub fn cross_section_m2(wavelength_nm: f64) -> f64 {
+    if wavelength_nm.is_nan() || wavelength_nm < CROSS_SECTION_MIN_NM {
+        return f64::NAN;
+    }
+    let bin = ((wavelength_nm - CROSS_SECTION_START_NM) / CROSS_SECTION_BIN_NM).floor();
+    if bin < 0.0 {
+        return CROSS_SECTION_M2[0];
+    }
+    CROSS_SECTION_M2.get(bin as usize).copied().unwrap_or(0.0)
+}
+
+/// Ozone absorption coefficient `α_O3 = n_O3(z)·σ(λ)`, m⁻¹.
+pub fn extinction_per_m(z_m: f64, wavelength_nm: f64) -> f64 {
+    number_density_m3(z_m) * cross_section_m2(wavelength_nm)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reproduces_the_table_at_its_levels() {
+        for k in 0..n_levels() {
+            let (z, n) = level(k);
+            assert!((number_density_m3(z) / n - 1.0).abs() < 1e-12, "level {k}");
+        }
+        // surface: 2.66e-2 ppmv × 2.548e19 cm⁻³ = 6.78e11 cm⁻³
+        assert!((number_density_m3(0.0) - 6.778e17).abs() < 1e14);
+        assert_eq!(number_density_m3(-100.0), number_density_m3(0.0));
+        assert_eq!(number_density_m3(60_000.1), 0.0);
+        assert!(number_density_m3(f64::NAN).is_nan());
+    }
+
+    #[test]
+    fn levels_increase_in_altitude() {
+        for k in 1..n_levels() {
+            assert!(level(k).0 > level(k - 1).0);
+        }
+    }
+
+    #[test]
+    fn peak_is_in_the_lower_stratosphere() {
+        let (z_peak, _) = (0..=600)
+            .map(|k| {
+                let z = k as f64 * 100.0;
+                (z, number_density_m3(z))
+            })
+            .fold((0.0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+        assert!((19_000.0..=25_000.0).contains(&z_peak), "{z_peak}");
+    }
+
+    #[test]
+    fn column_is_a_standard_atmosphere_column() {
+        let du = column_du();
+        assert!((300.0..=350.0).contains(&du), "{du}");
+        // numerical check of the closed form: midpoint rule at 1 m
+        let numeric: f64 = (0..60_000)
+            .map(|k| number_density_m3(k as f64 + 0.5))
+            .sum::<f64>()
+            / DOBSON_UNIT_PER_M2;
+        assert!((numeric / du - 1.0).abs() < 1e-6, "{numeric} vs {du}");
+        // partial columns add up, either order
+        let split = column_m2(0.0, 15_000.0) + column_m2(60_000.0, 15_000.0);
+        assert!((split / (du * DOBSON_UNIT_PER_M2) - 1.0).abs() < 1e-12);
+        assert_eq!(column_m2(70_000.0, 80_000.0), 0.0);
+        let below = column_m2(-1_000.0, 0.0);
+        assert!((below - 1_000.0 * number_density_m3(0.0)).abs() < 1e-6 * below);
+    }
+
+    #[test]
+    fn cross_section_values() {
+        // model.md: σ(532) ≈ 2.8e-21 cm² = 2.8e-25 m²
+        let s532 = cross_section_m2(532.0);
+        assert!((s532 / 2.8e-25 - 1.0).abs() < 0.03, "{s532}");
+        // Chappuis maximum near 600 nm, ≈ 5e-21 cm²
+        let peak = (360..840)
+            .map(|l| (l, cross_section_m2(l as f64)))
+            .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+        assert!((595..=610).contains(&peak.0), "{peak:?}");
+        assert!((peak.1 / 5.0e-25 - 1.0).abs() < 0.05);
+        assert_eq!(cross_section_m2(1064.0), 0.0);
+        assert_eq!(cross_section_m2(355.0), CROSS_SECTION_M2[0]);
+        assert!(cross_section_m2(300.0).is_nan());
+        assert!(cross_section_m2(f64::NAN).is_nan());
+    }
+
+    #[test]
+    fn two_way_transmission_at_532() {
+        // model.md §7: ozone takes about 4–5 % two-way at 532 nm from space down to the
+        // troposphere (300 DU); nearly all of it lies above 15 km.
+        let sigma = cross_section_m2(532.0);
+        let to_15km = (-2.0 * sigma * column_m2(15_000.0, TOP_ALTITUDE_M)).exp();
+        assert!((0.95..=0.97).contains(&to_15km), "{to_15km}");
+        let to_ground = (-2.0 * sigma * column_m2(0.0, TOP_ALTITUDE_M)).exp();
+        assert!((0.945..=0.96).contains(&to_ground), "{to_ground}");
+        let below_15km = (-2.0 * sigma * column_m2(0.0, 15_000.0)).exp();
+        assert!(below_15km > 0.99, "{below_15km}");
+        // and extinction_per_m is n·σ
+        let a = extinction_per_m(22_000.0, 532.0);
+        assert!((a - number_density_m3(22_000.0) * sigma).abs() < 1e-20);
+        assert_eq!(extinction_per_m(10_000.0, 1064.0), 0.0);
+    }
+}
