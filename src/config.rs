@@ -34,6 +34,9 @@ pub struct ScenarioConfig {
     /// The surface below a space-borne lidar; absent = no surface echo.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub surface: Option<SurfaceConfig>,
+    /// The scene along the track (space-borne); absent = one column everywhere.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scene: Option<SceneConfig>,
     /// Monte Carlo settings.
     #[serde(default)]
     pub simulation: SimulationConfig,
@@ -362,6 +365,12 @@ pub struct LayerConfig {
     /// Multiple-scattering factor η_ms multiplying the layer's optical depth (1 = single scattering).
     #[serde(default = "one")]
     pub multiple_scattering: f64,
+    /// Fraction of the track the layer covers (broken cloud, model.md §7); absent = 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cloud_fraction: Option<f64>,
+    /// Mean length of the layer's cells along the track, km (with `cloud_fraction`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cell_length_km: Option<f64>,
     /// Ångström exponent å: at wavelength λ the extinction is `α·(λ_ref/λ)^å`; absent =
     /// 0 for a cloud, required for an aerosol layer seen at another wavelength.
     #[serde(default)]
@@ -393,6 +402,44 @@ impl LayerConfig {
             .map_or(self.lidar_ratio_sr, |(_, v)| *v);
         (extinction, lidar_ratio)
     }
+}
+
+/// The scene along the track (`src/scene/`).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneConfig {
+    /// Stretches of the track, in order from the first shot; the last continues to the
+    /// end of the run.
+    #[serde(default)]
+    pub segments: Vec<SegmentConfig>,
+}
+
+/// One stretch of the track with its own layers, aerosol and surface.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SegmentConfig {
+    /// Length along the track, km.
+    pub length_km: f64,
+    /// The layers of this stretch (replacing `[[atmosphere.layers]]`); absent = those.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub layers: Option<Vec<LayerConfig>>,
+    /// The background aerosol of this stretch (replacing `[atmosphere.aerosol]`), or
+    /// `"none"`; absent = that of `[atmosphere]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub aerosol: Option<SegmentAerosol>,
+    /// The surface of this stretch (replacing `[surface]`); absent = that one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surface: Option<SurfaceConfig>,
+}
+
+/// A segment's aerosol: `"none"` or a whole `[atmosphere.aerosol]` table.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum SegmentAerosol {
+    /// `"none"`: no background aerosol in this stretch.
+    Named(String),
+    /// This stretch's aerosol.
+    Given(AerosolConfig),
 }
 
 /// A Lambertian surface (model.md §7, `src/surface.rs`).
@@ -853,6 +900,80 @@ impl ScenarioConfig {
         Ok(())
     }
 
+    /// A broken layer: a fraction in (0, 1] with a cell length, on a moving platform.
+    fn validate_broken(&self, c: &Checker, prefix: &str, l: &LayerConfig) -> Result<()> {
+        match (l.cloud_fraction, l.cell_length_km) {
+            (None, None) => Ok(()),
+            (Some(_), None) | (None, Some(_)) => Err(c.fail(
+                &format!("{prefix}cloud_fraction"),
+                "a broken layer needs both cloud_fraction and cell_length_km",
+            )),
+            (Some(f), Some(len)) => {
+                c.positive(&format!("{prefix}cloud_fraction"), f, 1.0)?;
+                c.positive(&format!("{prefix}cell_length_km"), len, 1e5)?;
+                if self.platform.kind == PlatformKind::Ground {
+                    return Err(c.fail(
+                        &format!("{prefix}cloud_fraction"),
+                        "broken cloud moves past a space-borne lidar; a ground lidar stays put",
+                    ));
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// The scene's segments: positive lengths; their layers, aerosol and surface as the
+    /// `[atmosphere]` and `[surface]` ones.
+    fn validate_scene(&self, c: &Checker, scene: &SceneConfig) -> Result<()> {
+        if self.platform.kind == PlatformKind::Ground && !scene.segments.is_empty() {
+            return Err(c.fail(
+                "scene.segments",
+                "a scene along the track needs a space-borne platform",
+            ));
+        }
+        if scene.segments.len() > 10_000 {
+            return Err(c.fail("scene.segments", "at most 10,000 segments"));
+        }
+        for (i, seg) in scene.segments.iter().enumerate() {
+            let key = |k: &str| format!("scene.segments[{i}].{k}");
+            c.positive(&key("length_km"), seg.length_km, 1e6)?;
+            for (n, l) in seg.layers.iter().flatten().enumerate() {
+                let k = key(&format!("layers[{n}]."));
+                if l.top_km <= l.base_km {
+                    return Err(c.fail(&format!("{k}top_km"), "must be above base_km"));
+                }
+                c.range(
+                    &format!("{k}extinction_per_km"),
+                    l.extinction_per_km,
+                    0.0,
+                    1e4,
+                )?;
+                c.range(&format!("{k}lidar_ratio_sr"), l.lidar_ratio_sr, 1.0, 1e4)?;
+                c.range(&format!("{k}depolarization"), l.depolarization, 0.0, 1.0)?;
+                self.validate_broken(c, &k, l)?;
+            }
+            if seg
+                .layers
+                .iter()
+                .flatten()
+                .filter(|l| l.cloud_fraction.is_some())
+                .count()
+                > 3
+            {
+                return Err(c.fail(&key("layers"), "at most 3 broken layers per segment"));
+            }
+            if let Some(SegmentAerosol::Named(name)) = &seg.aerosol
+                && name != "none"
+            {
+                return Err(c.fail(&key("aerosol"), "must be \"none\" or an aerosol table"));
+            }
+            if let Some(surface) = &seg.surface {
+                self.validate_surface(c, surface)?;
+            }
+        }
+        Ok(())
+    }
+
     /// Checks every field: finite, in range, consistent. `file` names the source in errors.
     pub fn validate(&self, file: &str) -> Result<()> {
         let c = Checker { file };
@@ -862,6 +983,19 @@ impl ScenarioConfig {
         c.range("background.radiance", self.background.radiance, 0.0, 1e25)?;
         if let Some(surface) = &self.surface {
             self.validate_surface(&c, surface)?;
+        }
+        if let Some(scene) = &self.scene {
+            self.validate_scene(&c, scene)?;
+        }
+        if self
+            .atmosphere
+            .layers
+            .iter()
+            .filter(|l| l.cloud_fraction.is_some())
+            .count()
+            > 3
+        {
+            return Err(c.fail("atmosphere.layers", "at most 3 broken layers"));
         }
         if let Some(t) = self.simulation.tolerance {
             c.positive(
@@ -1101,6 +1235,7 @@ impl ScenarioConfig {
             c.range(&key("depolarization"), l.depolarization, 0.0, 1.0)?;
             c.efficiency(&key("multiple_scattering"), l.multiple_scattering)?;
             self.validate_layer_spectrum(c, n, l)?;
+            self.validate_broken(c, &key(""), l)?;
         }
         Ok(())
     }

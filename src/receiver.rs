@@ -126,14 +126,28 @@ fn expand_one(
             }
         }
     }
-    // the layers' values stay at the instrument's wavelength
-    if let Some(toml::Value::Table(atm)) = root.get_mut("atmosphere")
-        && let Some(toml::Value::Array(layers)) = atm.get_mut("layers")
+    // the layers' values stay at the instrument's wavelength, the scene's too
+    let reference = toml::Value::Float(base.instrument.wavelength_nm);
+    let keep_reference = |layers: Option<&mut toml::Value>| {
+        for layer in layers
+            .and_then(toml::Value::as_array_mut)
+            .into_iter()
+            .flatten()
+        {
+            if let Some(t) = layer.as_table_mut() {
+                t.entry("reference_wavelength_nm")
+                    .or_insert(reference.clone());
+            }
+        }
+    };
+    if let Some(toml::Value::Table(atm)) = root.get_mut("atmosphere") {
+        keep_reference(atm.get_mut("layers"));
+    }
+    if let Some(toml::Value::Table(scene)) = root.get_mut("scene")
+        && let Some(toml::Value::Array(segments)) = scene.get_mut("segments")
     {
-        for layer in layers.iter_mut().filter_map(toml::Value::as_table_mut) {
-            layer
-                .entry("reference_wavelength_nm")
-                .or_insert(toml::Value::Float(base.instrument.wavelength_nm));
+        for seg in segments.iter_mut().filter_map(toml::Value::as_table_mut) {
+            keep_reference(seg.get_mut("layers"));
         }
     }
     let label = name.clone().unwrap_or_else(|| format!("{k}"));

@@ -1,7 +1,9 @@
 //! The world along the track: where the platform is at each shot (a circular orbit's
 //! sub-satellite point) and where the sun is (solar zenith angle, daylight radiance).
 //!
-//! These modules are pure functions of time and place; they know nothing of configs.
+//! `orbit` and `sun` are pure functions of time and place; `track` lays the scene's
+//! segments and broken cloud along the track.
 
 pub mod orbit;
 pub mod sun;
+pub mod track;

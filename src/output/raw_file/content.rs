@@ -87,8 +87,17 @@ fn per_channel(expected: &[ExpectedProfile], f: impl Fn(&ExpectedProfile) -> Vec
 /// coordinates, the expectations, the instrument constants and the atmosphere's truth.
 /// The point truth is (bin) when every channel sees one wavelength, (channel, bin) when
 /// the wavelengths differ.
-pub fn variables(lidar: &Lidar, expected: &[ExpectedProfile], shots: u64) -> Vec<Variable> {
-    use Dims::{Bin, Channel, ChannelBin};
+/// With `changing` (a scene that changes along the track) `expected_signal`,
+/// `expected_counts`, `snr_eq4` and `attenuated_backscatter` are (profile, channel, bin),
+/// their rows written with each profile in that order; the other variables are those of
+/// the first profile's first column.
+pub fn variables(
+    lidar: &Lidar,
+    expected: &[ExpectedProfile],
+    shots: u64,
+    changing: bool,
+) -> Vec<Variable> {
+    use Dims::{Bin, Channel, ChannelBin, ProfileChannelBin};
     let e0 = &expected[0];
     let channels = &lidar.channels;
     let instrument = |f: fn(&Scenario) -> f64| channels.iter().map(f).collect::<Vec<f64>>();
@@ -246,6 +255,23 @@ pub fn variables(lidar: &Lidar, expected: &[ExpectedProfile], shots: u64) -> Vec
     ];
     for (name, long_name, units, f) in point_truth {
         vars.push(var(name, truth_dims, long_name, units, &[], truth(f)));
+    }
+    if changing {
+        // per profile, in the order the simulation gives their rows
+        for name in [
+            "expected_signal",
+            "expected_counts",
+            "snr_eq4",
+            "attenuated_backscatter",
+        ] {
+            if let Some(i) = vars.iter().position(|v| v.name == name) {
+                let mut v = vars.remove(i);
+                v.dims = ProfileChannelBin;
+                v.data.clear();
+                v.long_name.push_str(" (average over the profile's shots)");
+                vars.push(v);
+            }
+        }
     }
     vars
 }

@@ -13,6 +13,8 @@ use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
+pub mod scene;
+
 use crate::config::Method;
 use crate::detector::{DeadTime, dead_time};
 use crate::error::{Error, Result};
@@ -494,9 +496,19 @@ pub fn run(
         method = fastest_within_totals(t, &totals, shots, approximable);
     }
     let n_bins = first.geometry.n_bins;
+    let scene = changing_scene(lidar, seed, profiles, &mut method, components, &energy)?;
     check_sizes(&totals, method, shots, profiles, components, opts)?;
     let spec = raw_file_spec(
-        lidar, &expected, method, seed, profiles, components, energy, tolerance, opts,
+        lidar,
+        &expected,
+        method,
+        seed,
+        profiles,
+        components,
+        energy,
+        tolerance,
+        opts,
+        scene.is_some(),
     )?;
     let mut writer = RawFileWriter::create(outputs.temp_path(raw)?, &opts.output, &spec)?;
 
@@ -522,12 +534,18 @@ pub fn run(
         let draw_start = Instant::now();
         let drawn: Vec<DrawnProfile> = (first_profile..last)
             .into_par_iter()
-            .map(|p| draw_profile(&channels, p as u64, shots, n_bins, components, &energy))
+            .map(|p| match &scene {
+                Some(sc) => {
+                    draw_scene_profile(sc, seed, lidar.channels.len(), p as u64, n_bins, &energy)
+                }
+                None => draw_profile(&channels, p as u64, shots, n_bins, components, &energy),
+            })
             .collect();
         drawing += draw_start.elapsed();
         for (k, d) in drawn.iter().enumerate() {
             total_counts += d.counts.iter().sum::<u64>();
             let index = first_profile + k;
+            let values: Vec<&[f64]> = d.values.iter().map(Vec::as_slice).collect();
             writer.write_profile(&ProfileRecord {
                 index,
                 time_s: index as f64 * profile_time_s + 0.5 * profile_time_s,
@@ -538,7 +556,7 @@ pub fn run(
                     .components
                     .as_ref()
                     .map(|[s, b, k]| [&s[..], &b[..], &k[..]]),
-                values: &[],
+                values: &values,
             })?;
         }
         progress.inc((last - first_profile) as u64);
@@ -566,6 +584,80 @@ struct DrawnProfile {
     components: Option<[Vec<u64>; 3]>,
     /// Sum of the shots' energy factors (the energy monitor's reading × M / E0).
     energy_sum: f64,
+    /// The rows of the per-profile variables (a changing scene's truth).
+    values: Vec<Vec<f64>>,
+}
+
+/// The scene model of a run whose scene changes along the track (`None` for one column
+/// everywhere); refuses what this version does not draw in a changing scene.
+fn changing_scene(
+    lidar: &Lidar,
+    seed: u64,
+    profiles: usize,
+    method: &mut ResolvedMethod,
+    components: bool,
+    energy: &RunEnergy,
+) -> Result<Option<scene::SceneModel>> {
+    if !crate::scene::track::Track::is_changing(&lidar.first().loaded.config) {
+        return Ok(None);
+    }
+    if components {
+        return Err(Error::Unsupported(
+            "--components is not available for a scene that changes along the track yet".into(),
+        ));
+    }
+    if *method == ResolvedMethod::Shot && !energy.law.is_constant() {
+        return Err(Error::Unsupported(
+            "a scene that changes along the track is drawn shot by shot with a constant pulse \
+             energy only (this version); use --method aggregate, or set \
+             instrument.pulse_energy_jitter = 0 and no energy_drift"
+                .into(),
+        ));
+    }
+    if matches!(method, ResolvedMethod::AggregateNormal { .. }) {
+        *method = ResolvedMethod::Aggregate;
+    }
+    scene::SceneModel::new(lidar, seed, profiles as u64, *method).map(Some)
+}
+
+/// Draws profile `p` of a changing scene, every channel, with the profile's truth.
+fn draw_scene_profile(
+    sc: &scene::SceneModel,
+    seed: u64,
+    channels: usize,
+    p: u64,
+    n_bins: usize,
+    energy: &RunEnergy,
+) -> DrawnProfile {
+    let runs = sc.runs(p);
+    let shots = runs.iter().map(|r| r.1).sum::<u64>();
+    let sums = scene::run_energy_sums(energy, p, shots, &runs);
+    let mut counts = vec![0u64; channels * n_bins];
+    for (k, acc) in counts.chunks_mut(n_bins).enumerate() {
+        sc.draw(k, channel_seed(seed, k), p, &runs, &sums, acc);
+    }
+    let truth = sc.truth(&runs);
+    let snr: Vec<f64> = (0..channels)
+        .flat_map(|k| {
+            let e = &sc.expected[runs[0].0][k];
+            let signal = &truth.signal[k * n_bins..(k + 1) * n_bins];
+            signal
+                .iter()
+                .map(|&s| crate::snr::eq4(s, e.background, e.dark, shots as f64))
+                .collect::<Vec<f64>>()
+        })
+        .collect();
+    DrawnProfile {
+        counts,
+        components: None,
+        energy_sum: sums.iter().sum(),
+        values: vec![
+            truth.signal,
+            truth.recorded,
+            snr,
+            truth.attenuated_backscatter,
+        ],
+    }
 }
 
 /// Draws profile `p` of every channel's streams.
@@ -607,6 +699,7 @@ fn draw_profile(
         counts,
         components,
         energy_sum: energy.law.profile_sum(energy_seed, p, shots),
+        values: Vec::new(),
     }
 }
 
@@ -622,6 +715,7 @@ fn raw_file_spec(
     energy: RunEnergy,
     tolerance: Option<f64>,
     opts: &RunOptions,
+    changing: bool,
 ) -> Result<RawFileSpec> {
     let first = lidar.first();
     let shots = first.shots_per_profile();
@@ -659,7 +753,7 @@ fn raw_file_spec(
         count_width: CountWidth::for_max_count(max_mean)?,
         components,
         time_units: content::time_units(&first.loaded.config.acquisition.start_time)?,
-        variables: content::variables(lidar, expected, shots),
+        variables: content::variables(lidar, expected, shots, changing),
         root_attributes: content::root_attributes(first, &run_info)?,
     })
 }

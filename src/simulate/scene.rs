@@ -1,0 +1,207 @@
+//! Drawing a scene that changes along the track (`crate::scene::track`): each column's
+//! model and samplers are built once; a profile is drawn run by run, each run of
+//! consecutive shots that see one column with that column's sampler.
+//!
+//! * `aggregate`: one Poisson draw per bin of mean `Σ_runs F_run·λ_sig,col + M·λ_rest`
+//!   (F_run the run's summed energy factors, its shot count at constant energy): exact,
+//!   since the profile's count is a sum of independent Poisson counts.
+//! * `shot`: every shot of a run drawn by the column's shot sampler (dead time included,
+//!   the detector live at each run's start: a column change is at least one shot apart,
+//!   far longer than τ); run `j` of profile `p` uses the streams of
+//!   `(seed ^ run_seed(j), p, block)`.
+//!
+//! The profile's truth is what its shots saw on average: `Σ_runs n_run·x_col / M` for
+//! the expected signal, recorded counts and attenuated backscatter.
+
+use std::collections::HashMap;
+
+use super::{ResolvedMethod, RunEnergy, StreamSampler};
+use crate::config::LoadedConfig;
+use crate::error::{Error, Result};
+use crate::receiver::ChannelConfig;
+use crate::sampling::{self, SHOT_BLOCK};
+use crate::scenario::{ExpectedProfile, Lidar, Scenario};
+use crate::scene::track::{Column, MAX_COLUMNS, Track};
+
+/// Seed of run `j`'s streams within a profile (run 0 keeps the channel's seed).
+fn run_seed(seed: u64, j: usize) -> u64 {
+    seed ^ (j as u64).wrapping_mul(0xA076_1D64_78BD_642F)
+}
+
+/// A changing scene ready to draw: the track, and per column its model and samplers.
+pub struct SceneModel {
+    /// Where each shot is and which column it sees.
+    pub track: Track,
+    columns: HashMap<Column, usize>,
+    /// Per column, per channel: the expectations.
+    pub expected: Vec<Vec<ExpectedProfile>>,
+    /// Per column, per channel: the shot samplers (`shot` only).
+    samplers: Vec<Vec<StreamSampler>>,
+    shots: u64,
+}
+
+/// A profile's per-shot averages of the model over its runs, per channel.
+pub struct ProfileTruth {
+    /// Expected signal per shot, channel-major.
+    pub signal: Vec<f64>,
+    /// Expected recorded counts per shot, channel-major.
+    pub recorded: Vec<f64>,
+    /// Attenuated backscatter seen on average, channel-major.
+    pub attenuated_backscatter: Vec<f64>,
+}
+
+impl SceneModel {
+    /// Builds every column of `lidar`'s scene for a run of `profiles` profiles drawn by
+    /// `method` from `seed`.
+    pub fn new(lidar: &Lidar, seed: u64, profiles: u64, method: ResolvedMethod) -> Result<Self> {
+        let first = lidar.first();
+        let shots = first.shots_per_profile();
+        let speed = crate::geometry::ground_track_speed_m_per_s(first.geometry.platform_altitude_m);
+        let track = Track::new(&first.loaded.config, seed, speed, shots, profiles);
+        let all = track.columns();
+        if all.len() > MAX_COLUMNS {
+            return Err(Error::Unsupported(format!(
+                "the scene has {} columns (segments × broken-layer subsets), at most {MAX_COLUMNS}",
+                all.len()
+            )));
+        }
+        let mut expected = Vec::with_capacity(all.len());
+        let mut samplers = Vec::with_capacity(all.len());
+        for &col in &all {
+            let channels = lidar
+                .channels
+                .iter()
+                .map(|c| column_scenario(&track, c, col))
+                .collect::<Result<Vec<Scenario>>>()?;
+            let e: Vec<ExpectedProfile> = channels
+                .iter()
+                .map(Scenario::expected)
+                .collect::<Result<_>>()?;
+            if method == ResolvedMethod::Shot {
+                samplers.push(
+                    channels
+                        .iter()
+                        .zip(&e)
+                        .map(|(c, e)| {
+                            let rest = vec![e.background + e.dark; e.n_bins()];
+                            StreamSampler::new(ResolvedMethod::Shot, &e.signal, &rest, 0.0)
+                                .through_detector(c.instrument.dead_time)
+                        })
+                        .collect(),
+                );
+            }
+            expected.push(e);
+        }
+        let columns = all.iter().enumerate().map(|(i, c)| (*c, i)).collect();
+        Ok(SceneModel {
+            track,
+            columns,
+            expected,
+            samplers,
+            shots,
+        })
+    }
+
+    /// The runs of profile `p`: (column index, shots).
+    pub fn runs(&self, p: u64) -> Vec<(usize, u64)> {
+        self.track
+            .runs(p)
+            .into_iter()
+            .map(|(c, n)| (self.columns[&c], n))
+            .collect()
+    }
+
+    /// Draws channel `channel` of profile `p` into `acc`.
+    pub fn draw(
+        &self,
+        channel: usize,
+        seed: u64,
+        p: u64,
+        runs: &[(usize, u64)],
+        energy_sums: &[f64],
+        acc: &mut [u64],
+    ) {
+        if self.samplers.is_empty() {
+            let e0 = &self.expected[runs[0].0][channel];
+            let rest = e0.background + e0.dark;
+            let m = self.shots as f64;
+            let mut lambda = vec![rest; acc.len()];
+            for (&(col, _), &f) in runs.iter().zip(energy_sums) {
+                let signal = &self.expected[col][channel].signal;
+                lambda
+                    .iter_mut()
+                    .zip(signal)
+                    .for_each(|(l, s)| *l += f / m * s);
+            }
+            sampling::aggregate_profile(&lambda, seed, p, self.shots, acc);
+        } else {
+            for (j, &(col, n)) in runs.iter().enumerate() {
+                self.samplers[col][channel].profile_counts(run_seed(seed, j), p, n, acc);
+            }
+        }
+    }
+
+    /// What profile `p`'s shots saw on average, every channel.
+    pub fn truth(&self, runs: &[(usize, u64)]) -> ProfileTruth {
+        let m = self.shots as f64;
+        let average = |f: fn(&ExpectedProfile) -> &Vec<f64>| -> Vec<f64> {
+            let channels = self.expected[0].len();
+            (0..channels)
+                .flat_map(|c| {
+                    let mut v = vec![0.0; self.expected[0][c].n_bins()];
+                    for &(col, n) in runs {
+                        let x = f(&self.expected[col][c]);
+                        v.iter_mut()
+                            .zip(x)
+                            .for_each(|(a, b)| *a += n as f64 / m * b);
+                    }
+                    v
+                })
+                .collect()
+        };
+        ProfileTruth {
+            signal: average(|e| &e.signal),
+            recorded: average(|e| &e.recorded),
+            attenuated_backscatter: average(|e| &e.attenuated_backscatter),
+        }
+    }
+}
+
+/// The summed energy factors of each run of profile `p` (the shot counts at constant
+/// energy): the factors of the profile's blocks, cut at the runs' boundaries.
+pub fn run_energy_sums(energy: &RunEnergy, p: u64, shots: u64, runs: &[(usize, u64)]) -> Vec<f64> {
+    if energy.law.is_constant() {
+        return runs.iter().map(|r| r.1 as f64).collect();
+    }
+    let seed = energy.seed.unwrap_or_default();
+    let mut factors = Vec::with_capacity(shots as usize);
+    let mut block = Vec::new();
+    for b in 0..shots.div_ceil(SHOT_BLOCK) {
+        energy.law.block_factors(seed, p, shots, b, &mut block);
+        factors.extend_from_slice(&block);
+    }
+    let mut start = 0usize;
+    runs.iter()
+        .map(|&(_, n)| {
+            let sum = factors[start..start + n as usize].iter().sum();
+            start += n as usize;
+            sum
+        })
+        .collect()
+}
+
+/// Channel scenario `c` in column `col`: its config with the column's layers, aerosol
+/// and surface.
+fn column_scenario(track: &Track, c: &Scenario, col: Column) -> Result<Scenario> {
+    let config = track.column_config(&c.loaded.config, col);
+    let loaded = LoadedConfig {
+        channels: vec![ChannelConfig {
+            name: c.channel_name.clone(),
+            config: config.clone(),
+        }],
+        config,
+        path: c.loaded.path.clone(),
+        resolved_toml: c.loaded.resolved_toml.clone(),
+    };
+    Scenario::from_loaded(loaded)
+}
