@@ -37,6 +37,9 @@ pub struct ScenarioConfig {
     /// The scene along the track (space-borne); absent = one column everywhere.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub scene: Option<SceneConfig>,
+    /// A circular orbit for a space-borne platform: geolocation of every profile.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orbit: Option<OrbitConfig>,
     /// Monte Carlo settings.
     #[serde(default)]
     pub simulation: SimulationConfig,
@@ -402,6 +405,23 @@ impl LayerConfig {
             .map_or(self.lidar_ratio_sr, |(_, v)| *v);
         (extinction, lidar_ratio)
     }
+}
+
+/// A circular orbit (`src/scene/orbit.rs`) at `platform.altitude_km`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct OrbitConfig {
+    /// Inclination, degrees (above 90: retrograde, e.g. 98.2 sun-synchronous).
+    pub inclination_deg: f64,
+    /// Latitude of the first shot, degrees north.
+    #[serde(default)]
+    pub start_latitude_deg: f64,
+    /// Longitude of the first shot, degrees east.
+    #[serde(default)]
+    pub start_longitude_deg: f64,
+    /// Moving north at the first shot (else south).
+    #[serde(default = "yes")]
+    pub ascending: bool,
 }
 
 /// The scene along the track (`src/scene/`).
@@ -986,6 +1006,25 @@ impl ScenarioConfig {
         }
         if let Some(scene) = &self.scene {
             self.validate_scene(&c, scene)?;
+        }
+        if let Some(o) = &self.orbit {
+            if self.platform.kind == PlatformKind::Ground {
+                return Err(c.fail("orbit", "an orbit needs a space-borne platform"));
+            }
+            c.range(
+                "orbit.start_longitude_deg",
+                o.start_longitude_deg,
+                -360.0,
+                360.0,
+            )?;
+            crate::scene::orbit::Orbit::new(
+                self.platform.altitude_km * 1e3,
+                o.inclination_deg,
+                o.start_latitude_deg,
+                o.start_longitude_deg,
+                o.ascending,
+            )
+            .map_err(|reason| c.fail("orbit", reason))?;
         }
         if self
             .atmosphere

@@ -511,6 +511,7 @@ pub fn run(
         scene.is_some(),
     )?;
     let mut writer = RawFileWriter::create(outputs.temp_path(raw)?, &opts.output, &spec)?;
+    let orbit = orbit_of(lidar)?;
 
     let channels: Vec<Vec<(StreamSampler, u64)>> = lidar
         .channels
@@ -545,7 +546,16 @@ pub fn run(
         for (k, d) in drawn.iter().enumerate() {
             total_counts += d.counts.iter().sum::<u64>();
             let index = first_profile + k;
-            let values: Vec<&[f64]> = d.values.iter().map(Vec::as_slice).collect();
+            let place = orbit.as_ref().map(|o| {
+                let g = o.position((index as f64 + 0.5) * profile_time_s);
+                [[g.latitude_deg], [g.longitude_deg], [g.along_track_m]]
+            });
+            let values: Vec<&[f64]> = d
+                .values
+                .iter()
+                .map(Vec::as_slice)
+                .chain(place.iter().flat_map(|p| p.iter().map(|v| &v[..])))
+                .collect();
             writer.write_profile(&ProfileRecord {
                 index,
                 time_s: index as f64 * profile_time_s + 0.5 * profile_time_s,
@@ -576,6 +586,24 @@ pub fn run(
         drawing,
         warning: lidar.run_notes(&expected),
     })
+}
+
+/// The orbit of a space-borne run with `[orbit]`.
+pub fn orbit_of(lidar: &Lidar) -> Result<Option<crate::scene::orbit::Orbit>> {
+    let cfg = &lidar.first().loaded.config;
+    cfg.orbit
+        .as_ref()
+        .map(|o| {
+            crate::scene::orbit::Orbit::new(
+                cfg.platform.altitude_km * 1e3,
+                o.inclination_deg,
+                o.start_latitude_deg,
+                o.start_longitude_deg,
+                o.ascending,
+            )
+            .map_err(|reason| Error::config(lidar.first().loaded.file_label(), "orbit", reason))
+        })
+        .transpose()
 }
 
 /// One profile of every channel, channel-major, as the file stores it.
@@ -753,7 +781,20 @@ fn raw_file_spec(
         count_width: CountWidth::for_max_count(max_mean)?,
         components,
         time_units: content::time_units(&first.loaded.config.acquisition.start_time)?,
-        variables: content::variables(lidar, expected, shots, changing),
+        variables: content::variables(lidar, expected, shots, changing)
+            .into_iter()
+            .chain(
+                orbit_of(lidar)?
+                    .is_some()
+                    .then(content::geolocation_variables)
+                    .into_iter()
+                    .flatten(),
+            )
+            .collect(),
+        profile_coordinates: match orbit_of(lidar)? {
+            Some(_) => content::GEOLOCATION.iter().map(|s| s.to_string()).collect(),
+            None => vec![],
+        },
         root_attributes: content::root_attributes(first, &run_info)?,
     })
 }

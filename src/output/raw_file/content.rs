@@ -276,6 +276,38 @@ pub fn variables(
     vars
 }
 
+/// The geolocation variables of a run with an orbit, in the order of their values.
+pub const GEOLOCATION: [&str; 3] = ["latitude", "longitude", "along_track_distance"];
+
+/// `latitude`, `longitude` and `along_track_distance` (profile): the ground-track
+/// position of each profile's centre (`src/scene/orbit.rs`).
+pub fn geolocation_variables() -> Vec<Variable> {
+    let profile = |name: &str, long_name: &str, units: &str, attrs: &[(&str, &str)]| Variable {
+        dims: Dims::Profile,
+        ..var(name, Dims::Profile, long_name, units, attrs, Vec::new())
+    };
+    vec![
+        profile(
+            GEOLOCATION[0],
+            "latitude of the profile centre's sub-satellite point (geocentric)",
+            "degrees_north",
+            &[("standard_name", "latitude")],
+        ),
+        profile(
+            GEOLOCATION[1],
+            "longitude of the profile centre's sub-satellite point",
+            "degrees_east",
+            &[("standard_name", "longitude")],
+        ),
+        profile(
+            GEOLOCATION[2],
+            "distance along the ground track from the first shot to the profile centre",
+            "m",
+            &[],
+        ),
+    ]
+}
+
 /// The root attributes of interface.md: conventions, provenance, the resolved config,
 /// the seed and method, the format version.
 pub fn root_attributes(sc: &Scenario, run: &RunInfo) -> Result<Vec<(String, AttrValue)>> {

@@ -196,6 +196,17 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
         }
     }
 
+    // the coordinates of (profile, …) variables: time, and latitude/longitude where given
+    let extra: String = spec
+        .profile_coordinates
+        .iter()
+        .map(|c| format!(" {c}"))
+        .collect();
+    let coords_profile_bin = format!("{COORDS_PROFILE_BIN}{extra}");
+    let coords_profile = format!("time{extra}");
+    let coords_profile_bin = coords_profile_bin.as_str();
+    let coords_profile = coords_profile.as_str();
+
     // Dimensions: coordinate variables marked as dimension scales.
     let profile = create_var::<i64>(&file, PROFILE_DIM, &[spec.n_profiles])?;
     write_index(&profile, spec.n_profiles)?;
@@ -230,7 +241,7 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
                 "accumulated raw photon counts (signal + background + dark)",
             ),
             ("units", "count"),
-            ("coordinates", COORDS_PROFILE_BIN),
+            ("coordinates", coords_profile_bin),
         ],
     )?;
     attach_scales(&counts, &dims3)?;
@@ -249,7 +260,7 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
                 &[
                     ("long_name", long_name),
                     ("units", "count"),
-                    ("coordinates", COORDS_PROFILE_BIN),
+                    ("coordinates", coords_profile_bin),
                 ],
             )?;
             attach_scales(&ds, &dims3)?;
@@ -282,7 +293,7 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
         &[
             ("long_name", "laser shots accumulated in the profile"),
             ("units", "1"),
-            ("coordinates", "time"),
+            ("coordinates", coords_profile),
         ],
     )?;
     attach_scales(&n_shots, &[&profile])?;
@@ -296,7 +307,7 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
                 "mean emitted pulse energy of the profile's shots (energy monitor)",
             ),
             ("units", "J"),
-            ("coordinates", "time"),
+            ("coordinates", coords_profile),
         ],
     )?;
     attach_scales(&pulse_energy, &[&profile])?;
@@ -311,11 +322,11 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
                 vec![&channel, &bin],
                 Some(COORDS_BIN),
             ),
-            Dims::Profile => (vec![spec.n_profiles], vec![&profile], Some("time")),
+            Dims::Profile => (vec![spec.n_profiles], vec![&profile], Some(coords_profile)),
             Dims::ProfileChannelBin => (
                 vec![spec.n_profiles, spec.channels.len(), spec.n_bins],
                 vec![&profile, &channel, &bin],
-                Some(COORDS_PROFILE_BIN),
+                Some(coords_profile_bin),
             ),
         };
         let ds = match var.dims {
@@ -329,8 +340,10 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
         for (k, v) in &var.attributes {
             write_str_attr(&ds, k, v)?;
         }
-        // a coordinate itself (altitude, range) lists no coordinates
-        if let Some(c) = coords.filter(|_| !matches!(var.name.as_str(), "altitude" | "range")) {
+        // a coordinate itself (altitude, range, latitude, ...) lists no coordinates
+        let is_coordinate = matches!(var.name.as_str(), "altitude" | "range")
+            || spec.profile_coordinates.contains(&var.name);
+        if let Some(c) = coords.filter(|_| !is_coordinate) {
             write_str_attr(&ds, "coordinates", c)?;
         }
         attach_scales(&ds, &scales)?;

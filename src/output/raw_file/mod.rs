@@ -199,6 +199,9 @@ pub struct RawFileSpec {
     pub variables: Vec<Variable>,
     /// Root attributes, in this order.
     pub root_attributes: Vec<(String, AttrValue)>,
+    /// Further coordinates of the profile dimension (e.g. `latitude longitude`), listed in
+    /// the `coordinates` attribute of every (profile, …) variable.
+    pub profile_coordinates: Vec<String>,
 }
 
 impl RawFileSpec {
