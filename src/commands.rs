@@ -163,7 +163,7 @@ pub fn build_snr_map(sc: &Scenario, e: &ExpectedProfile) -> snr_map::SnrMap {
             i.telescope_area_m2,
             i.wavelength_nm,
             i.fov_rad * 1e6,
-            cfg.background.radiance,
+            cfg.background.radiance.unwrap_or(0.0),
             cfg.platform.altitude_km
         ),
     }

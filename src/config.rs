@@ -505,11 +505,39 @@ pub enum BackgroundEfficiency {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct BackgroundConfig {
-    /// Spectral radiance Lλ, photons m⁻² s⁻¹ sr⁻¹ nm⁻¹ (paper: 1.1e10 night, 1.1e15 day).
-    pub radiance: f64,
+    /// `"fixed"` (the paper's: `radiance`) or `"solar"` (sunlight from the scene).
+    #[serde(default)]
+    pub model: BackgroundModel,
+    /// Spectral radiance Lλ, photons m⁻² s⁻¹ sr⁻¹ nm⁻¹ (paper: 1.1e10 night, 1.1e15
+    /// day); required by the fixed model; with the solar model a floor added to the
+    /// reflected sunlight (night sky, moonlight).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radiance: Option<f64>,
     /// Efficiencies applied to the background.
     #[serde(default)]
     pub efficiency: BackgroundEfficiency,
+    /// Solar model: two-way transmission of the sunlight (sun → scene → instrument); absent = 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transmission: Option<f64>,
+    /// Solar model: albedo of an optically thick cloud top (column optical depth ≥ 1); absent = 0.7.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cloud_albedo: Option<f64>,
+    /// Solar model: a fixed solar zenith angle, degrees (instead of the sun's position
+    /// along the orbit).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub solar_zenith_deg: Option<f64>,
+}
+
+/// Where the sky background comes from.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BackgroundModel {
+    /// A fixed radiance (`background.radiance`), the paper's way.
+    #[default]
+    Fixed,
+    /// Sunlight reflected by the surface or a cloud top below a space-borne lidar, from
+    /// the solar zenith angle at each profile's time and place (model.md §7).
+    Solar,
 }
 
 /// Monte Carlo method (interface.md `--method`).
@@ -994,13 +1022,57 @@ impl ScenarioConfig {
         Ok(())
     }
 
+    /// The background: a radiance for the fixed model; the solar model's sun and scene.
+    fn validate_background(&self, c: &Checker) -> Result<()> {
+        let b = &self.background;
+        match b.model {
+            BackgroundModel::Fixed => match b.radiance {
+                Some(r) => c.range("background.radiance", r, 0.0, 1e25),
+                None => Err(c.fail(
+                    "background.radiance",
+                    "is required (photons m-2 s-1 sr-1 nm-1; the paper: 1.1e10 night, 1.1e15 day), \
+                     or set background.model = \"solar\"",
+                )),
+            },
+            BackgroundModel::Solar => {
+                if let Some(r) = b.radiance {
+                    c.range("background.radiance", r, 0.0, 1e25)?;
+                }
+                if self.platform.kind == PlatformKind::Ground {
+                    return Err(c.fail(
+                        "background.model",
+                        "\"solar\" is sunlight reflected below a space-borne lidar; a ground lidar \
+                         takes a fixed sky radiance",
+                    ));
+                }
+                if self.orbit.is_none() && b.solar_zenith_deg.is_none() {
+                    return Err(c.fail(
+                        "background.model",
+                        "\"solar\" needs the sun's angle: give [orbit] (and acquisition.start_time) \
+                         or background.solar_zenith_deg",
+                    ));
+                }
+                if let Some(t) = b.transmission {
+                    c.range("background.transmission", t, 0.0, 1.0)?;
+                }
+                if let Some(a) = b.cloud_albedo {
+                    c.range("background.cloud_albedo", a, 0.0, 1.0)?;
+                }
+                if let Some(z) = b.solar_zenith_deg {
+                    c.range("background.solar_zenith_deg", z, 0.0, 180.0)?;
+                }
+                Ok(())
+            }
+        }
+    }
+
     /// Checks every field: finite, in range, consistent. `file` names the source in errors.
     pub fn validate(&self, file: &str) -> Result<()> {
         let c = Checker { file };
         self.validate_instrument(&c)?;
         self.validate_geometry(&c)?;
         self.validate_atmosphere(&c)?;
-        c.range("background.radiance", self.background.radiance, 0.0, 1e25)?;
+        self.validate_background(&c)?;
         if let Some(surface) = &self.surface {
             self.validate_surface(&c, surface)?;
         }

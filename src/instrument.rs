@@ -22,6 +22,9 @@ pub struct Instrument {
     pub signal_constant: f64,
     /// Expected sky-background counts per shot per bin, `λ_bkg` (Eq. 3).
     pub background_per_bin: f64,
+    /// Background counts per shot per bin per unit of radiance (photons m⁻² s⁻¹ sr⁻¹
+    /// nm⁻¹): `A·Ω·Δλ·TF·Δt·ε_bkg`, halved for a polarization channel (Eq. 3).
+    pub background_per_radiance: f64,
     /// Expected dark counts per shot per bin, `λ_dc = R_dc·Δt`.
     pub dark_per_bin: f64,
     /// The detector's dead time; `None` for an ideal linear detector (τ = 0).
@@ -60,11 +63,13 @@ impl Instrument {
             0.5
         };
         // Eq. 3: N_bkg = Lλ·A·Ω·Δλ·TF (photons/s), then ·Δt·ε_bkg per bin.
-        let background_rate_hz = cfg.background.radiance
-            * i.telescope_area_m2
+        let background_per_radiance = i.telescope_area_m2
             * solid_angle_sr(i.fov_rad)
             * i.filter_width_nm
-            * i.filter_transmission;
+            * i.filter_transmission
+            * i.bin_width_s
+            * efficiency
+            * polarization_share;
         Instrument {
             wavelength_nm: i.wavelength_nm,
             bin_width_s: i.bin_width_s,
@@ -72,10 +77,8 @@ impl Instrument {
             pulse_energy_jitter: i.pulse_energy_jitter,
             channel: i.channel,
             signal_constant,
-            background_per_bin: background_rate_hz
-                * i.bin_width_s
-                * efficiency
-                * polarization_share,
+            background_per_bin: cfg.background.radiance.unwrap_or(0.0) * background_per_radiance,
+            background_per_radiance,
             dark_per_bin: i.dark_count_rate_hz * i.bin_width_s,
             dead_time: i
                 .detector

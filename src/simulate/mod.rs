@@ -626,8 +626,17 @@ fn changing_scene(
     components: bool,
     energy: &RunEnergy,
 ) -> Result<Option<scene::SceneModel>> {
-    if !crate::scene::track::Track::is_changing(&lidar.first().loaded.config) {
+    let cfg = &lidar.first().loaded.config;
+    let solar = cfg.background.model == crate::config::BackgroundModel::Solar;
+    if !crate::scene::track::Track::is_changing(cfg) && !solar {
         return Ok(None);
+    }
+    if solar && *method == ResolvedMethod::Shot {
+        return Err(Error::Unsupported(
+            "background.model = \"solar\" is drawn with --method aggregate in this version \
+             (the background changes from profile to profile); dead time is not available with it yet"
+                .into(),
+        ));
     }
     if components {
         return Err(Error::Unsupported(
@@ -661,17 +670,36 @@ fn draw_scene_profile(
     let shots = runs.iter().map(|r| r.1).sum::<u64>();
     let sums = scene::run_energy_sums(energy, p, shots, &runs);
     let mut counts = vec![0u64; channels * n_bins];
+    let mut background = Vec::with_capacity(channels * n_bins);
     for (k, acc) in counts.chunks_mut(n_bins).enumerate() {
-        sc.draw(k, channel_seed(seed, k), p, &runs, &sums, acc);
+        let bkg = sc.run_backgrounds(k, p, &runs);
+        sc.draw(k, channel_seed(seed, k), p, &runs, &sums, &bkg, acc);
+        let mean: f64 = runs
+            .iter()
+            .zip(&bkg)
+            .map(|(r, b)| r.1 as f64 * b)
+            .sum::<f64>()
+            / shots as f64;
+        background.extend(std::iter::repeat_n(mean, n_bins));
     }
-    let truth = sc.truth(&runs);
+    let mut truth = sc.truth(&runs);
+    if sc.is_solar() {
+        // an ideal detector records what arrives
+        for k in 0..channels {
+            let dark = sc.expected[runs[0].0][k].dark;
+            for i in k * n_bins..(k + 1) * n_bins {
+                truth.recorded[i] = truth.signal[i] + background[i] + dark;
+            }
+        }
+    }
     let snr: Vec<f64> = (0..channels)
         .flat_map(|k| {
             let e = &sc.expected[runs[0].0][k];
             let signal = &truth.signal[k * n_bins..(k + 1) * n_bins];
             signal
                 .iter()
-                .map(|&s| crate::snr::eq4(s, e.background, e.dark, shots as f64))
+                .zip(&background[k * n_bins..(k + 1) * n_bins])
+                .map(|(&s, &b)| crate::snr::eq4(s, b, e.dark, shots as f64))
                 .collect::<Vec<f64>>()
         })
         .collect();
@@ -681,6 +709,7 @@ fn draw_scene_profile(
         energy_sum: sums.iter().sum(),
         values: vec![
             truth.signal,
+            background,
             truth.recorded,
             snr,
             truth.attenuated_backscatter,

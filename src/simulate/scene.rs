@@ -16,12 +16,15 @@
 use std::collections::HashMap;
 
 use super::{ResolvedMethod, RunEnergy, StreamSampler};
-use crate::config::LoadedConfig;
+use crate::config::{BackgroundModel, LayerKind, LoadedConfig, ScenarioConfig, SurfaceKind};
 use crate::error::{Error, Result};
 use crate::receiver::ChannelConfig;
 use crate::sampling::{self, SHOT_BLOCK};
 use crate::scenario::{ExpectedProfile, Lidar, Scenario};
+use crate::scene::orbit::Orbit;
+use crate::scene::sun;
 use crate::scene::track::{Column, MAX_COLUMNS, Track};
+use crate::surface::Surface;
 
 /// Seed of run `j`'s streams within a profile (run 0 keeps the channel's seed).
 fn run_seed(seed: u64, j: usize) -> u64 {
@@ -38,7 +41,83 @@ pub struct SceneModel {
     /// Per column, per channel: the shot samplers (`shot` only).
     samplers: Vec<Vec<StreamSampler>>,
     shots: u64,
+    /// The sun, for a solar background.
+    sunlight: Option<Sunlight>,
+    /// Per column: the albedo below (surface or thick cloud top), for the solar background.
+    albedo: Vec<f64>,
+    /// Per channel: the instrument's background counts per unit radiance, and the solar
+    /// irradiance at its wavelength at 1 AU (photons s⁻¹ m⁻² nm⁻¹).
+    channel_sun: Vec<(f64, f64)>,
 }
+
+/// What the solar background needs: where the sun is for each profile.
+pub struct Sunlight {
+    orbit: Option<Orbit>,
+    fixed_zenith_deg: Option<f64>,
+    /// Unix time of the first shot, s.
+    start_unix_s: f64,
+    profile_time_s: f64,
+    transmission: f64,
+}
+
+impl Sunlight {
+    /// The sun of a run whose background model is solar (`None` otherwise).
+    fn of(lidar: &Lidar) -> Result<Option<Sunlight>> {
+        let first = lidar.first();
+        let b = &first.loaded.config.background;
+        if b.model != BackgroundModel::Solar {
+            return Ok(None);
+        }
+        let start = humantime::parse_rfc3339(&first.loaded.config.acquisition.start_time)
+            .map_err(|e| Error::Unsupported(format!("acquisition.start_time: {e}")))?;
+        let start_unix_s = start
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0.0, |d| d.as_secs_f64());
+        Ok(Some(Sunlight {
+            orbit: super::orbit_of(lidar)?,
+            fixed_zenith_deg: b.solar_zenith_deg,
+            start_unix_s,
+            profile_time_s: first.shots_per_profile() as f64 / first.instrument.rep_rate_hz,
+            transmission: b.transmission.unwrap_or(1.0),
+        }))
+    }
+
+    /// Solar zenith angle (degrees) and sun distance (AU) at profile `p`'s centre.
+    pub fn sun_at(&self, p: u64) -> (f64, f64) {
+        let t = (p as f64 + 0.5) * self.profile_time_s;
+        let unix = self.start_unix_s + t;
+        let zenith = match (self.fixed_zenith_deg, &self.orbit) {
+            (Some(z), _) => z,
+            (None, Some(o)) => {
+                let g = o.position(t);
+                sun::solar_zenith_deg(unix, g.latitude_deg, g.longitude_deg)
+            }
+            (None, None) => 90.0,
+        };
+        (zenith, sun::earth_sun_distance_au(unix))
+    }
+}
+
+/// The albedo under a column: an optically thick cloud's top (`cloud_albedo`), else the
+/// surface's (land when the scene has none).
+fn column_albedo(cfg: &ScenarioConfig) -> f64 {
+    let thick_cloud =
+        cfg.atmosphere.layers.iter().any(|l| {
+            l.kind == LayerKind::Cloud && l.extinction_per_km * (l.top_km - l.base_km) >= 1.0
+        });
+    if thick_cloud {
+        return cfg.background.cloud_albedo.unwrap_or(DEFAULT_CLOUD_ALBEDO);
+    }
+    cfg.surface
+        .as_ref()
+        .map_or(SurfaceKind::Land.albedo(), |s| {
+            Surface::from_config(s).albedo
+        })
+}
+
+/// Albedo of an optically thick cloud top at visible wavelengths (liquid stratocumulus
+/// of optical depth ~10–20: 0.6–0.8).
+pub const DEFAULT_CLOUD_ALBEDO: f64 = 0.7;
 
 /// A profile's per-shot averages of the model over its runs, per channel.
 pub struct ProfileTruth {
@@ -67,6 +146,10 @@ impl SceneModel {
         }
         let mut expected = Vec::with_capacity(all.len());
         let mut samplers = Vec::with_capacity(all.len());
+        let albedo = all
+            .iter()
+            .map(|&c| column_albedo(&track.column_config(&first.loaded.config, c)))
+            .collect();
         for &col in &all {
             let channels = lidar
                 .channels
@@ -93,13 +176,66 @@ impl SceneModel {
             expected.push(e);
         }
         let columns = all.iter().enumerate().map(|(i, c)| (*c, i)).collect();
+        let channel_sun = lidar
+            .channels
+            .iter()
+            .map(|c| {
+                let f = sun::solar_spectral_irradiance_photons(c.instrument.wavelength_nm);
+                (
+                    c.instrument.background_per_radiance,
+                    if f.is_finite() { f } else { 0.0 },
+                )
+            })
+            .collect();
         Ok(SceneModel {
             track,
             columns,
             expected,
             samplers,
             shots,
+            sunlight: Sunlight::of(lidar)?,
+            albedo,
+            channel_sun,
         })
+    }
+
+    /// Whether the background comes from the sun.
+    pub fn is_solar(&self) -> bool {
+        self.sunlight.is_some()
+    }
+
+    /// The sun of a solar run.
+    pub fn sunlight(&self) -> Option<&Sunlight> {
+        self.sunlight.as_ref()
+    }
+
+    /// Background counts per shot per bin of each run of profile `p`, channel `channel`:
+    /// the channel's fixed background, or the sunlight reflected below each run's
+    /// column, `ρ·F_λ/d²·cos θ_s/π·T` (model.md §7) times the instrument's factor, plus
+    /// the fixed radiance's background as a floor.
+    pub fn run_backgrounds(&self, channel: usize, p: u64, runs: &[(usize, u64)]) -> Vec<f64> {
+        match &self.sunlight {
+            None => runs
+                .iter()
+                .map(|&(col, _)| self.expected[col][channel].background)
+                .collect(),
+            Some(sunlight) => {
+                let (zenith, au) = sunlight.sun_at(p);
+                let (factor, irradiance) = self.channel_sun[channel];
+                runs.iter()
+                    .map(|&(col, _)| {
+                        let l = sun::reflected_radiance(
+                            self.albedo[col],
+                            irradiance / (au * au),
+                            zenith,
+                            sunlight.transmission,
+                        );
+                        // the fixed radiance, if any, is a floor (night sky)
+                        l * factor + self.expected[col][channel].background
+                    })
+                    .collect()
+            }
+        }
     }
 
     /// The runs of profile `p`: (column index, shots).
@@ -111,7 +247,9 @@ impl SceneModel {
             .collect()
     }
 
-    /// Draws channel `channel` of profile `p` into `acc`.
+    /// Draws channel `channel` of profile `p` into `acc`; `backgrounds` are the runs'
+    /// background counts per shot per bin ([`run_backgrounds`](Self::run_backgrounds)).
+    #[allow(clippy::too_many_arguments)]
     pub fn draw(
         &self,
         channel: usize,
@@ -119,12 +257,18 @@ impl SceneModel {
         p: u64,
         runs: &[(usize, u64)],
         energy_sums: &[f64],
+        backgrounds: &[f64],
         acc: &mut [u64],
     ) {
         if self.samplers.is_empty() {
-            let e0 = &self.expected[runs[0].0][channel];
-            let rest = e0.background + e0.dark;
             let m = self.shots as f64;
+            let dark = self.expected[runs[0].0][channel].dark;
+            let rest = dark
+                + runs
+                    .iter()
+                    .zip(backgrounds)
+                    .map(|(r, b)| r.1 as f64 / m * b)
+                    .sum::<f64>();
             let mut lambda = vec![rest; acc.len()];
             for (&(col, _), &f) in runs.iter().zip(energy_sums) {
                 let signal = &self.expected[col][channel].signal;

@@ -87,8 +87,9 @@ fn per_channel(expected: &[ExpectedProfile], f: impl Fn(&ExpectedProfile) -> Vec
 /// coordinates, the expectations, the instrument constants and the atmosphere's truth.
 /// The point truth is (bin) when every channel sees one wavelength, (channel, bin) when
 /// the wavelengths differ.
-/// With `changing` (a scene that changes along the track) `expected_signal`,
-/// `expected_counts`, `snr_eq4` and `attenuated_backscatter` are (profile, channel, bin),
+/// With `changing` (a scene that changes along the track, or a solar background)
+/// `expected_signal`, `expected_background`, `expected_counts`, `snr_eq4` and
+/// `attenuated_backscatter` are (profile, channel, bin),
 /// their rows written with each profile in that order; the other variables are those of
 /// the first profile's first column.
 pub fn variables(
@@ -260,6 +261,7 @@ pub fn variables(
         // per profile, in the order the simulation gives their rows
         for name in [
             "expected_signal",
+            "expected_background",
             "expected_counts",
             "snr_eq4",
             "attenuated_backscatter",
