@@ -508,7 +508,7 @@ pub fn run(
         energy,
         tolerance,
         opts,
-        scene.is_some(),
+        scene.as_ref(),
     )?;
     let mut writer = RawFileWriter::create(outputs.temp_path(raw)?, &opts.output, &spec)?;
     let orbit = orbit_of(lidar)?;
@@ -607,18 +607,23 @@ pub fn orbit_of(lidar: &Lidar) -> Result<Option<crate::scene::orbit::Orbit>> {
 }
 
 /// One profile of every channel, channel-major, as the file stores it.
-struct DrawnProfile {
-    counts: Vec<u64>,
+pub struct DrawnProfile {
+    /// Recorded counts, channel-major.
+    pub counts: Vec<u64>,
     components: Option<[Vec<u64>; 3]>,
     /// Sum of the shots' energy factors (the energy monitor's reading × M / E0).
     energy_sum: f64,
-    /// The rows of the per-profile variables (a changing scene's truth).
-    values: Vec<Vec<f64>>,
+    /// The rows of the per-profile variables (a changing scene's truth: expected signal,
+    /// background, recorded counts per shot, S/N, attenuated backscatter).
+    pub values: Vec<Vec<f64>>,
 }
+
+/// Index in [`DrawnProfile::values`] of a changing scene's expected recorded counts per shot.
+pub const RECORDED_ROW: usize = 2;
 
 /// The scene model of a run whose scene changes along the track (`None` for one column
 /// everywhere); refuses what this version does not draw in a changing scene.
-fn changing_scene(
+pub fn changing_scene(
     lidar: &Lidar,
     seed: u64,
     profiles: usize,
@@ -658,7 +663,7 @@ fn changing_scene(
 }
 
 /// Draws profile `p` of a changing scene, every channel, with the profile's truth.
-fn draw_scene_profile(
+pub fn draw_scene_profile(
     sc: &scene::SceneModel,
     seed: u64,
     channels: usize,
@@ -772,8 +777,9 @@ fn raw_file_spec(
     energy: RunEnergy,
     tolerance: Option<f64>,
     opts: &RunOptions,
-    changing: bool,
+    scene: Option<&scene::SceneModel>,
 ) -> Result<RawFileSpec> {
+    let changing = scene.is_some();
     let first = lidar.first();
     let shots = first.shots_per_profile();
     let mut method_attributes = vec![];
@@ -793,13 +799,19 @@ fn raw_file_spec(
         method_attributes,
         command_line: &opts.command_line,
     };
-    // the brightest bin at the brightest pulse of the run sizes the counters
-    let max_mean = expected
-        .iter()
+    // the brightest bin at the brightest pulse of the run sizes the counters (every
+    // column of a changing scene, in full sunlight)
+    let columns: Vec<&ExpectedProfile> = match scene {
+        Some(sc) => sc.expected.iter().flatten().collect(),
+        None => expected.iter().collect(),
+    };
+    let brightest_sky = scene.map_or(0.0, |sc| sc.brightest_background());
+    let max_mean = columns
+        .into_iter()
         .flat_map(|e| {
             e.signal
                 .iter()
-                .map(|s| energy.envelope * s + e.background + e.dark)
+                .map(move |s| energy.envelope * s + e.background + brightest_sky + e.dark)
         })
         .fold(0.0f64, f64::max)
         * shots as f64;

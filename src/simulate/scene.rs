@@ -199,6 +199,22 @@ impl SceneModel {
         })
     }
 
+    /// An upper bound of the solar background counts per shot per bin of any channel:
+    /// the brightest albedo under an overhead sun at perihelion (0 without the sun).
+    pub fn brightest_background(&self) -> f64 {
+        let Some(sunlight) = &self.sunlight else {
+            return 0.0;
+        };
+        let albedo = self.albedo.iter().fold(0.0f64, |m, &a| m.max(a));
+        self.channel_sun
+            .iter()
+            .map(|&(factor, irradiance)| {
+                factor
+                    * sun::reflected_radiance(albedo, irradiance * 1.04, 0.0, sunlight.transmission)
+            })
+            .fold(0.0, f64::max)
+    }
+
     /// Whether the background comes from the sun.
     pub fn is_solar(&self) -> bool {
         self.sunlight.is_some()

@@ -44,6 +44,7 @@ use crate::scenario::{ExpectedProfile, Lidar};
 use crate::simulate::{self, ResolvedMethod, RunEnergy, StreamSampler};
 
 pub mod calibration;
+pub mod scene;
 
 pub use calibration::{BIN_INTERVAL, CHECK_LEVEL, Check, check};
 use calibration::{Shape, check_calibrated};
@@ -591,12 +592,17 @@ pub fn run(lidar: &Lidar, opts: &ValidateOptions) -> Result<Report> {
         ));
     }
     let seed = opts.seed.unwrap_or(cfg.simulation.seed);
-    let method = simulate::resolve_method(opts.method.unwrap_or(cfg.simulation.method), lidar)?;
+    let mut method = simulate::resolve_method(opts.method.unwrap_or(cfg.simulation.method), lidar)?;
     simulate::check_detector(lidar, false)?;
+    let energy = simulate::run_energy(lidar, seed, 0.0)?;
+    if let Some(sc) =
+        simulate::changing_scene(lidar, seed, opts.realizations, &mut method, false, &energy)?
+    {
+        return run_changing(lidar, opts, &sc, seed, method, &energy);
+    }
     let expected = lidar.expected()?;
     let shots = first.shots_per_profile();
     let laser = PulseEnergy::from_config(&cfg.instrument);
-    let energy = simulate::run_energy(lidar, seed, 0.0)?;
     let source = SimulatorSource::for_lidar(lidar, &expected, method, energy, seed);
     let mut models = Vec::new();
     let mut altitudes = Vec::new();
@@ -635,6 +641,62 @@ pub fn run(lidar: &Lidar, opts: &ValidateOptions) -> Result<Report> {
         checks,
         consistent,
         warning: lidar.run_notes(&expected),
+    })
+}
+
+/// `validate` of a scene that changes along the track: each profile against its own
+/// expectation ([`scene`]); an ideal detector without jitter.
+fn run_changing(
+    lidar: &Lidar,
+    opts: &ValidateOptions,
+    sc: &simulate::scene::SceneModel,
+    seed: u64,
+    method: ResolvedMethod,
+    energy: &RunEnergy,
+) -> Result<Report> {
+    if lidar
+        .channels
+        .iter()
+        .any(|c| c.instrument.dead_time.is_some())
+        || !energy.law.is_constant()
+    {
+        return Err(Error::Unsupported(
+            "validate of a scene that changes along the track checks an ideal detector with a \
+             constant pulse energy (this version): set instrument.detector.dead_time_s = 0 and \
+             instrument.pulse_energy_jitter = 0"
+                .into(),
+        ));
+    }
+    let first = lidar.first();
+    let n_bins = first.geometry.n_bins;
+    let channels = lidar.channels.len();
+    let shots = first.shots_per_profile();
+    let names = lidar.channel_names();
+    let altitudes: Vec<f64> = (0..channels)
+        .flat_map(|_| (0..n_bins).map(|i| first.geometry.bin_centre_altitude_m(i)))
+        .collect();
+    let draw = |p: u64| {
+        let d = simulate::draw_scene_profile(sc, seed, channels, p, n_bins, energy);
+        let mu = d.values[simulate::RECORDED_ROW]
+            .iter()
+            .map(|x| x * shots as f64)
+            .collect();
+        (d.counts, mu)
+    };
+    let (bins, checks) = scene::validate_profiles(&draw, opts.realizations, &names, &altitudes);
+    let consistent = checks.iter().all(|c| c.pass);
+    Ok(Report {
+        scenario: first.loaded.config.name.clone(),
+        method: method.name().into(),
+        seed,
+        realizations: opts.realizations,
+        shots_per_profile: shots,
+        background_bins: 0,
+        channels: names,
+        bins,
+        checks,
+        consistent,
+        warning: None,
     })
 }
 
