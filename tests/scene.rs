@@ -99,3 +99,151 @@ fn a_short_profile_continues_with_us76() {
     assert!(full.atmosphere.molecules.continuation_note().is_none());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+fn orbit_run(name: &str, extra: &[&str]) -> (std::path::PathBuf, hdf5::File) {
+    let dir = std::env::temp_dir().join(format!("lidarsim-scene-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("orbit.h5");
+    let cfg = common::config_path("instruments/caliop_orbit.toml");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_lidarsim"))
+        .args([
+            "simulate",
+            cfg.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let f = hdf5::File::open(&out).unwrap();
+    (dir, f)
+}
+
+fn read(f: &hdf5::File, name: &str) -> Vec<f64> {
+    f.dataset(name).unwrap().read_raw().unwrap()
+}
+
+/// Geolocation along the CALIOP-like orbit: the along-track distance grows by the
+/// ground speed times the profile time (to 0.1 %), latitude stays within the
+/// inclination's reach, and the file's latitude is the orbit's.
+#[test]
+fn profiles_are_geolocated_along_the_orbit() {
+    let (dir, f) = orbit_run("geo", &[]);
+    let d = read(&f, "along_track_distance");
+    let lat = read(&f, "latitude");
+    let speed = lidarsim::geometry::ground_track_speed_m_per_s(705e3);
+    let profile_time = 15.0 / 20.16;
+    for w in d.windows(2) {
+        assert!(((w[1] - w[0]) / (speed * profile_time) - 1.0).abs() < 1e-3);
+    }
+    assert!(lat.iter().all(|l| l.abs() <= 180.0 - 98.2 + 1e-9));
+    assert!(
+        (lat[0] + 62.0).abs() < 0.1 && lat[199] < lat[0],
+        "descending from 62S"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The scene along the track: a profile inside the cirrus segment sees the cirrus, one in
+/// the clear segments none; the broken stratocumulus gives profiles between clear and
+/// overcast whose truth is the average over their shots; daylight reflected by the
+/// surface follows `ρ·F_λ/d²·cos θ_s/π·T` (within 1 %) until the terminator, then the
+/// night floor.
+#[test]
+fn segments_broken_cloud_and_the_terminator() {
+    let (dir, f) = orbit_run("segments", &[]);
+    let n_bins = read(&f, "altitude").len();
+    let alt = read(&f, "altitude");
+    let signal = read(&f, "expected_signal");
+    let bkg = read(&f, "expected_background");
+    let d = read(&f, "along_track_distance");
+    let at = |p: usize, z: f64| {
+        let i = (0..n_bins)
+            .min_by(|&a, &b| (alt[a] - z).abs().total_cmp(&(alt[b] - z).abs()))
+            .unwrap();
+        signal[p * n_bins + i]
+    };
+    let clear = 10; // segment 0 (0-250 km)
+    let cirrus = 75; // segment 1 (250-500 km)
+    assert!(d[clear] < 250e3 && (250e3..500e3).contains(&d[cirrus]));
+    assert!(at(cirrus, 10e3) > 5.0 * at(clear, 10e3));
+    // broken Sc (500-800 km): cloud-top bin at 1.4 km from zero (clear) to overcast
+    let sc: Vec<f64> = (0..200)
+        .filter(|&p| (510e3..790e3).contains(&d[p]))
+        .map(|p| at(p, 1.4e3))
+        .collect();
+    let (lo, hi) = sc
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+    assert!(
+        hi > 10.0 * lo.max(1e-12),
+        "no cloud-free and cloudy profiles: {lo} {hi}"
+    );
+    assert!(
+        sc.iter().any(|&x| x > 0.05 * hi && x < 0.95 * hi),
+        "no mixed profile"
+    );
+    // daylight: profile 0 over the ocean (ρ = 0.05), per bin per shot
+    let sc0 = common::scenario("instruments/caliop_532.toml", &[]);
+    let factor = sc0.instrument.background_per_radiance;
+    let start = humantime::parse_rfc3339("2024-06-20T12:00:00Z").unwrap();
+    let unix = start
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_secs_f64()
+        + 0.5 * 15.0 / 20.16;
+    let lat = read(&f, "latitude");
+    let lon = read(&f, "longitude");
+    let sun = lidarsim::scene::sun::solar_zenith_deg(unix, lat[0], lon[0]).to_radians();
+    let au = lidarsim::scene::sun::earth_sun_distance_au(unix);
+    let flux = lidarsim::scene::sun::solar_spectral_irradiance_photons(532.0) / (au * au);
+    let want = 0.05 * flux * sun.cos() / std::f64::consts::PI * 0.8 * factor + 1e10 * factor;
+    assert!((bkg[0] / want - 1.0).abs() < 0.01, "{} vs {want}", bkg[0]);
+    // night after the terminator: the floor alone
+    assert!((bkg[199 * n_bins] / (1e10 * factor) - 1.0).abs() < 1e-9);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `validate` passes on the orbit run (segments, broken cloud, the terminator), each
+/// profile against its own expectation (false alarm < 2e-3), and rejects expectations
+/// 2 % low in the bright bins (a test that can fail).
+#[test]
+fn validate_checks_a_changing_scene_profile_by_profile() {
+    let lidar = common::lidar("instruments/caliop_orbit.toml", &[]);
+    let opts = lidarsim::validate::ValidateOptions {
+        realizations: 200,
+        method: None,
+        seed: Some(5),
+        json: None,
+    };
+    let report = lidarsim::validate::run(&lidar, &opts).unwrap();
+    assert!(report.consistent, "{:#?}", report.checks);
+    let tested = report
+        .checks
+        .iter()
+        .find(|c| c.statistic == "variance")
+        .unwrap();
+    assert!(tested.bins_tested > 100);
+    // the same draws against expectations 2 % too low
+    let mut method = lidarsim::simulate::ResolvedMethod::Aggregate;
+    let energy = lidarsim::simulate::run_energy(&lidar, 5, 0.0).unwrap();
+    let sc = lidarsim::simulate::changing_scene(&lidar, 5, 200, &mut method, false, &energy)
+        .unwrap()
+        .unwrap();
+    let n_bins = lidar.first().geometry.n_bins;
+    let draw = |p: u64| {
+        let d = lidarsim::simulate::draw_scene_profile(&sc, 5, 1, p, n_bins, &energy);
+        let mu = d.values[lidarsim::simulate::RECORDED_ROW]
+            .iter()
+            .map(|x| 15.0 * x * 0.98)
+            .collect();
+        (d.counts, mu)
+    };
+    let alt: Vec<f64> = (0..n_bins)
+        .map(|i| lidar.first().geometry.bin_centre_altitude_m(i))
+        .collect();
+    let (_, checks) =
+        lidarsim::validate::scene::validate_profiles(&draw, 200, &lidar.channel_names(), &alt);
+    assert!(!checks[0].pass, "a 2 % error not seen: {:#?}", checks[0]);
+}
