@@ -256,6 +256,10 @@ pub struct AtmosphereConfig {
     /// Aerosol and cloud layers.
     #[serde(default)]
     pub layers: Vec<LayerConfig>,
+    /// Ozone absorption (Chappuis band) in T² from a standard ozone profile
+    /// (`src/atmosphere/ozone.rs`); on unless set to false.
+    #[serde(default = "yes")]
+    pub ozone: bool,
 }
 
 /// Molecular atmosphere options.
@@ -1296,6 +1300,16 @@ impl ScenarioConfig {
             c.range("atmosphere.molecular.depolarization", rho, 0.0, 0.2)?;
         }
         c.range("atmosphere.molecular.grid_m", m.grid_m, 0.1, 1000.0)?;
+        let wl = self.instrument.wavelength_nm;
+        if self.atmosphere.ozone && crate::atmosphere::ozone::cross_section_m2(wl).is_nan() {
+            return Err(c.fail(
+                "atmosphere.ozone",
+                format!(
+                    "no ozone cross-section is tabulated at {wl} nm (from 350 nm up); set \
+                     atmosphere.ozone = false"
+                ),
+            ));
+        }
         if let Some(a) = &self.atmosphere.aerosol {
             c.positive("atmosphere.aerosol.visibility_km", a.visibility_km, 1e4)?;
             c.range(

@@ -32,6 +32,7 @@ fn every_config_key_is_documented() {
         "ground/ground_532_depol.toml",
         "instruments/caliop_532.toml",
         "instruments/caliop_3ch.toml",
+        "instruments/caliop_orbit.toml",
     ] {
         let lidar = common::lidar(
             cfg,

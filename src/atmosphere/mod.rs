@@ -177,6 +177,8 @@ pub struct Atmosphere {
     pub channel: Channel,
     /// The channel's polarization cross-talk.
     pub crosstalk: f64,
+    /// Ozone absorption at this wavelength, if on: the Chappuis cross-section, m².
+    pub ozone_cross_section_m2: Option<f64>,
 }
 
 impl Atmosphere {
@@ -232,6 +234,11 @@ impl Atmosphere {
             grid_m: m.grid_m,
             channel: cfg.instrument.channel,
             crosstalk: cfg.instrument.crosstalk,
+            ozone_cross_section_m2: cfg
+                .atmosphere
+                .ozone
+                .then(|| ozone::cross_section_m2(wl))
+                .filter(|s| *s > 0.0),
         })
     }
 
@@ -247,6 +254,12 @@ impl Atmosphere {
             * self
                 .channel
                 .share(self.molecules.depolarization, self.crosstalk);
+        if let Some(sigma) = self.ozone_cross_section_m2 {
+            // absorption only: it attenuates, it does not backscatter
+            let alpha = sigma * ozone::number_density_m3(z_m);
+            o.alpha_total += alpha;
+            o.alpha_effective += alpha;
+        }
         if let Some(a) = &self.aerosol {
             let alpha = a.extinction_per_m(z_m);
             let beta = alpha / a.lidar_ratio_sr;
@@ -290,6 +303,9 @@ impl Atmosphere {
         let last = (z_hi / self.grid_m).floor() as i64;
         edges.extend((first..=last).map(|k| k as f64 * self.grid_m));
         edges.push(self.molecules.top_m());
+        if self.ozone_cross_section_m2.is_some() {
+            edges.push(ozone::TOP_ALTITUDE_M);
+        }
         if self.aerosol.is_some() {
             edges.push(aerosol_profile::PROFILE_TOP_M);
         }

@@ -690,11 +690,9 @@ pub fn draw_scene_profile(
     let mut truth = sc.truth(&runs);
     if sc.is_solar() {
         // an ideal detector records what arrives
-        for k in 0..channels {
-            let dark = sc.expected[runs[0].0][k].dark;
-            for i in k * n_bins..(k + 1) * n_bins {
-                truth.recorded[i] = truth.signal[i] + background[i] + dark;
-            }
+        for (i, recorded) in truth.recorded.iter_mut().enumerate() {
+            let dark = sc.expected[runs[0].0][i / n_bins].dark;
+            *recorded = truth.signal[i] + background[i] + dark;
         }
     }
     let snr: Vec<f64> = (0..channels)
