@@ -636,10 +636,15 @@ pub fn changing_scene(
     if !crate::scene::track::Track::is_changing(cfg) && !solar {
         return Ok(None);
     }
-    if solar && *method == ResolvedMethod::Shot {
+    if solar
+        && lidar
+            .channels
+            .iter()
+            .any(|c| c.instrument.dead_time.is_some())
+    {
         return Err(Error::Unsupported(
-            "background.model = \"solar\" is drawn with --method aggregate in this version \
-             (the background changes from profile to profile); dead time is not available with it yet"
+            "background.model = \"solar\" with dead time is not simulated yet (the sunlight is \
+             placed per run of shots, not shot by shot); set instrument.detector.dead_time_s = 0"
                 .into(),
         ));
     }

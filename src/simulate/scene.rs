@@ -26,6 +26,27 @@ use crate::scene::sun;
 use crate::scene::track::{Column, MAX_COLUMNS, Track};
 use crate::surface::Surface;
 
+/// Seed offset of a solar background's stream.
+const SKY_STREAM: u64 = 0x5C7B_ACC6_0000_0001;
+
+/// Adds background counts of mean `per_bin` in every bin of `acc` (the run's shots
+/// together): the total `N ~ Poisson(per_bin·bins)` placed uniformly (a multinomial
+/// split of a Poisson total is independent Poissons), each by the multiply-shift map of a
+/// 64-bit uniform (bias ≤ bins/2⁶⁴). Cost O(N + 1).
+fn add_background<R: rand::Rng>(rng: &mut R, per_bin: f64, acc: &mut [u64]) {
+    let total = per_bin * acc.len() as f64;
+    if total <= 0.0 {
+        return;
+    }
+    let n =
+        rand_distr::Poisson::new(total).map_or(0.0, |d| rand_distr::Distribution::sample(&d, rng));
+    let bins = acc.len() as u128;
+    for _ in 0..n as u64 {
+        let bin = (u128::from(rng.next_u64()) * bins >> 64) as usize;
+        acc[bin] += 1;
+    }
+}
+
 /// Seed of run `j`'s streams within a profile (run 0 keeps the channel's seed).
 fn run_seed(seed: u64, j: usize) -> u64 {
     seed ^ (j as u64).wrapping_mul(0xA076_1D64_78BD_642F)
@@ -150,6 +171,7 @@ impl SceneModel {
             .iter()
             .map(|&c| column_albedo(&track.column_config(&first.loaded.config, c)))
             .collect();
+        let solar = lidar.first().loaded.config.background.model == BackgroundModel::Solar;
         for &col in &all {
             let channels = lidar
                 .channels
@@ -166,7 +188,9 @@ impl SceneModel {
                         .iter()
                         .zip(&e)
                         .map(|(c, e)| {
-                            let rest = vec![e.background + e.dark; e.n_bins()];
+                            // a solar background is placed per run ([`add_background`])
+                            let sky = if solar { 0.0 } else { e.background };
+                            let rest = vec![sky + e.dark; e.n_bins()];
                             StreamSampler::new(ResolvedMethod::Shot, &e.signal, &rest, 0.0)
                                 .through_detector(c.instrument.dead_time)
                         })
@@ -297,6 +321,10 @@ impl SceneModel {
         } else {
             for (j, &(col, n)) in runs.iter().enumerate() {
                 self.samplers[col][channel].profile_counts(run_seed(seed, j), p, n, acc);
+                if self.sunlight.is_some() {
+                    let mut rng = sampling::stream_rng(run_seed(seed, j) ^ SKY_STREAM, p, 0);
+                    add_background(&mut rng, n as f64 * backgrounds[j], acc);
+                }
             }
         }
     }
