@@ -295,6 +295,18 @@ pub fn simulate_as(
     Ok(())
 }
 
+/// `lidarsim curtain RAW.h5 --png OUT.png`: one channel's counts per shot against
+/// along-track distance (or time) and altitude.
+pub fn curtain(raw: &Path, png: &Path, channel: Option<&str>) -> Result<()> {
+    let mut outputs = Outputs::new([raw]);
+    let id = outputs.add("--png", png, Stream::Binary)?;
+    let c = crate::output::curtain::read(raw, channel)?;
+    let bytes = crate::output::curtain::png_bytes(&c)
+        .map_err(|r| Error::output(outputs.shown_path(id), r))?;
+    outputs.write(id, |w| w.write_all(&bytes))?;
+    outputs.commit()
+}
+
 /// `lidarsim export-scc RAW.h5 OUT.nc`: a raw file to the SCC raw NetCDF format.
 pub fn export_scc(raw: &Path, out: &Path, opts: &scc::SccOptions) -> Result<()> {
     let mut outputs = Outputs::new([raw]);

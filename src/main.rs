@@ -109,6 +109,17 @@ enum Command {
         #[arg(long, value_enum, default_value_t = lidarsim::commands::OutputFormat::Raw)]
         format: lidarsim::commands::OutputFormat,
     },
+    /// Draws a raw file's counts per shot against along-track distance (or time) and altitude.
+    Curtain {
+        /// The raw lidar file (`simulate -o`).
+        raw: PathBuf,
+        /// Output PNG.
+        #[arg(long, value_name = "OUT.png")]
+        png: PathBuf,
+        /// The channel to draw (default: the first).
+        #[arg(long, value_name = "NAME")]
+        channel: Option<String>,
+    },
     /// Converts a raw file (ground run) to the EARLINET SCC raw NetCDF format.
     ExportScc {
         /// The raw lidar file (`simulate -o`).
@@ -195,6 +206,9 @@ fn main() -> ExitCode {
                 command_line: std::env::args().collect::<Vec<_>>().join(" "),
             };
             lidarsim::commands::simulate_as(config, set, &opts, *threads, *format).map(|()| true)
+        }
+        Command::Curtain { raw, png, channel } => {
+            lidarsim::commands::curtain(raw, png, channel.as_deref()).map(|()| true)
         }
         Command::ExportScc {
             raw,

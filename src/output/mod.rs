@@ -2,6 +2,7 @@
 //! Every output goes through [`safe_file`]: one rule for temporary names, renames,
 //! locks, special files, standard output and signals.
 
+pub mod curtain;
 pub mod expect;
 pub mod raw_file;
 pub mod safe_file;

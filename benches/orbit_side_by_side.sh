@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# A whole CALIOP-like orbit at shot level (issue 9's speed criterion): lidarsim
+# `simulate --method shot --threads 1` on configs/instruments/caliop_orbit.toml over
+# 7,960 profiles of 15 shots (119,400 shots, one 98.7 min orbit, the scene changing
+# along it: segments, broken cloud, day and night), against numpy's Generator.poisson
+# drawing the same per-shot means (each profile's own, from the file's per-profile
+# truth) shot by shot, one thread each, in one run. Also the peak memory of half and
+# the whole orbit (flat: the run streams its profiles). Needs python3 with numpy, h5py.
+#   bash benches/orbit_side_by_side.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo build --release --quiet
+bin=target/release/lidarsim
+cfg=configs/instruments/caliop_orbit.toml
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+for n in 3980 7960; do
+  echo "== lidarsim simulate --method shot --threads 1 --profiles $n"
+  /usr/bin/time -f "peak memory %M kB" "$bin" simulate "$cfg" -o "$tmp/orbit.h5" \
+    --method shot --threads 1 --profiles "$n" 2>&1 | grep -v "^lidarsim: warning"
+done
+echo "== numpy Generator.poisson, the same per-shot means, shot by shot"
+OMP_NUM_THREADS=1 python3 - "$tmp/orbit.h5" <<'PY'
+import sys, time
+import h5py
+import numpy as np
+f = h5py.File(sys.argv[1])
+sig = f["expected_signal"]
+bkg = f["expected_background"]
+dark = f["expected_dark"][0, :]
+shots = int(f["n_shots"][0])
+rng = np.random.default_rng(1)
+draws, elapsed = 0, 0.0
+for p in range(sig.shape[0]):
+    lam = sig[p, 0, :] + bkg[p, 0, :] + dark
+    t0 = time.perf_counter()
+    x = rng.poisson(lam, size=(shots, lam.size)).sum(axis=0)
+    elapsed += time.perf_counter() - t0
+    draws += x.size * shots
+print(f"numpy: {draws:.4g} draws in {elapsed:.3f} s ({draws / elapsed:.3g} draws/s)")
+PY
