@@ -436,6 +436,10 @@ pub struct SceneConfig {
     /// end of the run.
     #[serde(default)]
     pub segments: Vec<SegmentConfig>,
+    /// A tabulated curtain (along-track × altitude aerosol and cloud, `src/scene/curtain.rs`),
+    /// relative to the config file; instead of `segments`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub curtain: Option<PathBuf>,
 }
 
 /// One stretch of the track with its own layers, aerosol and surface.
@@ -982,6 +986,15 @@ impl ScenarioConfig {
                 "scene.segments",
                 "a scene along the track needs a space-borne platform",
             ));
+        }
+        if scene.curtain.is_some() && !scene.segments.is_empty() {
+            return Err(c.fail(
+                "scene.curtain",
+                "gives the scene along the track: use it or scene.segments, not both",
+            ));
+        }
+        if scene.curtain.is_some() && self.platform.kind == PlatformKind::Ground {
+            return Err(c.fail("scene.curtain", "a curtain needs a space-borne platform"));
         }
         if scene.segments.len() > 10_000 {
             return Err(c.fail("scene.segments", "at most 10,000 segments"));

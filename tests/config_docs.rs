@@ -33,6 +33,7 @@ fn every_config_key_is_documented() {
         "instruments/caliop_532.toml",
         "instruments/caliop_3ch.toml",
         "instruments/caliop_orbit.toml",
+        "instruments/caliop_curtain.toml",
     ] {
         let lidar = common::lidar(
             cfg,

@@ -247,3 +247,53 @@ fn validate_checks_a_changing_scene_profile_by_profile() {
         lidarsim::validate::scene::validate_profiles(&draw, 200, &lidar.channel_names(), &alt);
     assert!(!checks[0].pass, "a 2 % error not seen: {:#?}", checks[0]);
 }
+
+/// A tabulated curtain: each column of the example file is a stretch of the track, so a
+/// profile under its middle third sees the cirrus and the smoke plume's bins rise along
+/// the track; a file that is not a curtain is refused in one line naming it.
+#[test]
+fn a_tabulated_curtain_is_the_scene() {
+    let dir = std::env::temp_dir().join(format!("lidarsim-curtain-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("c.h5");
+    let cfg = common::config_path("instruments/caliop_curtain.toml");
+    let run = |extra: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_lidarsim"))
+            .args([
+                "simulate",
+                cfg.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+            ])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = run(&[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let f = hdf5::File::open(&out).unwrap();
+    let alt = read(&f, "altitude");
+    let signal = read(&f, "expected_signal");
+    let n = alt.len();
+    let bin = |z: f64| {
+        (0..n)
+            .min_by(|&a, &b| (alt[a] - z).abs().total_cmp(&(alt[b] - z).abs()))
+            .unwrap()
+    };
+    // 40 profiles of 5.03 km over 40 columns of 5 km: profile 20 is under the cirrus
+    assert!(signal[20 * n + bin(10e3)] > 5.0 * signal[2 * n + bin(10e3)]);
+    // the plume: at 2 km early, at 5 km late
+    assert!(signal[2 * n + bin(2e3)] > 2.0 * signal[38 * n + bin(2e3)]);
+    assert!(signal[38 * n + bin(5e3)] > 2.0 * signal[2 * n + bin(5e3)]);
+    drop(f);
+    let bad = dir.join("not_a_curtain.h5");
+    std::fs::write(&bad, b"plain text").unwrap();
+    let o = run(&["--set", &format!("scene.curtain=\"{}\"", bad.display())]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("not_a_curtain.h5") && err.lines().count() == 1,
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

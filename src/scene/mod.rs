@@ -4,6 +4,7 @@
 //! `orbit` and `sun` are pure functions of time and place; `track` lays the scene's
 //! segments and broken cloud along the track.
 
+pub mod curtain;
 pub mod orbit;
 pub mod sun;
 pub mod track;

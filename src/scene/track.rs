@@ -75,7 +75,8 @@ fn n_segments(cfg: &ScenarioConfig) -> usize {
 impl Track {
     /// Whether `cfg` describes a scene that changes along the track.
     pub fn is_changing(cfg: &ScenarioConfig) -> bool {
-        (0..n_segments(cfg)).any(|i| i > 0 || segment_layers(cfg, i).iter().any(is_broken))
+        cfg.scene.as_ref().is_some_and(|s| s.curtain.is_some())
+            || (0..n_segments(cfg)).any(|i| i > 0 || segment_layers(cfg, i).iter().any(is_broken))
     }
 
     /// The track of a run of `profiles` profiles of `shots_per_profile` shots at ground

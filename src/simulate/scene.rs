@@ -156,8 +156,14 @@ impl SceneModel {
     pub fn new(lidar: &Lidar, seed: u64, profiles: u64, method: ResolvedMethod) -> Result<Self> {
         let first = lidar.first();
         let shots = first.shots_per_profile();
+        // a curtain file is the same scene as its segments
+        let configs: Vec<ScenarioConfig> = lidar
+            .channels
+            .iter()
+            .map(|c| with_curtain(&c.loaded))
+            .collect::<Result<_>>()?;
         let speed = crate::geometry::ground_track_speed_m_per_s(first.geometry.platform_altitude_m);
-        let track = Track::new(&first.loaded.config, seed, speed, shots, profiles);
+        let track = Track::new(&configs[0], seed, speed, shots, profiles);
         let all = track.columns();
         if all.len() > MAX_COLUMNS {
             return Err(Error::Unsupported(format!(
@@ -169,14 +175,15 @@ impl SceneModel {
         let mut samplers = Vec::with_capacity(all.len());
         let albedo = all
             .iter()
-            .map(|&c| column_albedo(&track.column_config(&first.loaded.config, c)))
+            .map(|&c| column_albedo(&track.column_config(&configs[0], c)))
             .collect();
         let solar = lidar.first().loaded.config.background.model == BackgroundModel::Solar;
         for &col in &all {
             let channels = lidar
                 .channels
                 .iter()
-                .map(|c| column_scenario(&track, c, col))
+                .zip(&configs)
+                .map(|(c, cfg)| column_scenario(&track, c, cfg, col))
                 .collect::<Result<Vec<Scenario>>>()?;
             let e: Vec<ExpectedProfile> = channels
                 .iter()
@@ -378,10 +385,26 @@ pub fn run_energy_sums(energy: &RunEnergy, p: u64, shots: u64, runs: &[(usize, u
         .collect()
 }
 
+/// The config with its curtain file, if any, turned into segments.
+fn with_curtain(loaded: &LoadedConfig) -> Result<ScenarioConfig> {
+    let mut cfg = loaded.config.clone();
+    if let Some(scene) = cfg.scene.as_mut()
+        && let Some(file) = scene.curtain.take()
+    {
+        scene.segments = crate::scene::curtain::segments(&loaded.resolve_path(&file))?;
+    }
+    Ok(cfg)
+}
+
 /// Channel scenario `c` in column `col`: its config with the column's layers, aerosol
 /// and surface.
-fn column_scenario(track: &Track, c: &Scenario, col: Column) -> Result<Scenario> {
-    let config = track.column_config(&c.loaded.config, col);
+fn column_scenario(
+    track: &Track,
+    c: &Scenario,
+    cfg: &ScenarioConfig,
+    col: Column,
+) -> Result<Scenario> {
+    let config = track.column_config(cfg, col);
     let loaded = LoadedConfig {
         channels: vec![ChannelConfig {
             name: c.channel_name.clone(),

@@ -1,0 +1,174 @@
+//! A tabulated curtain (`[scene] curtain = "FILE.h5"`): the aerosol and cloud of the
+//! scene as an along-track × altitude grid, e.g. from a model or a retrieval. Each
+//! along-track column becomes a segment of the track whose layers are the grid's cells
+//! (`docs/scenes.md` has the layout; `configs/atmospheres/curtain_example.h5` is an
+//! example made by `tools/make_curtain_example.py`).
+//!
+//! **Layout** (HDF5 or netCDF-4):
+//!
+//! | name | dims | meaning |
+//! |---|---|---|
+//! | `along_track_km` | (along_track) | start of each column along the track, km, strictly increasing from 0 |
+//! | `altitude_km` | (altitude) | cell centres, km, strictly increasing, evenly spaced (cells span the midpoints) |
+//! | `extinction_aerosol`, `extinction_cloud` | (along_track, altitude) | extinction, km⁻¹, ≥ 0 (either may be absent) |
+//! | `lidar_ratio_aerosol`, `lidar_ratio_cloud` | (along_track, altitude) | lidar ratio, sr, in [1, 1e4] where the extinction is > 0 |
+//! | `depolarization_aerosol`, `depolarization_cloud` | (along_track, altitude) | linear depolarization ratio in [0, 1] (absent = 0) |
+//! | root attribute `wavelength_nm` | | the wavelength of the values |
+//! | attribute `angstrom_exponent` of `extinction_aerosol` | | its Ångström exponent (absent = 0) |
+//!
+//! A column's last stretch runs to the next column's start; the last column's length is
+//! the previous spacing. Cells with zero extinction are left out.
+
+use std::path::Path;
+
+use crate::config::{LayerConfig, LayerKind, SegmentConfig};
+use crate::error::{Error, Result};
+
+/// Most cells (columns × altitudes) a curtain may have.
+pub const MAX_CELLS: usize = 2_000_000;
+
+/// The segments of the curtain file `path`.
+pub fn segments(path: &Path) -> Result<Vec<SegmentConfig>> {
+    let fail = |why: String| Error::output(path, why);
+    let f = hdf5::File::open(path)
+        .map_err(|_| fail("cannot open the curtain (not an HDF5 / netCDF-4 file)".into()))?;
+    let vector = |name: &str| -> Result<Vec<f64>> {
+        f.dataset(name)
+            .and_then(|d| d.read_raw::<f64>())
+            .map_err(|_| fail(format!("curtain: no readable `{name}`")))
+    };
+    let x = vector("along_track_km")?;
+    let z = vector("altitude_km")?;
+    check_axis(&x, "along_track_km").map_err(fail)?;
+    check_axis(&z, "altitude_km").map_err(fail)?;
+    if x.len() * z.len() > MAX_CELLS {
+        return Err(fail(format!("curtain: more than {MAX_CELLS} cells")));
+    }
+    let wavelength_nm: f64 = f
+        .attr("wavelength_nm")
+        .and_then(|a| a.read_scalar())
+        .map_err(|_| fail("curtain: no root attribute `wavelength_nm`".into()))?;
+    let grid = |name: &str, default: Option<f64>| -> Result<Option<Vec<f64>>> {
+        match f.dataset(name) {
+            Ok(d) => {
+                if d.shape() != [x.len(), z.len()] {
+                    return Err(fail(format!(
+                        "curtain: `{name}` is not (along_track, altitude)"
+                    )));
+                }
+                let v: Vec<f64> = d
+                    .read_raw()
+                    .map_err(|e| fail(format!("curtain: `{name}`: {e}")))?;
+                Ok(Some(v))
+            }
+            Err(_) => Ok(default.map(|d| vec![d; x.len() * z.len()])),
+        }
+    };
+    let mut species = Vec::new();
+    for (kind, tag) in [(LayerKind::Aerosol, "aerosol"), (LayerKind::Cloud, "cloud")] {
+        let Some(ext) = grid(&format!("extinction_{tag}"), None)? else {
+            continue;
+        };
+        let ratio = grid(&format!("lidar_ratio_{tag}"), None)?.ok_or_else(|| {
+            fail(format!(
+                "curtain: `extinction_{tag}` without `lidar_ratio_{tag}`"
+            ))
+        })?;
+        let depol = grid(&format!("depolarization_{tag}"), Some(0.0))?.unwrap_or_default();
+        let angstrom = f
+            .dataset(&format!("extinction_{tag}"))
+            .and_then(|d| d.attr("angstrom_exponent"))
+            .and_then(|a| a.read_scalar::<f64>())
+            .ok();
+        check_values(&ext, &ratio, &depol, tag).map_err(fail)?;
+        species.push((kind, ext, ratio, depol, angstrom));
+    }
+    let dz = if z.len() > 1 { z[1] - z[0] } else { 1.0 };
+    let spacing = if x.len() > 1 {
+        x[x.len() - 1] - x[x.len() - 2]
+    } else {
+        1.0
+    };
+    Ok((0..x.len())
+        .map(|i| {
+            let length_km = if i + 1 < x.len() {
+                x[i + 1] - x[i]
+            } else {
+                spacing
+            };
+            let mut layers = Vec::new();
+            for (kind, ext, ratio, depol, angstrom) in &species {
+                for (k, zc) in z.iter().enumerate() {
+                    let c = i * z.len() + k;
+                    if ext[c] > 0.0 {
+                        layers.push(LayerConfig {
+                            kind: *kind,
+                            base_km: zc - dz / 2.0,
+                            top_km: zc + dz / 2.0,
+                            extinction_per_km: ext[c],
+                            lidar_ratio_sr: ratio[c],
+                            depolarization: depol[c],
+                            multiple_scattering: 1.0,
+                            angstrom_exponent: *angstrom,
+                            reference_wavelength_nm: Some(wavelength_nm),
+                            lidar_ratio_sr_by_wavelength: Default::default(),
+                            cloud_fraction: None,
+                            cell_length_km: None,
+                        });
+                    }
+                }
+            }
+            SegmentConfig {
+                length_km,
+                layers: Some(layers),
+                aerosol: None,
+                surface: None,
+            }
+        })
+        .collect())
+}
+
+/// An axis: at least one finite value, strictly increasing (along-track from 0).
+fn check_axis(v: &[f64], name: &str) -> std::result::Result<(), String> {
+    if v.is_empty() || v.iter().any(|x| !x.is_finite()) {
+        return Err(format!("curtain: `{name}` is empty or not finite"));
+    }
+    if v.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(format!("curtain: `{name}` is not strictly increasing"));
+    }
+    if name == "along_track_km" && v[0] != 0.0 {
+        return Err(format!("curtain: `{name}` must start at 0"));
+    }
+    Ok(())
+}
+
+/// A species' values: extinction ≥ 0, lidar ratio in [1, 1e4] and depolarization in
+/// [0, 1] wherever there is extinction, everything finite.
+fn check_values(
+    ext: &[f64],
+    ratio: &[f64],
+    depol: &[f64],
+    tag: &str,
+) -> std::result::Result<(), String> {
+    for c in 0..ext.len() {
+        if !(ext[c].is_finite() && (0.0..=1e4).contains(&ext[c])) {
+            return Err(format!(
+                "curtain: `extinction_{tag}` cell {c} is {} (want 0 to 1e4 km-1)",
+                ext[c]
+            ));
+        }
+        if ext[c] > 0.0 && !(1.0..=1e4).contains(&ratio[c]) {
+            return Err(format!(
+                "curtain: `lidar_ratio_{tag}` cell {c} is {} (want 1 to 1e4 sr)",
+                ratio[c]
+            ));
+        }
+        if ext[c] > 0.0 && !(0.0..=1.0).contains(&depol[c]) {
+            return Err(format!(
+                "curtain: `depolarization_{tag}` cell {c} is {} (want 0 to 1)",
+                depol[c]
+            ));
+        }
+    }
+    Ok(())
+}
