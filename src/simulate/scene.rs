@@ -42,7 +42,7 @@ fn add_background<R: rand::Rng>(rng: &mut R, per_bin: f64, acc: &mut [u64]) {
         rand_distr::Poisson::new(total).map_or(0.0, |d| rand_distr::Distribution::sample(&d, rng));
     let bins = acc.len() as u128;
     for _ in 0..n as u64 {
-        let bin = (u128::from(rng.next_u64()) * bins >> 64) as usize;
+        let bin = ((u128::from(rng.next_u64()) * bins) >> 64) as usize;
         acc[bin] += 1;
     }
 }
