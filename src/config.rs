@@ -428,6 +428,22 @@ pub struct OrbitConfig {
     pub ascending: bool,
 }
 
+impl OrbitConfig {
+    /// The orbit at `altitude_m` (the platform's altitude).
+    pub fn orbit(
+        &self,
+        altitude_m: f64,
+    ) -> std::result::Result<crate::scene::orbit::Orbit, String> {
+        crate::scene::orbit::Orbit::new(
+            altitude_m,
+            self.inclination_deg,
+            self.start_latitude_deg,
+            self.start_longitude_deg,
+            self.ascending,
+        )
+    }
+}
+
 /// The scene along the track (`src/scene/`).
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -1106,14 +1122,8 @@ impl ScenarioConfig {
                 -360.0,
                 360.0,
             )?;
-            crate::scene::orbit::Orbit::new(
-                self.platform.altitude_km * 1e3,
-                o.inclination_deg,
-                o.start_latitude_deg,
-                o.start_longitude_deg,
-                o.ascending,
-            )
-            .map_err(|reason| c.fail("orbit", reason))?;
+            o.orbit(self.platform.altitude_km * 1e3)
+                .map_err(|reason| c.fail("orbit", reason))?;
         }
         if self
             .atmosphere

@@ -100,11 +100,17 @@ fn a_short_profile_continues_with_us76() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-fn orbit_run(name: &str, extra: &[&str]) -> (std::path::PathBuf, hdf5::File) {
+/// Runs `simulate` on shipped config `cfg` into a scratch directory named `name`: the
+/// directory, the output path and the process output.
+fn simulate(
+    cfg: &str,
+    name: &str,
+    extra: &[&str],
+) -> (std::path::PathBuf, std::path::PathBuf, std::process::Output) {
     let dir = std::env::temp_dir().join(format!("lidarsim-scene-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let out = dir.join("orbit.h5");
-    let cfg = common::config_path("instruments/caliop_orbit.toml");
+    let out = dir.join("run.h5");
+    let cfg = common::config_path(cfg);
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_lidarsim"))
         .args([
             "simulate",
@@ -115,6 +121,11 @@ fn orbit_run(name: &str, extra: &[&str]) -> (std::path::PathBuf, hdf5::File) {
         .args(extra)
         .output()
         .unwrap();
+    (dir, out, o)
+}
+
+fn orbit_run(name: &str, extra: &[&str]) -> (std::path::PathBuf, hdf5::File) {
+    let (dir, out, o) = simulate("instruments/caliop_orbit.toml", name, extra);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let f = hdf5::File::open(&out).unwrap();
     (dir, f)
@@ -253,23 +264,8 @@ fn validate_checks_a_changing_scene_profile_by_profile() {
 /// the track; a file that is not a curtain is refused in one line naming it.
 #[test]
 fn a_tabulated_curtain_is_the_scene() {
-    let dir = std::env::temp_dir().join(format!("lidarsim-curtain-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let out = dir.join("c.h5");
-    let cfg = common::config_path("instruments/caliop_curtain.toml");
-    let run = |extra: &[&str]| {
-        std::process::Command::new(env!("CARGO_BIN_EXE_lidarsim"))
-            .args([
-                "simulate",
-                cfg.to_str().unwrap(),
-                "-o",
-                out.to_str().unwrap(),
-            ])
-            .args(extra)
-            .output()
-            .unwrap()
-    };
-    let o = run(&[]);
+    let run = |extra: &[&str]| simulate("instruments/caliop_curtain.toml", "curtain", extra);
+    let (dir, out, o) = run(&[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let f = hdf5::File::open(&out).unwrap();
     let alt = read(&f, "altitude");
@@ -288,7 +284,7 @@ fn a_tabulated_curtain_is_the_scene() {
     drop(f);
     let bad = dir.join("not_a_curtain.h5");
     std::fs::write(&bad, b"plain text").unwrap();
-    let o = run(&["--set", &format!("scene.curtain=\"{}\"", bad.display())]);
+    let (_, _, o) = run(&["--set", &format!("scene.curtain=\"{}\"", bad.display())]);
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(

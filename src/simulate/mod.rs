@@ -594,14 +594,8 @@ pub fn orbit_of(lidar: &Lidar) -> Result<Option<crate::scene::orbit::Orbit>> {
     cfg.orbit
         .as_ref()
         .map(|o| {
-            crate::scene::orbit::Orbit::new(
-                cfg.platform.altitude_km * 1e3,
-                o.inclination_deg,
-                o.start_latitude_deg,
-                o.start_longitude_deg,
-                o.ascending,
-            )
-            .map_err(|reason| Error::config(lidar.first().loaded.file_label(), "orbit", reason))
+            o.orbit(cfg.platform.altitude_km * 1e3)
+                .map_err(|reason| Error::config(lidar.first().loaded.file_label(), "orbit", reason))
         })
         .transpose()
 }

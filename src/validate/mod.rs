@@ -543,6 +543,13 @@ pub fn validate_channels(
 ) -> (Vec<BinReport>, Vec<Check>) {
     let sums = accumulate(source, realizations, models.len(), channels);
     let bins = bin_reports(&sums, models, altitudes, realizations, channels);
+    let checks = verdicts(&bins);
+    (bins, checks)
+}
+
+/// The verdict of each statistic over the bins where it was tested: the outside count
+/// and Σz², each at [`CHECK_LEVEL`] (with the bins' calibrated shapes).
+fn verdicts(bins: &[BinReport]) -> Vec<Check> {
     let verdict = |name: &str, f: fn(&BinReport) -> &Stat| {
         let (zs, shapes): (Vec<f64>, Vec<Shape>) = bins
             .iter()
@@ -551,13 +558,12 @@ pub fn validate_channels(
             .unzip();
         check_calibrated(name, &zs, &shapes)
     };
-    let checks = vec![
+    vec![
         verdict("mean", |b| &b.mean),
         verdict("variance", |b| &b.variance),
         verdict("snr_known_background", |b| &b.snr_known_background),
         verdict("snr_estimated_background", |b| &b.snr_estimated_background),
-    ];
-    (bins, checks)
+    ]
 }
 
 /// Options of `lidarsim validate`.

@@ -19,8 +19,8 @@
 
 use rayon::prelude::*;
 
-use super::calibration::{self, Shape, check_calibrated};
-use super::{BinModel, BinReport, Check, MIN_TOTAL_COUNTS, Stat, mean_z};
+use super::calibration;
+use super::{BinModel, BinReport, Check, MIN_TOTAL_COUNTS, Stat, mean_z, verdicts};
 
 /// Per-bin sums over the profiles.
 #[derive(Debug, Clone, Copy, Default)]
@@ -78,20 +78,7 @@ pub fn validate_profiles(
         .enumerate()
         .map(|(i, s)| bin_report(s, n, &names[i / per_channel], i % per_channel, altitudes[i]))
         .collect();
-    let verdict = |name: &str, f: fn(&BinReport) -> &Stat| {
-        let (zs, shapes): (Vec<f64>, Vec<Shape>) = reports
-            .iter()
-            .map(f)
-            .filter_map(|s| s.z.map(|z| (z, s.shape.unwrap_or_else(Shape::normal))))
-            .unzip();
-        check_calibrated(name, &zs, &shapes)
-    };
-    let checks = vec![
-        verdict("mean", |b| &b.mean),
-        verdict("variance", |b| &b.variance),
-        verdict("snr_known_background", |b| &b.snr_known_background),
-        verdict("snr_estimated_background", |b| &b.snr_estimated_background),
-    ];
+    let checks = verdicts(&reports);
     (reports, checks)
 }
 

@@ -120,27 +120,18 @@ fn chunk_rows(spec: &RawFileSpec) -> usize {
 
 /// Creates an empty (profile, channel, bin) count variable at the file's width.
 fn create_count_var(file: &File, name: &str, spec: &RawFileSpec) -> hdf5::Result<Dataset> {
-    let (c, b) = (spec.channels.len(), spec.n_bins);
-    let builder = file.new_dataset_builder();
-    let builder = match spec.count_width {
-        CountWidth::U16 => builder.empty::<u16>(),
-        CountWidth::U32 => builder.empty::<u32>(),
-        CountWidth::U64 => builder.empty::<u64>(),
-    };
-    builder
-        .shape((spec.n_profiles, c, b))
-        .chunk((chunk_rows(spec), c, b))
-        .shuffle()
-        .deflate(DEFLATE_LEVEL)
-        .obj_track_times(false)
-        .attr_creation_order(AttrCreationOrder::Indexed)
-        .create(name)
+    match spec.count_width {
+        CountWidth::U16 => create_rows::<u16>(file, name, spec),
+        CountWidth::U32 => create_rows::<u32>(file, name, spec),
+        CountWidth::U64 => create_rows::<u64>(file, name, spec),
+    }
 }
 
-/// Creates a (profile, channel, bin) f64 variable, chunked and compressed as the counts.
-fn create_profile_var(file: &File, name: &str, spec: &RawFileSpec) -> hdf5::Result<Dataset> {
+/// Creates a (profile, channel, bin) variable of `T`, written a row at a time: chunked
+/// along profiles, shuffled and deflated.
+fn create_rows<T: H5Type>(file: &File, name: &str, spec: &RawFileSpec) -> hdf5::Result<Dataset> {
     let (c, b) = (spec.channels.len(), spec.n_bins);
-    file.new_dataset::<f64>()
+    file.new_dataset::<T>()
         .shape((spec.n_profiles, c, b))
         .chunk((chunk_rows(spec), c, b))
         .shuffle()
@@ -330,7 +321,7 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
             ),
         };
         let ds = match var.dims {
-            Dims::ProfileChannelBin => create_profile_var(&file, &var.name, spec)?,
+            Dims::ProfileChannelBin => create_rows::<f64>(&file, &var.name, spec)?,
             _ => create_var::<f64>(&file, &var.name, &shape)?,
         };
         if !var.dims.per_profile() {
