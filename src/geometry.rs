@@ -34,6 +34,25 @@ pub fn max_rep_rate_hz(range_m: f64) -> f64 {
     SPEED_OF_LIGHT_M_PER_S / (2.0 * range_m)
 }
 
+/// The largest repetition rate at which no pulse's returns reach another pulse's
+/// recording window (model.md §7, pulses in flight): returns come from ranges
+/// `returns = (r_a, r_s)` (top of the atmosphere to the surface), the window records
+/// `window = (r_n, r_f)`. Pulse `j−k` is seen in window `j` when `k·T ∈ [B, A]` with
+/// `A = 2(r_s − r_n)/c`, `B = 2(r_a − r_f)/c`; with `B ≤ 0 < A` every window is clean
+/// when `T > max(A, −B)`, whatever the number of pulses in flight. (A window wholly
+/// above the atmosphere, `B > 0`, is clean at `T > A` too; lower rates that slip
+/// between returns are not searched.)
+pub fn clean_windows_max_rep_rate_hz(returns: (f64, f64), window: (f64, f64)) -> f64 {
+    let a = 2.0 * (returns.1 - window.0) / SPEED_OF_LIGHT_M_PER_S;
+    let b = 2.0 * (returns.0 - window.1) / SPEED_OF_LIGHT_M_PER_S;
+    let t_min = a.max(-b);
+    if t_min > 0.0 {
+        1.0 / t_min
+    } else {
+        f64::INFINITY
+    }
+}
+
 /// The beam's path and the range-bin grid.
 #[derive(Debug, Clone)]
 pub struct Geometry {

@@ -233,6 +233,7 @@ impl Scenario {
             path,
             channel_name,
         };
+        sc.check_pulses_in_flight(&file)?;
         if let Some(asked) = sc.loaded.config.acquisition.background_bins {
             let available = sc.signal_free_bins().len();
             if asked > available {
@@ -248,6 +249,48 @@ impl Scenario {
             }
         }
         Ok(sc)
+    }
+
+    /// Refuses a space-borne repetition rate at which another pulse's returns (from the
+    /// top of the atmosphere down to the surface echo) reach the recording window
+    /// (model.md §7, [`crate::geometry::clean_windows_max_rep_rate_hz`]).
+    fn check_pulses_in_flight(&self, file: &str) -> Result<()> {
+        let g = &self.geometry;
+        if g.kind != crate::config::PlatformKind::Spaceborne {
+            return Ok(());
+        }
+        let ground_m = self
+            .loaded
+            .config
+            .surface
+            .as_ref()
+            .map_or(0.0, |s| s.altitude_km * 1e3);
+        let top_m = self.atmosphere.top_m().min(g.platform_altitude_m);
+        let window = (g.first_bin_range_m, g.max_range_m());
+        // the returns that matter: from the window's top (or the atmosphere's, if lower)
+        // down to the ground; the thin air above a window that starts inside the
+        // atmosphere returns far less than the window's own scene and is not counted
+        let first_return_m = g.range_at_altitude(top_m).max(window.0);
+        let last_return_m = g.range_at_altitude(ground_m);
+        let max_hz =
+            crate::geometry::clean_windows_max_rep_rate_hz((first_return_m, last_return_m), window);
+        let fl = self.instrument.rep_rate_hz;
+        if fl <= max_hz {
+            return Ok(());
+        }
+        Err(Error::config(
+            file,
+            "instrument.rep_rate_hz",
+            format!(
+                "at {fl} Hz the returns of another pulse (from {:.0} km range down to the \
+                 ground) reach the recording window ({:.0}-{:.0} km range); at most {:.0} Hz \
+                 keeps every window clean (several pulses in flight are fine below it)",
+                first_return_m / 1e3,
+                window.0 / 1e3,
+                window.1 / 1e3,
+                max_hz.floor()
+            ),
+        ))
     }
 
     /// The window's bins lying wholly above the atmosphere (signal-free: they measure the

@@ -293,3 +293,45 @@ fn a_tabulated_curtain_is_the_scene() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Pulses in flight (model.md §7): from 600 km a 40 km window at 5 kHz would record the
+/// previous pulse's lower atmosphere and surface echo: refused with the largest clean
+/// rate (3.7 kHz: the pulse period must exceed the window's 268 µs); several pulses in
+/// flight are accepted when the windows stay clean (10 kHz over a 14 km window, as
+/// ICESat-2 does); the paper's 250 Hz ceiling is one pulse in flight, not a limit.
+#[test]
+fn pulses_in_flight_are_checked_against_the_window() {
+    let load = |ov: &[&str]| {
+        let ov: Vec<String> = ov.iter().map(|s| s.to_string()).collect();
+        Scenario::load(&common::config_path("paper/scenario1.toml"), &ov)
+    };
+    let e = load(&[
+        "instrument.rep_rate_hz=5000",
+        "acquisition.top_altitude_km=40",
+    ])
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("instrument.rep_rate_hz") && e.contains("at most 3731 Hz"),
+        "{e}"
+    );
+    assert!(
+        load(&[
+            "instrument.rep_rate_hz=3700",
+            "acquisition.top_altitude_km=40"
+        ])
+        .is_ok()
+    );
+    assert!(
+        load(&[
+            "instrument.rep_rate_hz=10000",
+            "acquisition.top_altitude_km=13",
+            "acquisition.bottom_altitude_km=-1",
+        ])
+        .is_ok()
+    );
+    assert!(
+        load(&["instrument.rep_rate_hz=1000"]).is_ok(),
+        "one pulse in flight is a choice"
+    );
+}
