@@ -19,6 +19,7 @@
 use rand::Rng;
 
 use crate::config::{LayerConfig, ScenarioConfig, SegmentAerosol};
+use crate::error::{Error, Result, compact};
 use crate::sampling::stream_rng;
 
 /// Seed offset of the cloud-cell streams.
@@ -87,7 +88,7 @@ impl Track {
         speed_m_per_s: f64,
         shots_per_profile: u64,
         profiles: u64,
-    ) -> Track {
+    ) -> Result<Track> {
         let rep_rate_hz = cfg.instrument.rep_rate_hz;
         let run_length_m =
             speed_m_per_s * (profiles as f64 * shots_per_profile as f64) / rep_rate_hz;
@@ -113,19 +114,22 @@ impl Track {
                     .iter()
                     .filter(|l| is_broken(l))
                     .enumerate()
-                    .map(|(k, l)| draw_cells(l, seed, i, k, start_m, end_m))
-                    .collect();
+                    .map(|(k, l)| {
+                        check_cell_count(l, end_m - start_m)?;
+                        Ok(draw_cells(l, seed, i, k, start_m, end_m))
+                    })
+                    .collect::<Result<_>>()?;
                 let s = Stretch { start_m, cells };
                 start_m = end_m;
-                s
+                Ok(s)
             })
-            .collect();
-        Track {
+            .collect::<Result<_>>()?;
+        Ok(Track {
             speed_m_per_s,
             rep_rate_hz,
             shots_per_profile,
             stretches,
-        }
+        })
     }
 
     /// Every column the scene can show, in order (segment, then subset).
@@ -217,6 +221,26 @@ impl Track {
     }
 }
 
+/// Most cloudy cells a broken layer may have over the run (memory: 16 bytes each).
+pub const MAX_CELLS: f64 = 1e7;
+
+/// Refuses a broken layer whose cells over `length_m` would not fit in memory.
+fn check_cell_count(l: &LayerConfig, length_m: f64) -> Result<()> {
+    let f = l.cloud_fraction.unwrap_or(1.0);
+    let cell_m = l.cell_length_km.unwrap_or(1.0) * 1e3;
+    let cells = length_m * f / cell_m;
+    if cells > MAX_CELLS {
+        return Err(Error::Unsupported(format!(
+            "a broken layer with cells of {} km would need ~{cells:.1e} cells over the run's \
+             {:.3e} km (at most {}): use longer cells or fewer profiles",
+            compact(cell_m / 1e3),
+            length_m / 1e3,
+            compact(MAX_CELLS)
+        )));
+    }
+    Ok(())
+}
+
 /// The cloudy cells of broken layer `k` of segment `i` over `[start_m, end_m)`.
 fn draw_cells(
     l: &LayerConfig,
@@ -288,7 +312,7 @@ mod tests {
     #[test]
     fn runs_follow_the_cells_and_columns_drop_absent_layers() {
         let c = cfg(&[]);
-        let track = Track::new(&c, 3, 7000.0, 100, 50);
+        let track = Track::new(&c, 3, 7000.0, 100, 50).unwrap();
         assert!(Track::is_changing(&c));
         assert_eq!(track.columns().len(), 2);
         let mut seen = [0u64; 2];

@@ -163,7 +163,7 @@ impl SceneModel {
             .map(|c| with_curtain(&c.loaded))
             .collect::<Result<_>>()?;
         let speed = crate::geometry::ground_track_speed_m_per_s(first.geometry.platform_altitude_m);
-        let track = Track::new(&configs[0], seed, speed, shots, profiles);
+        let track = Track::new(&configs[0], seed, speed, shots, profiles)?;
         let all = track.columns();
         if all.len() > MAX_COLUMNS {
             return Err(Error::Unsupported(format!(
