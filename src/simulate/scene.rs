@@ -26,6 +26,10 @@ use crate::scene::sun;
 use crate::scene::track::{Column, MAX_COLUMNS, Track};
 use crate::surface::Surface;
 
+/// Memory kept per bin of each column and channel: its expectations (13 f64) and, for
+/// `shot`, its sampler's tables.
+const COLUMN_BYTES_PER_BIN: f64 = 200.0;
+
 /// Seed offset of a solar background's stream.
 const SKY_STREAM: u64 = 0x5C7B_ACC6_0000_0001;
 
@@ -171,6 +175,16 @@ impl SceneModel {
                 all.len()
             )));
         }
+        let kept_bytes = (all.len() * lidar.channels.len() * first.geometry.n_bins) as f64
+            * COLUMN_BYTES_PER_BIN;
+        crate::resources::require_memory(
+            &format!(
+                "the scene's {} columns of {} bins",
+                all.len(),
+                first.geometry.n_bins
+            ),
+            kept_bytes,
+        )?;
         let mut expected = Vec::with_capacity(all.len());
         let mut samplers = Vec::with_capacity(all.len());
         let albedo = all
