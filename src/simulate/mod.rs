@@ -630,18 +630,6 @@ pub fn changing_scene(
     if !crate::scene::track::Track::is_changing(cfg) && !solar {
         return Ok(None);
     }
-    if solar
-        && lidar
-            .channels
-            .iter()
-            .any(|c| c.instrument.dead_time.is_some())
-    {
-        return Err(Error::Unsupported(
-            "background.model = \"solar\" with dead time is not simulated yet (the sunlight is \
-             placed per run of shots, not shot by shot); set instrument.detector.dead_time_s = 0"
-                .into(),
-        ));
-    }
     if components {
         return Err(Error::Unsupported(
             "--components is not available for a scene that changes along the track yet".into(),
@@ -688,10 +676,15 @@ pub fn draw_scene_profile(
     }
     let mut truth = sc.truth(&runs);
     if sc.is_solar() {
-        // an ideal detector records what arrives
+        // an ideal detector records what arrives; a dead-time one its stationary rate per
+        // bin (the transient at a sharp edge, O(τ/Δt), is not in this truth)
         for (i, recorded) in truth.recorded.iter_mut().enumerate() {
-            let dark = sc.expected[runs[0].0][i / n_bins].dark;
-            *recorded = truth.signal[i] + background[i] + dark;
+            let k = i / n_bins;
+            let arriving = truth.signal[i] + background[i] + sc.expected[runs[0].0][k].dark;
+            *recorded = match &sc.dead[k] {
+                Some(d) => d.stationary_rate(arriving / d.bin_width_s) * d.bin_width_s,
+                None => arriving,
+            };
         }
     }
     let snr: Vec<f64> = (0..channels)

@@ -17,9 +17,11 @@ use std::collections::HashMap;
 
 use super::{ResolvedMethod, RunEnergy, StreamSampler};
 use crate::config::{BackgroundModel, LayerKind, LoadedConfig, ScenarioConfig, SurfaceKind};
+use crate::detector::DeadTime;
+use crate::detector::dead_time::{ARRIVAL_STREAM, Scratch};
 use crate::error::{Error, Result};
 use crate::receiver::ChannelConfig;
-use crate::sampling::{self, SHOT_BLOCK};
+use crate::sampling::{self, CountSink, SHOT_BLOCK, ShotCounts, ShotSampler};
 use crate::scenario::{ExpectedProfile, Lidar, Scenario};
 use crate::scene::orbit::Orbit;
 use crate::scene::sun;
@@ -37,17 +39,48 @@ const SKY_STREAM: u64 = 0x5C7B_ACC6_0000_0001;
 /// together): the total `N ~ Poisson(per_bin·bins)` placed uniformly (a multinomial
 /// split of a Poisson total is independent Poissons), each by the multiply-shift map of a
 /// 64-bit uniform (bias ≤ bins/2⁶⁴). Cost O(N + 1).
-fn add_background<R: rand::Rng>(rng: &mut R, per_bin: f64, acc: &mut [u64]) {
-    let total = per_bin * acc.len() as f64;
+fn add_background<R: rand::Rng, S: CountSink + ?Sized>(
+    rng: &mut R,
+    per_bin: f64,
+    bins: usize,
+    sink: &mut S,
+) {
+    let total = per_bin * bins as f64;
     if total <= 0.0 {
         return;
     }
     let n =
         rand_distr::Poisson::new(total).map_or(0.0, |d| rand_distr::Distribution::sample(&d, rng));
-    let bins = acc.len() as u128;
     for _ in 0..n as u64 {
-        let bin = ((u128::from(rng.next_u64()) * bins) >> 64) as usize;
-        acc[bin] += 1;
+        let bin = ((u128::from(rng.next_u64()) * bins as u128) >> 64) as usize;
+        sink.add(bin, 1);
+    }
+}
+
+/// Run `j` of a solar scene through a dead-time detector, shot by shot: each shot's
+/// signal and dark photons (the column's sampler) and its sunlit photons
+/// (`sky_per_bin` per bin, placed uniformly) recorded together.
+#[allow(clippy::too_many_arguments)]
+fn sunlit_dead_time_run(
+    photons: &ShotSampler,
+    dead: &DeadTime,
+    sky_per_bin: f64,
+    seed: u64,
+    p: u64,
+    shots: u64,
+    acc: &mut [u64],
+) {
+    let bins = acc.len();
+    let mut rng = sampling::stream_rng(seed, p, 0);
+    let mut sky = sampling::stream_rng(seed ^ SKY_STREAM, p, 0);
+    let mut arrivals = sampling::stream_rng(seed ^ ARRIVAL_STREAM, p, 0);
+    let mut shot = ShotCounts::new(bins);
+    let mut scratch = Scratch::default();
+    for _ in 0..shots {
+        shot.clear();
+        photons.sample_shot(&mut rng, &mut shot);
+        add_background(&mut sky, sky_per_bin, bins, &mut shot);
+        dead.record_shot(&mut arrivals, &shot, &mut scratch, acc);
     }
 }
 
@@ -73,6 +106,8 @@ pub struct SceneModel {
     /// Per channel: the instrument's background counts per unit radiance, and the solar
     /// irradiance at its wavelength at 1 AU (photons s⁻¹ m⁻² nm⁻¹).
     channel_sun: Vec<(f64, f64)>,
+    /// Per channel: the detector's dead time, if any.
+    pub dead: Vec<Option<DeadTime>>,
 }
 
 /// What the solar background needs: where the sun is for each profile.
@@ -241,6 +276,11 @@ impl SceneModel {
             sunlight: Sunlight::of(lidar)?,
             albedo,
             channel_sun,
+            dead: lidar
+                .channels
+                .iter()
+                .map(|c| c.instrument.dead_time)
+                .collect(),
         })
     }
 
@@ -341,10 +381,19 @@ impl SceneModel {
             sampling::aggregate_profile(&lambda, seed, p, self.shots, acc);
         } else {
             for (j, &(col, n)) in runs.iter().enumerate() {
-                self.samplers[col][channel].profile_counts(run_seed(seed, j), p, n, acc);
-                if self.sunlight.is_some() {
-                    let mut rng = sampling::stream_rng(run_seed(seed, j) ^ SKY_STREAM, p, 0);
-                    add_background(&mut rng, n as f64 * backgrounds[j], acc);
+                let sampler = &self.samplers[col][channel];
+                match (&self.sunlight, sampler) {
+                    (Some(_), StreamSampler::DeadTimed(photons, dead)) => {
+                        let s = run_seed(seed, j);
+                        sunlit_dead_time_run(photons, dead, backgrounds[j], s, p, n, acc);
+                    }
+                    (Some(_), _) => {
+                        sampler.profile_counts(run_seed(seed, j), p, n, acc);
+                        let mut rng = sampling::stream_rng(run_seed(seed, j) ^ SKY_STREAM, p, 0);
+                        let bins = acc.len();
+                        add_background(&mut rng, n as f64 * backgrounds[j], bins, acc);
+                    }
+                    (None, _) => sampler.profile_counts(run_seed(seed, j), p, n, acc),
                 }
             }
         }
