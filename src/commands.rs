@@ -295,6 +295,66 @@ pub fn simulate_as(
     Ok(())
 }
 
+/// `lidarsim sweep`: the grid of `vary` over the config, the `metrics` of the
+/// deterministic model at each point, as CSV (`-` for stdout) and optionally a PNG.
+pub fn sweep(
+    config: &Path,
+    overrides: &[String],
+    vary: &[String],
+    metrics: &[String],
+    csv: &Path,
+    png: Option<&Path>,
+) -> Result<()> {
+    use crate::design::sweep::{self, Axis, Metric};
+    if vary.is_empty() || metrics.is_empty() {
+        return Err(Error::Unsupported(
+            "sweep needs at least one --vary KEY=START..STOP:N and one --metric".into(),
+        ));
+    }
+    let axes = vary
+        .iter()
+        .map(|v| Axis::parse(v))
+        .collect::<Result<Vec<_>>>()?;
+    let parsed = metrics
+        .iter()
+        .map(|m| Metric::parse(m))
+        .collect::<Result<Vec<_>>>()?;
+    let base = Scenario::load(config, overrides)?;
+    let mut outputs = outputs_for(&base);
+    let csv_id = outputs.add("--csv", csv, Stream::Text)?;
+    let png_id = png
+        .map(|p| outputs.add("--png", p, Stream::Binary))
+        .transpose()?;
+    let points = sweep::grid(&axes)?.len();
+    let bar =
+        crate::simulate::progress_bar(std::io::IsTerminal::is_terminal(&std::io::stderr()), points);
+    let scenario = |extra: &[String]| {
+        let all: Vec<String> = overrides.iter().chain(extra).cloned().collect();
+        Scenario::load(config, &all)
+    };
+    let rows = sweep::run(&axes, &parsed, &scenario, &|| bar.inc(1))?;
+    bar.finish_and_clear();
+    outputs.write(csv_id, |w| {
+        let header: Vec<&str> = axes
+            .iter()
+            .map(|a| a.key.as_str())
+            .chain(metrics.iter().map(String::as_str))
+            .collect();
+        writeln!(w, "{}", header.join(","))?;
+        for (point, values) in &rows {
+            let cells: Vec<String> = point.iter().chain(values).map(|v| format!("{v}")).collect();
+            writeln!(w, "{}", cells.join(","))?;
+        }
+        Ok(())
+    })?;
+    if let Some(id) = png_id {
+        let bytes = crate::output::sweep_plot::png_bytes(&axes, &metrics[0], &rows)
+            .map_err(|r| Error::output(outputs.shown_path(id), r))?;
+        outputs.write(id, |w| w.write_all(&bytes))?;
+    }
+    outputs.commit()
+}
+
 /// `lidarsim curtain RAW.h5 --png OUT.png`: one channel's counts per shot against
 /// along-track distance (or time) and altitude.
 pub fn curtain(raw: &Path, png: &Path, channel: Option<&str>) -> Result<()> {

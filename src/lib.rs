@@ -8,6 +8,7 @@ pub mod cli_values;
 pub mod commands;
 pub mod config;
 pub mod constants;
+pub mod design;
 pub mod detector;
 pub mod error;
 pub mod geometry;

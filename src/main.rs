@@ -109,6 +109,26 @@ enum Command {
         #[arg(long, value_enum, default_value_t = lidarsim::commands::OutputFormat::Raw)]
         format: lidarsim::commands::OutputFormat,
     },
+    /// Instrument design grid from the deterministic model: metrics over varied config keys.
+    Sweep {
+        /// Scenario config (TOML).
+        config: PathBuf,
+        /// Override a config key (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// A key to vary: KEY=START..STOP:N (linear) or KEY=START..STOP:log:N (repeatable).
+        #[arg(long, value_name = "KEY=START..STOP[:log]:N")]
+        vary: Vec<String>,
+        /// snr_at:Zkm, max_altitude:snr=X, time_to_snr:X@Zkm, mean_laser_power_w, pulses_in_flight (repeatable).
+        #[arg(long, value_name = "METRIC")]
+        metric: Vec<String>,
+        /// One CSV row per grid point (`-` for stdout).
+        #[arg(long, value_name = "PATH")]
+        csv: PathBuf,
+        /// The first metric as a line (one key) or heatmap (two keys).
+        #[arg(long, value_name = "OUT.png")]
+        png: Option<PathBuf>,
+    },
     /// Draws a raw file's counts per shot against along-track distance (or time) and altitude.
     Curtain {
         /// The raw lidar file (`simulate -o`).
@@ -206,6 +226,16 @@ fn main() -> ExitCode {
                 command_line: std::env::args().collect::<Vec<_>>().join(" "),
             };
             lidarsim::commands::simulate_as(config, set, &opts, *threads, *format).map(|()| true)
+        }
+        Command::Sweep {
+            config,
+            set,
+            vary,
+            metric,
+            csv,
+            png,
+        } => {
+            lidarsim::commands::sweep(config, set, vary, metric, csv, png.as_deref()).map(|()| true)
         }
         Command::Curtain { raw, png, channel } => {
             lidarsim::commands::curtain(raw, png, channel.as_deref()).map(|()| true)

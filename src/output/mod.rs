@@ -8,3 +8,4 @@ pub mod raw_file;
 pub mod safe_file;
 pub mod scc;
 pub mod snr_map;
+pub mod sweep_plot;

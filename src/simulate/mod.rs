@@ -896,7 +896,7 @@ fn check_sizes(
     Ok(())
 }
 
-fn progress_bar(show: bool, profiles: usize) -> indicatif::ProgressBar {
+pub fn progress_bar(show: bool, profiles: usize) -> indicatif::ProgressBar {
     if !show {
         return indicatif::ProgressBar::hidden();
     }

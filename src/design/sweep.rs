@@ -1,0 +1,282 @@
+//! Design sweeps (`lidarsim sweep`, interface.md): a grid over any config keys, and per
+//! grid point metrics of the deterministic model (Eq. 2–4), no Monte Carlo.
+//!
+//! * `snr_at:Zkm` — Eq. 4 S/N of the bin nearest altitude Z at the config's accumulation
+//!   time (first channel);
+//! * `max_altitude:snr=X` — the highest bin-centre altitude with S/N ≥ X, km (NaN when
+//!   none);
+//! * `time_to_snr:X@Zkm` — the accumulation time for S/N ≥ X at Z: Eq. 4 grows as √M,
+//!   so `M = X²·(λ_sig+λ_bkg+λ_dc)/λ_sig²` shots, `t = M/fL` (s; ∞ without signal);
+//! * `mean_laser_power_w` — `E0·fL`, W;
+//! * `pulses_in_flight` — pulses emitted while one travels to the ground and back,
+//!   `⌈2·r_ground/c · fL⌉` (space-borne; 1 for a ground lidar).
+
+use rayon::prelude::*;
+
+use crate::constants::SPEED_OF_LIGHT_M_PER_S;
+use crate::error::{Error, Result};
+use crate::scenario::{ExpectedProfile, Scenario};
+use crate::snr;
+
+/// Most grid points a sweep computes.
+pub const MAX_POINTS: usize = 1_000_000;
+
+/// One varied key: its values.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Axis {
+    /// The dotted config key.
+    pub key: String,
+    /// Its values, in order.
+    pub values: Vec<f64>,
+}
+
+impl Axis {
+    /// Parses `KEY=START..STOP:N` (linear) or `KEY=START..STOP:log:N`.
+    pub fn parse(spec: &str) -> Result<Axis> {
+        let fail = |why: &str| Error::Unsupported(format!("--vary {spec}: {why}"));
+        let (key, range) = spec
+            .split_once('=')
+            .ok_or_else(|| fail("expected KEY=START..STOP:N or KEY=START..STOP:log:N"))?;
+        let (bounds, rest) = range
+            .split_once(':')
+            .ok_or_else(|| fail("missing :N (the number of values)"))?;
+        let (log, n) = match rest.split_once(':') {
+            Some(("log", n)) => (true, n),
+            Some(_) => return Err(fail("expected :N or :log:N after the range")),
+            None => (false, rest),
+        };
+        let (start, stop) = bounds
+            .split_once("..")
+            .ok_or_else(|| fail("expected START..STOP"))?;
+        let number = |s: &str| {
+            s.trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| fail(&format!("`{s}` is not a finite number")))
+        };
+        let (a, b) = (number(start)?, number(stop)?);
+        let n: usize = n
+            .trim()
+            .parse()
+            .ok()
+            .filter(|&n| (1..=MAX_POINTS).contains(&n))
+            .ok_or_else(|| fail("N must be a whole number from 1 to 1e6"))?;
+        if log && (a <= 0.0 || b <= 0.0) {
+            return Err(fail("a log range needs positive bounds"));
+        }
+        let values = (0..n)
+            .map(|i| {
+                let t = if n == 1 {
+                    0.0
+                } else {
+                    i as f64 / (n - 1) as f64
+                };
+                if log {
+                    (a.ln() + t * (b.ln() - a.ln())).exp()
+                } else {
+                    a + t * (b - a)
+                }
+            })
+            .collect();
+        Ok(Axis {
+            key: key.trim().to_string(),
+            values,
+        })
+    }
+}
+
+/// A metric of the deterministic model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Metric {
+    /// Eq. 4 S/N at an altitude (m).
+    SnrAt(f64),
+    /// The highest altitude with S/N ≥ a threshold.
+    MaxAltitude(f64),
+    /// Accumulation time for S/N ≥ a threshold at an altitude (m).
+    TimeToSnr(f64, f64),
+    /// `E0·fL`.
+    MeanLaserPower,
+    /// Pulses in flight.
+    PulsesInFlight,
+}
+
+impl Metric {
+    /// Parses a metric name of interface.md, e.g. `snr_at:10km`, `time_to_snr:10@15km`.
+    pub fn parse(spec: &str) -> Result<Metric> {
+        let fail = || {
+            Error::Unsupported(format!(
+                "--metric {spec}: expected snr_at:Zkm, max_altitude:snr=X, time_to_snr:X@Zkm, \
+                 mean_laser_power_w or pulses_in_flight"
+            ))
+        };
+        let km = |s: &str| -> Result<f64> {
+            let v: f64 = s
+                .strip_suffix("km")
+                .ok_or_else(fail)?
+                .parse()
+                .map_err(|_| fail())?;
+            v.is_finite().then_some(v * 1e3).ok_or_else(fail)
+        };
+        let num = |s: &str| {
+            s.parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(fail)
+        };
+        match spec.split_once(':') {
+            Some(("snr_at", z)) => Ok(Metric::SnrAt(km(z)?)),
+            Some(("max_altitude", x)) => Ok(Metric::MaxAltitude(num(x
+                .strip_prefix("snr=")
+                .ok_or_else(fail)?)?)),
+            Some(("time_to_snr", rest)) => {
+                let (x, z) = rest.split_once('@').ok_or_else(fail)?;
+                Ok(Metric::TimeToSnr(num(x)?, km(z)?))
+            }
+            None if spec == "mean_laser_power_w" => Ok(Metric::MeanLaserPower),
+            None if spec == "pulses_in_flight" => Ok(Metric::PulsesInFlight),
+            _ => Err(fail()),
+        }
+    }
+
+    /// The metric of a scenario and its model.
+    pub fn of(self, sc: &Scenario, e: &ExpectedProfile) -> f64 {
+        let shots = sc.instrument.rep_rate_hz * sc.accumulation_time_s();
+        let bin_at = |z: f64| {
+            (0..e.n_bins()).min_by(|&a, &b| {
+                (e.altitude_m[a] - z)
+                    .abs()
+                    .total_cmp(&(e.altitude_m[b] - z).abs())
+            })
+        };
+        match self {
+            Metric::SnrAt(z) => bin_at(z).map_or(f64::NAN, |i| {
+                snr::eq4(e.signal[i], e.background, e.dark, shots)
+            }),
+            Metric::MaxAltitude(x) => (0..e.n_bins())
+                .filter(|&i| snr::eq4(e.signal[i], e.background, e.dark, shots) >= x)
+                .map(|i| e.altitude_m[i] / 1e3)
+                .fold(f64::NAN, f64::max),
+            Metric::TimeToSnr(x, z) => bin_at(z).map_or(f64::NAN, |i| {
+                let s = e.signal[i];
+                if s > 0.0 {
+                    x * x * (s + e.background + e.dark) / (s * s) / sc.instrument.rep_rate_hz
+                } else {
+                    f64::INFINITY
+                }
+            }),
+            Metric::MeanLaserPower => {
+                sc.loaded.config.instrument.pulse_energy_j * sc.instrument.rep_rate_hz
+            }
+            Metric::PulsesInFlight => {
+                let g = &sc.geometry;
+                if g.kind == crate::config::PlatformKind::Ground {
+                    return 1.0;
+                }
+                let ground = g.range_at_altitude(0.0);
+                (2.0 * ground / SPEED_OF_LIGHT_M_PER_S * sc.instrument.rep_rate_hz).ceil()
+            }
+        }
+    }
+}
+
+/// The grid's points: every combination of the axes' values, the last axis fastest.
+pub fn grid(axes: &[Axis]) -> Result<Vec<Vec<f64>>> {
+    let n: f64 = axes.iter().map(|a| a.values.len() as f64).product();
+    if n > MAX_POINTS as f64 {
+        return Err(Error::Unsupported(format!(
+            "the sweep has {n} grid points, at most {MAX_POINTS}"
+        )));
+    }
+    Ok(axes.iter().fold(vec![vec![]], |points, axis| {
+        points
+            .iter()
+            .flat_map(|p| {
+                axis.values.iter().map(move |&v| {
+                    let mut q = p.clone();
+                    q.push(v);
+                    q
+                })
+            })
+            .collect()
+    }))
+}
+
+/// The metrics at every grid point; `scenario` builds the scenario of one point's
+/// overrides (`KEY=VALUE`, after the command's own `--set`); `tick` is called per point.
+pub fn run(
+    axes: &[Axis],
+    metrics: &[Metric],
+    scenario: &(dyn Fn(&[String]) -> Result<Scenario> + Sync),
+    tick: &(dyn Fn() + Sync),
+) -> Result<Vec<(Vec<f64>, Vec<f64>)>> {
+    grid(axes)?
+        .into_par_iter()
+        .map(|point| {
+            let overrides: Vec<String> = axes
+                .iter()
+                .zip(&point)
+                .map(|(a, v)| format!("{}={v}", a.key))
+                .collect();
+            let sc = scenario(&overrides)?;
+            let e = sc.expected()?;
+            tick();
+            Ok((point, metrics.iter().map(|m| m.of(&sc, &e)).collect()))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn axes_and_metrics_parse() {
+        let a = Axis::parse("instrument.pulse_energy_j=1e-4..1e-1:log:4").unwrap();
+        assert_eq!(a.key, "instrument.pulse_energy_j");
+        let want = [1e-4, 1e-3, 1e-2, 1e-1];
+        assert!(
+            a.values
+                .iter()
+                .zip(want)
+                .all(|(v, w)| (v / w - 1.0).abs() < 1e-12)
+        );
+        assert_eq!(
+            Axis::parse("x=10..250:3").unwrap().values,
+            vec![10.0, 130.0, 250.0]
+        );
+        for bad in [
+            "x",
+            "x=1..2",
+            "x=1..2:0",
+            "x=0..1:log:3",
+            "x=a..2:3",
+            "x=1..2:lin:3",
+        ] {
+            assert!(Axis::parse(bad).is_err(), "{bad}");
+        }
+        assert_eq!(Metric::parse("snr_at:10km").unwrap(), Metric::SnrAt(10e3));
+        assert_eq!(
+            Metric::parse("max_altitude:snr=3").unwrap(),
+            Metric::MaxAltitude(3.0)
+        );
+        assert_eq!(
+            Metric::parse("time_to_snr:10@15km").unwrap(),
+            Metric::TimeToSnr(10.0, 15e3)
+        );
+        assert!(Metric::parse("snr_at:10").is_err() && Metric::parse("bogus").is_err());
+        let g = grid(&[
+            Axis {
+                key: "a".into(),
+                values: vec![1.0, 2.0],
+            },
+            Axis {
+                key: "b".into(),
+                values: vec![3.0, 4.0, 5.0],
+            },
+        ])
+        .unwrap();
+        assert_eq!(g.len(), 6);
+        assert_eq!(g[1], vec![1.0, 4.0]);
+    }
+}
