@@ -14,6 +14,7 @@ pub mod error;
 pub mod geometry;
 pub mod instrument;
 pub mod laser;
+pub mod onboard;
 pub mod output;
 pub mod receiver;
 pub mod resources;

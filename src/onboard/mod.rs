@@ -1,0 +1,13 @@
+//! Onboard averaging (issue 10, model.md §7): altitude regions, each with a vertical
+//! resolution (native bins merged) and a horizontal one (shots summed), applied to the
+//! shot-level counts as an onboard processor would: integer sums, nothing in floating
+//! point in the data path. The sum of Poisson counts is Poisson, so a stationary scene
+//! averaged onboard has the law of a direct simulation at the coarse resolution; over
+//! broken cloud or with dead time it does not, and that is what averaging studies
+//! measure.
+
+pub mod scheme;
+pub mod sum;
+
+pub use scheme::{Region, RegionLayout, Scheme};
+pub use sum::Averager;
