@@ -109,6 +109,29 @@ enum Command {
         #[arg(long, value_enum, default_value_t = lidarsim::commands::OutputFormat::Raw)]
         format: lidarsim::commands::OutputFormat,
     },
+    /// Onboard averaging of shot-level counts: the downlinked product and the report.
+    Onboard {
+        /// Scenario config (TOML).
+        config: PathBuf,
+        /// Override a config key (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// none, uniform:N, caliop, or a scheme file (TOML) (repeatable: the first one's product is written).
+        #[arg(long, value_name = "NAME|FILE")]
+        scheme: Vec<String>,
+        /// The downlinked product (HDF5, one group per region).
+        #[arg(short = 'o', long = "output", value_name = "PRODUCT.h5")]
+        output: PathBuf,
+        /// One CSV row per scheme and region (`-` for stdout).
+        #[arg(long, value_name = "PATH")]
+        report: Option<PathBuf>,
+        /// Random seed (default: simulation.seed).
+        #[arg(long, allow_negative_numbers = true, value_parser = cli_values::seed)]
+        seed: Option<u64>,
+        /// Bits per downlinked count, for the data rate.
+        #[arg(long, default_value_t = 16)]
+        word_bits: u32,
+    },
     /// Instrument design grid from the deterministic model: metrics over varied config keys.
     Sweep {
         /// Scenario config (TOML).
@@ -226,6 +249,28 @@ fn main() -> ExitCode {
                 command_line: std::env::args().collect::<Vec<_>>().join(" "),
             };
             lidarsim::commands::simulate_as(config, set, &opts, *threads, *format).map(|()| true)
+        }
+        Command::Onboard {
+            config,
+            set,
+            scheme,
+            output,
+            report,
+            seed,
+            word_bits,
+        } => {
+            let opts = lidarsim::onboard::run::OnboardOptions {
+                schemes: scheme.clone(),
+                output: output.clone(),
+                report: report.clone(),
+                seed: *seed,
+                word_bits: *word_bits,
+            };
+            if opts.schemes.is_empty() {
+                Err(lidarsim::onboard::run::no_scheme())
+            } else {
+                lidarsim::onboard::run::run(config, set, &opts).map(|()| true)
+            }
         }
         Command::Sweep {
             config,

@@ -143,3 +143,118 @@ fn an_averaged_stationary_scene_has_the_coarse_law() {
         checks[0]
     );
 }
+
+/// `lidarsim onboard` end to end: the CALIOP product's groups (583 bins, their
+/// resolutions and shots as attributes), their counts the exact sums of the very native
+/// counts `simulate` draws for one-shot profiles with the same seed, and the report's
+/// rows for every scheme given.
+#[test]
+fn the_onboard_product_sums_the_native_shots() {
+    let dir = std::env::temp_dir().join(format!("lidarsim-onboard-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cfg = common::config_path("instruments/caliop_532.toml");
+    let window = [
+        "--set",
+        "acquisition.top_altitude_km=40",
+        "--set",
+        "acquisition.bottom_altitude_km=-2",
+    ];
+    let (product, raw) = (dir.join("p.h5"), dir.join("raw.h5"));
+    let run = |args: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_lidarsim"))
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        o
+    };
+    let mut a = vec![
+        "onboard",
+        cfg.to_str().unwrap(),
+        "--scheme",
+        "caliop",
+        "--scheme",
+        "uniform:15",
+    ];
+    a.extend(window);
+    a.extend([
+        "--set",
+        "acquisition.profiles=6",
+        "--seed",
+        "4",
+        "-o",
+        product.to_str().unwrap(),
+        "--report",
+        "-",
+    ]);
+    let o = run(&a);
+    let report = String::from_utf8(o.stdout).unwrap();
+    assert_eq!(report.lines().count(), 1 + 5 + 1, "{report}");
+    assert!(report.starts_with("scheme,region,altitude_min_km,altitude_max_km,vertical_resolution_m,shots_averaged,bins,snr_eq4_median,snr_empirical_median,data_rate_bps"));
+    let mut s = vec![
+        "simulate",
+        cfg.to_str().unwrap(),
+        "--method",
+        "shot",
+        "--seed",
+        "4",
+    ];
+    s.extend(window);
+    s.extend([
+        "--set",
+        "acquisition.accumulation_time_s=0.0496031746031746",
+        "--profiles",
+        "90",
+        "-o",
+        raw.to_str().unwrap(),
+    ]);
+    run(&s);
+    let raw = hdf5::File::open(&raw).unwrap();
+    let native: Vec<u64> = raw
+        .dataset("counts")
+        .unwrap()
+        .read_raw::<u64>()
+        .unwrap_or_else(|_| {
+            raw.dataset("counts")
+                .unwrap()
+                .read_raw::<u16>()
+                .unwrap()
+                .iter()
+                .map(|&c| u64::from(c))
+                .collect()
+        });
+    let n_bins = raw.dataset("altitude").unwrap().shape()[0];
+    assert_eq!(
+        raw.dataset("n_shots").unwrap().read_raw::<u64>().unwrap()[0],
+        1
+    );
+    let sc = caliop_native("3");
+    let regions = layout(&sc, "caliop");
+    let f = hdf5::File::open(&product).unwrap();
+    let mut total_bins = 0;
+    for (k, r) in regions.iter().enumerate() {
+        let g = f.group(&format!("region_{k}")).unwrap();
+        let counts = g.dataset("counts").unwrap();
+        let shape = counts.shape();
+        assert_eq!(shape, vec![90 / r.shots as usize, 1, r.bins]);
+        total_bins += shape[2];
+        let shots: u32 = g.attr("shots_averaged").unwrap().read_scalar().unwrap();
+        assert_eq!(shots, r.shots);
+        let product_sum: u64 = counts
+            .read_raw::<u32>()
+            .unwrap()
+            .iter()
+            .map(|&c| u64::from(c))
+            .sum();
+        let native_sum: u64 = (0..90)
+            .map(|p| {
+                native[p * n_bins + r.first_bin..p * n_bins + r.first_bin + r.merge * r.bins]
+                    .iter()
+                    .sum::<u64>()
+            })
+            .sum();
+        assert_eq!(product_sum, native_sum, "region {k}");
+    }
+    assert_eq!(total_bins, 583);
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -6,6 +6,7 @@
 //! broken cloud or with dead time it does not, and that is what averaging studies
 //! measure.
 
+pub mod run;
 pub mod scheme;
 pub mod sum;
 

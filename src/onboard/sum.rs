@@ -2,19 +2,35 @@
 
 use super::RegionLayout;
 
-/// Sums consecutive single-shot native profiles into each region's downlinked profiles.
+/// Sums consecutive single-shot native profiles into each region's downlinked profiles,
+/// every channel (native profiles and sums channel-major).
 #[derive(Debug, Clone)]
 pub struct Averager {
     regions: Vec<RegionLayout>,
-    /// Per region: its running sums and the shots in them.
+    /// Per region: its running sums (channels × bins) and the shots in them.
     pending: Vec<(Vec<u64>, u32)>,
+    channels: usize,
+    n_bins: usize,
 }
 
 impl Averager {
-    /// An averager for `regions` (from [`super::Scheme::layout`]).
+    /// An averager for one channel's `regions` (from [`super::Scheme::layout`]).
     pub fn new(regions: Vec<RegionLayout>) -> Self {
-        let pending = regions.iter().map(|r| (vec![0u64; r.bins], 0)).collect();
-        Averager { regions, pending }
+        Self::with_channels(regions, 1, 0)
+    }
+
+    /// An averager for `channels` channels of `n_bins` native bins each.
+    pub fn with_channels(regions: Vec<RegionLayout>, channels: usize, n_bins: usize) -> Self {
+        let pending = regions
+            .iter()
+            .map(|r| (vec![0u64; r.bins * channels], 0))
+            .collect();
+        Averager {
+            regions,
+            pending,
+            channels,
+            n_bins,
+        }
     }
 
     /// The regions.
@@ -25,10 +41,18 @@ impl Averager {
     /// Adds one shot's native counts; `emit(region, sums)` receives every region profile
     /// completed by it (its shots summed and bins merged, integers only).
     pub fn add_shot(&mut self, native: &[u64], mut emit: impl FnMut(usize, &[u64])) {
+        let stride = if self.channels == 1 {
+            native.len()
+        } else {
+            self.n_bins
+        };
         for (k, (r, (sums, shots))) in self.regions.iter().zip(&mut self.pending).enumerate() {
-            let span = &native[r.first_bin..r.first_bin + r.merge * r.bins];
-            for (s, chunk) in sums.iter_mut().zip(span.chunks_exact(r.merge)) {
-                *s += chunk.iter().sum::<u64>();
+            for (c, out) in sums.chunks_mut(r.bins).enumerate() {
+                let start = c * stride + r.first_bin;
+                let span = &native[start..start + r.merge * r.bins];
+                for (s, chunk) in out.iter_mut().zip(span.chunks_exact(r.merge)) {
+                    *s += chunk.iter().sum::<u64>();
+                }
             }
             *shots += 1;
             if *shots == r.shots {

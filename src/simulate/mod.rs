@@ -383,7 +383,7 @@ impl StreamSampler {
 
 /// The streams of one channel with their seeds: the total, or signal, background and
 /// dark apart.
-fn stream_samplers(
+pub fn stream_samplers(
     e: &ExpectedProfile,
     method: ResolvedMethod,
     energy: RunEnergy,
@@ -713,7 +713,7 @@ pub fn draw_scene_profile(
 }
 
 /// Draws profile `p` of every channel's streams.
-fn draw_profile(
+pub fn draw_profile(
     channels: &[Vec<(StreamSampler, u64)>],
     p: u64,
     shots: u64,

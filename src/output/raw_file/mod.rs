@@ -21,7 +21,7 @@
 //! [`super::safe_file`].
 
 pub mod content;
-mod hdf5_ds;
+pub(crate) mod hdf5_ds;
 pub mod layout;
 pub mod writer;
 
