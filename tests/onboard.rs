@@ -258,3 +258,41 @@ fn the_onboard_product_sums_the_native_shots() {
     assert_eq!(total_bins, 583);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Over broken cloud (40 % of thick boundary-layer cells of 2 km) the averaging bias of
+/// the report grows with the horizontal averaging: none for single shots, more for 5,
+/// 15 and 75 shots (the cells are drawn from the seed: a deterministic check).
+#[test]
+fn the_averaging_bias_grows_with_the_averaging_length_over_broken_cloud() {
+    let dir = std::env::temp_dir().join(format!("lidarsim-onboard-bias-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cfg = common::config_path("instruments/caliop_532.toml");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_lidarsim"))
+        .args(["onboard", cfg.to_str().unwrap()])
+        .args(["--set", "acquisition.top_altitude_km=20", "--set", "acquisition.profiles=200"])
+        .args([
+            "--set",
+            "atmosphere.layers=[{kind=\"cloud\", base_km=1.0, top_km=1.5, extinction_per_km=10.0, lidar_ratio_sr=18.0, cloud_fraction=0.4, cell_length_km=2.0}]",
+        ])
+        .args(["--scheme", "uniform:1", "--scheme", "uniform:5", "--scheme", "uniform:15", "--scheme", "uniform:75"])
+        .args(["-o", dir.join("p.h5").to_str().unwrap(), "--report", "-"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report = String::from_utf8(o.stdout).unwrap();
+    assert!(
+        report
+            .lines()
+            .next()
+            .unwrap()
+            .ends_with(",averaging_bias_median")
+    );
+    let bias: Vec<f64> = report
+        .lines()
+        .skip(1)
+        .map(|l| l.rsplit(',').next().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(bias[0], 0.0, "{report}");
+    assert!(bias.windows(2).all(|w| w[1] > w[0]), "{bias:?}");
+    std::fs::remove_dir_all(&dir).ok();
+}
