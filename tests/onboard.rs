@@ -296,3 +296,40 @@ fn the_averaging_bias_grows_with_the_averaging_length_over_broken_cloud() {
     assert!(bias.windows(2).all(|w| w[1] > w[0]), "{bias:?}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A scheme from a TOML file: its regions laid on the native grid; a malformed or
+/// inconsistent file is refused in one line naming the problem.
+#[test]
+fn a_scheme_file_is_read_and_checked() {
+    let dir = std::env::temp_dir().join(format!("lidarsim-scheme-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let good = dir.join("two.toml");
+    std::fs::write(
+        &good,
+        "[[regions]]\ntop_km = 20.0\nbottom_km = 10.0\nvertical_resolution_m = 150.0\nshots_averaged = 10\n\n\
+         [[regions]]\ntop_km = 10.0\nbottom_km = 0.0\nvertical_resolution_m = 30.0\nshots_averaged = 2\n",
+    )
+    .unwrap();
+    let sc = caliop_native("0");
+    let l = layout(&sc, good.to_str().unwrap());
+    assert_eq!(
+        l.iter()
+            .map(|r| (r.bins, r.merge, r.shots))
+            .collect::<Vec<_>>(),
+        [(67, 5, 10), (333, 1, 2)]
+    );
+    let bad = dir.join("gap.toml");
+    std::fs::write(
+        &bad,
+        "[[regions]]\ntop_km = 20.0\nbottom_km = 10.0\nvertical_resolution_m = 150.0\nshots_averaged = 10\n\n\
+         [[regions]]\ntop_km = 9.0\nbottom_km = 0.0\nvertical_resolution_m = 30.0\nshots_averaged = 2\n",
+    )
+    .unwrap();
+    let e = Scheme::parse(bad.to_str().unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("regions[1]") && !e.contains('\n'), "{e}");
+    std::fs::write(&bad, "[[regions]]\ntop_km = \"high\"\n").unwrap();
+    assert!(Scheme::parse(bad.to_str().unwrap()).is_err());
+    std::fs::remove_dir_all(&dir).ok();
+}
