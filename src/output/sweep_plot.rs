@@ -45,6 +45,12 @@ fn finite_range(v: impl Iterator<Item = f64>) -> (f64, f64) {
     }
 }
 
+/// Whether values span more than two decades, all positive (drawn on a log axis).
+fn wants_log(v: impl Iterator<Item = f64> + Clone) -> bool {
+    let (lo, hi) = finite_range(v.clone());
+    lo > 0.0 && hi / lo > 100.0 && v.filter(|x| x.is_finite()).all(|x| x > 0.0)
+}
+
 fn line(
     rgb: &mut [u8],
     axis: &Axis,
@@ -53,24 +59,47 @@ fn line(
 ) -> std::result::Result<(), Box<dyn std::error::Error>> {
     let root = BitMapBackend::with_buffer(rgb, (WIDTH, HEIGHT)).into_drawing_area();
     root.fill(&WHITE)?;
-    let (x0, x1) = finite_range(axis.values.iter().copied());
-    let (y0, y1) = finite_range(rows.iter().map(|r| r.1[0]));
+    let log_x = wants_log(axis.values.iter().copied());
+    let log_y = wants_log(rows.iter().map(|r| r.1[0]));
+    let tx = |v: f64| if log_x { v.log10() } else { v };
+    let ty = |v: f64| if log_y { v.log10() } else { v };
+    let (x0, x1) = finite_range(axis.values.iter().map(|&v| tx(v)));
+    let (y0, y1) = finite_range(rows.iter().map(|r| ty(r.1[0])));
     let mut chart = ChartBuilder::on(&root)
         .caption(format!("{name} against {}", axis.key), (FONT, 18))
         .margin(15)
         .x_label_area_size(45)
-        .y_label_area_size(70)
+        .y_label_area_size(80)
         .build_cartesian_2d(x0..x1, y0..y1)?;
+    let label = |log: bool| {
+        move |v: &f64| {
+            if log {
+                format!("{:.2e}", 10f64.powf(*v))
+            } else {
+                format!("{v:.3}")
+            }
+        }
+    };
     chart
         .configure_mesh()
-        .x_desc(axis.key.as_str())
-        .y_desc(name)
+        .x_desc(if log_x {
+            format!("{} (log scale)", axis.key)
+        } else {
+            axis.key.clone()
+        })
+        .y_desc(if log_y {
+            format!("{name} (log scale)")
+        } else {
+            name.to_string()
+        })
+        .x_label_formatter(&label(log_x))
+        .y_label_formatter(&label(log_y))
         .label_style((FONT, 13))
         .draw()?;
     let points: Vec<(f64, f64)> = rows
         .iter()
         .filter(|r| r.1[0].is_finite())
-        .map(|r| (r.0[0], r.1[0]))
+        .map(|r| (tx(r.0[0]), ty(r.1[0])))
         .collect();
     chart.draw_series(std::iter::once(PathElement::new(
         points.clone(),
