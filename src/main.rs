@@ -125,6 +125,9 @@ enum Command {
         /// One CSV row per scheme and region (`-` for stdout).
         #[arg(long, value_name = "PATH")]
         report: Option<PathBuf>,
+        /// Also write the native shot-level raw file of the same draw.
+        #[arg(long, value_name = "RAW.h5")]
+        raw: Option<PathBuf>,
         /// Random seed (default: simulation.seed).
         #[arg(long, allow_negative_numbers = true, value_parser = cli_values::seed)]
         seed: Option<u64>,
@@ -256,6 +259,7 @@ fn main() -> ExitCode {
             scheme,
             output,
             report,
+            raw,
             seed,
             word_bits,
         } => {
@@ -263,6 +267,7 @@ fn main() -> ExitCode {
                 schemes: scheme.clone(),
                 output: output.clone(),
                 report: report.clone(),
+                raw: raw.clone(),
                 seed: *seed,
                 word_bits: *word_bits,
             };

@@ -159,7 +159,7 @@ fn the_onboard_product_sums_the_native_shots() {
         "--set",
         "acquisition.bottom_altitude_km=-2",
     ];
-    let (product, raw) = (dir.join("p.h5"), dir.join("raw.h5"));
+    let (product, raw, own_raw) = (dir.join("p.h5"), dir.join("raw.h5"), dir.join("own.h5"));
     let run = |args: &[&str]| {
         let o = std::process::Command::new(env!("CARGO_BIN_EXE_lidarsim"))
             .args(args)
@@ -186,6 +186,8 @@ fn the_onboard_product_sums_the_native_shots() {
         product.to_str().unwrap(),
         "--report",
         "-",
+        "--raw",
+        own_raw.to_str().unwrap(),
     ]);
     let o = run(&a);
     let report = String::from_utf8(o.stdout).unwrap();
@@ -224,6 +226,12 @@ fn the_onboard_product_sums_the_native_shots() {
                 .collect()
         });
     let n_bins = raw.dataset("altitude").unwrap().shape()[0];
+    // --raw writes the very same draw
+    let own = hdf5::File::open(&own_raw).unwrap();
+    assert_eq!(
+        own.dataset("counts").unwrap().read_raw::<u16>().unwrap(),
+        raw.dataset("counts").unwrap().read_raw::<u16>().unwrap()
+    );
     assert_eq!(
         raw.dataset("n_shots").unwrap().read_raw::<u64>().unwrap()[0],
         1

@@ -24,6 +24,8 @@ pub struct OnboardOptions {
     pub output: PathBuf,
     /// The report CSV (`-` for stdout).
     pub report: Option<PathBuf>,
+    /// The native shot-level raw file of the same draw (one shot per profile).
+    pub raw: Option<PathBuf>,
     /// Seed (`simulation.seed` when None).
     pub seed: Option<u64>,
     /// Bits per downlinked count, for the data rate.
@@ -131,6 +133,11 @@ pub fn run(config: &Path, overrides: &[String], opts: &OnboardOptions) -> Result
         .collect::<Result<_>>()?;
     let mut outputs = crate::commands::outputs_for(sc);
     let product = outputs.add("-o", &opts.output, Stream::Binary)?;
+    let raw = opts
+        .raw
+        .as_deref()
+        .map(|p| outputs.add("--raw", p, Stream::Binary))
+        .transpose()?;
     let report = opts
         .report
         .as_deref()
@@ -220,7 +227,22 @@ pub fn run(config: &Path, overrides: &[String], opts: &OnboardOptions) -> Result
             )
         })?;
     }
-    outputs.commit()
+    match (raw, &opts.raw) {
+        // the same draw again (counts depend on the seed and shot only), written as
+        // `simulate` writes it; that run commits every output together
+        (Some(id), Some(path)) => {
+            let raw_opts = simulate::RunOptions {
+                output: path.clone(),
+                seed: Some(seed),
+                profiles: Some(total as usize),
+                method: Some(Method::Shot),
+                command_line: std::env::args().collect::<Vec<_>>().join(" "),
+                ..Default::default()
+            };
+            simulate::run(&lidar, &raw_opts, outputs, id).map(|_| ())
+        }
+        _ => outputs.commit(),
+    }
 }
 
 /// The product's regions: profiles, coordinates and bounds.
