@@ -31,6 +31,30 @@ pub struct Instrument {
     pub dead_time: Option<crate::detector::DeadTime>,
 }
 
+/// The sky radiance the instrument sees, photons m⁻² s⁻¹ sr⁻¹ nm⁻¹: the fixed
+/// `background.radiance`; with the solar model and a fixed `solar_zenith_deg` also the
+/// sunlight reflected below (at 1 AU, `crate::scene::sun::reflected_radiance`). Along an
+/// orbit the solar part changes from profile to profile and is added by the scene
+/// (`crate::simulate::scene`), not here.
+pub fn sky_radiance(cfg: &ScenarioConfig) -> f64 {
+    let b = &cfg.background;
+    let floor = b.radiance.unwrap_or(0.0);
+    match (b.model, b.solar_zenith_deg) {
+        (crate::config::BackgroundModel::Solar, Some(zenith)) => {
+            let f =
+                crate::scene::sun::solar_spectral_irradiance_photons(cfg.instrument.wavelength_nm);
+            let sun = crate::scene::sun::reflected_radiance(
+                crate::surface::albedo_below(cfg),
+                if f.is_finite() { f } else { 0.0 },
+                zenith,
+                b.transmission.unwrap_or(1.0),
+            );
+            floor + sun
+        }
+        _ => floor,
+    }
+}
+
 /// Photons per joule at `wavelength_nm`: `λ0/(h·c)`.
 pub fn photons_per_joule(wavelength_nm: f64) -> f64 {
     wavelength_nm * 1e-9 / (PLANCK_J_S * SPEED_OF_LIGHT_M_PER_S)
@@ -77,7 +101,7 @@ impl Instrument {
             pulse_energy_jitter: i.pulse_energy_jitter,
             channel: i.channel,
             signal_constant,
-            background_per_bin: cfg.background.radiance.unwrap_or(0.0) * background_per_radiance,
+            background_per_bin: sky_radiance(cfg) * background_per_radiance,
             background_per_radiance,
             dark_per_bin: i.dark_count_rate_hz * i.bin_width_s,
             dead_time: i

@@ -10,7 +10,7 @@
 //! the surface: nothing below it is seen. Specular glint (ocean at nadir) is not
 //! modelled: the ocean's albedo here is its Lambertian equivalent.
 
-use crate::config::{SurfaceConfig, SurfaceKind};
+use crate::config::{ScenarioConfig, SurfaceConfig, SurfaceKind};
 
 /// A Lambertian surface.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -20,6 +20,27 @@ pub struct Surface {
     /// Altitude of the surface above sea level, m.
     pub altitude_m: f64,
 }
+
+/// The albedo under a column: an optically thick cloud's top (`cloud_albedo`), else the
+/// surface's (land when the scene has none).
+pub fn albedo_below(cfg: &ScenarioConfig) -> f64 {
+    let thick_cloud = cfg.atmosphere.layers.iter().any(|l| {
+        l.kind == crate::config::LayerKind::Cloud
+            && l.extinction_per_km * (l.top_km - l.base_km) >= 1.0
+    });
+    if thick_cloud {
+        return cfg.background.cloud_albedo.unwrap_or(DEFAULT_CLOUD_ALBEDO);
+    }
+    cfg.surface
+        .as_ref()
+        .map_or(crate::config::SurfaceKind::Land.albedo(), |s| {
+            Surface::from_config(s).albedo
+        })
+}
+
+/// Albedo of an optically thick cloud top at visible wavelengths (liquid stratocumulus
+/// of optical depth ~10–20: 0.6–0.8).
+pub const DEFAULT_CLOUD_ALBEDO: f64 = 0.7;
 
 impl SurfaceKind {
     /// A typical Lambertian albedo at 532 nm (documented in `docs/config.md`): open ocean

@@ -372,3 +372,24 @@ fn daylight_through_dead_time() {
     assert!((counts[k] / (15.0 * expected[k]) - 1.0).abs() < 0.05);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// With a fixed solar zenith angle the deterministic model (`expect`, `sweep`) sees the
+/// daylight too: the background is `(floor + ρ·F_λ·cos θ_s/π·T)` times the instrument's
+/// factor, at 1 AU.
+#[test]
+fn a_fixed_sun_enters_the_deterministic_model() {
+    let day = common::scenario(
+        "instruments/caliop_532.toml",
+        &[
+            "background.model=\"solar\"",
+            "background.solar_zenith_deg=60",
+            "background.transmission=0.8",
+            "surface={kind=\"snow\"}",
+        ],
+    );
+    let f = lidarsim::scene::sun::solar_spectral_irradiance_photons(532.0);
+    let want = (1.1e10 + 0.9 * f * 0.5 / std::f64::consts::PI * 0.8)
+        * day.instrument.background_per_radiance;
+    let got = day.expected().unwrap().background;
+    assert!((got / want - 1.0).abs() < 1e-12, "{got} vs {want}");
+}

@@ -122,7 +122,14 @@ fn heatmap(
     let (nx, ny) = (axes[0].values.len(), axes[1].values.len());
     let mut chart = ChartBuilder::on(&root)
         .caption(
-            format!("{name} (dark {lo:.3e} to yellow {hi:.3e}; grey: none)"),
+            format!(
+                "{name} (dark {lo:.3e} to yellow {hi:.3e}; grey: none{})",
+                if name.starts_with("snr_at") {
+                    "; white: S/N = 1, 3, 10"
+                } else {
+                    ""
+                }
+            ),
             (FONT, 18),
         )
         .margin(15)
@@ -153,6 +160,39 @@ fn heatmap(
         };
         Rectangle::new([(i, j), (i + 1.0, j + 1.0)], color.filled())
     }))?;
+    if name.starts_with("snr_at") {
+        // S/N contours (marching squares, `contour`), in the heatmap's cell coordinates
+        let values: Vec<f64> = (0..ny)
+            .flat_map(|j| (0..nx).map(move |i| (i, j)))
+            .map(|(i, j)| rows[i * ny + j].1[0])
+            .map(|v| if v.is_finite() { v } else { 0.0 })
+            .collect();
+        let lines = contour::ContourBuilder::new(nx, ny, true)
+            .lines(&values, &SNR_CONTOURS)
+            .map_err(|e| format!("contours: {e:?}"))?;
+        for line in &lines {
+            for path in line.geometry().0.iter() {
+                // the rings close along the grid's edge: draw only the inner pieces
+                let on_edge = |x: f64, y: f64| {
+                    x <= 0.51 || y <= 0.51 || x >= nx as f64 - 0.51 || y >= ny as f64 - 0.51
+                };
+                for w in path.0.windows(2) {
+                    let (a, b) = (w[0], w[1]);
+                    if on_edge(a.x, a.y) && on_edge(b.x, b.y) {
+                        continue;
+                    }
+                    let segment = vec![(a.x, a.y), (b.x, b.y)];
+                    chart.draw_series(std::iter::once(PathElement::new(
+                        segment,
+                        WHITE.stroke_width(2),
+                    )))?;
+                }
+            }
+        }
+    }
     root.present()?;
     Ok(())
 }
+
+/// The S/N contours drawn on a heatmap of an `snr_at` metric.
+const SNR_CONTOURS: [f64; 3] = [1.0, 3.0, 10.0];

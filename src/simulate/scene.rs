@@ -16,7 +16,7 @@
 use std::collections::HashMap;
 
 use super::{ResolvedMethod, RunEnergy, StreamSampler};
-use crate::config::{BackgroundModel, LayerKind, LoadedConfig, ScenarioConfig, SurfaceKind};
+use crate::config::{BackgroundModel, LoadedConfig, ScenarioConfig};
 use crate::detector::DeadTime;
 use crate::detector::dead_time::{ARRIVAL_STREAM, Scratch};
 use crate::error::{Error, Result};
@@ -26,7 +26,6 @@ use crate::scenario::{ExpectedProfile, Lidar, Scenario};
 use crate::scene::orbit::Orbit;
 use crate::scene::sun;
 use crate::scene::track::{Column, MAX_COLUMNS, Track};
-use crate::surface::Surface;
 
 /// Memory kept per bin of each column and channel: its expectations (13 f64) and, for
 /// `shot`, its sampler's tables.
@@ -118,6 +117,8 @@ pub struct Sunlight {
     start_unix_s: f64,
     profile_time_s: f64,
     transmission: f64,
+    /// The fixed radiance added under the sun (night sky).
+    floor: f64,
 }
 
 impl Sunlight {
@@ -139,6 +140,7 @@ impl Sunlight {
             start_unix_s,
             profile_time_s: first.shots_per_profile() as f64 / first.instrument.rep_rate_hz,
             transmission: b.transmission.unwrap_or(1.0),
+            floor: b.radiance.unwrap_or(0.0),
         }))
     }
 
@@ -157,27 +159,6 @@ impl Sunlight {
         (zenith, sun::earth_sun_distance_au(unix))
     }
 }
-
-/// The albedo under a column: an optically thick cloud's top (`cloud_albedo`), else the
-/// surface's (land when the scene has none).
-fn column_albedo(cfg: &ScenarioConfig) -> f64 {
-    let thick_cloud =
-        cfg.atmosphere.layers.iter().any(|l| {
-            l.kind == LayerKind::Cloud && l.extinction_per_km * (l.top_km - l.base_km) >= 1.0
-        });
-    if thick_cloud {
-        return cfg.background.cloud_albedo.unwrap_or(DEFAULT_CLOUD_ALBEDO);
-    }
-    cfg.surface
-        .as_ref()
-        .map_or(SurfaceKind::Land.albedo(), |s| {
-            Surface::from_config(s).albedo
-        })
-}
-
-/// Albedo of an optically thick cloud top at visible wavelengths (liquid stratocumulus
-/// of optical depth ~10–20: 0.6–0.8).
-pub const DEFAULT_CLOUD_ALBEDO: f64 = 0.7;
 
 /// A profile's per-shot averages of the model over its runs, per channel.
 pub struct ProfileTruth {
@@ -224,7 +205,7 @@ impl SceneModel {
         let mut samplers = Vec::with_capacity(all.len());
         let albedo = all
             .iter()
-            .map(|&c| column_albedo(&track.column_config(&configs[0], c)))
+            .map(|&c| crate::surface::albedo_below(&track.column_config(&configs[0], c)))
             .collect();
         let solar = lidar.first().loaded.config.background.model == BackgroundModel::Solar;
         for &col in &all {
@@ -323,6 +304,7 @@ impl SceneModel {
             Some(sunlight) => {
                 let (zenith, au) = sunlight.sun_at(p);
                 let (factor, irradiance) = self.channel_sun[channel];
+                let floor = sunlight.floor;
                 runs.iter()
                     .map(|&(col, _)| {
                         let l = sun::reflected_radiance(
@@ -332,7 +314,7 @@ impl SceneModel {
                             sunlight.transmission,
                         );
                         // the fixed radiance, if any, is a floor (night sky)
-                        l * factor + self.expected[col][channel].background
+                        (l + floor) * factor
                     })
                     .collect()
             }
