@@ -62,7 +62,7 @@ fn downlinked_counts_sum_the_native_counts_exactly() {
     let sc = caliop_native("3");
     let e = sc.expected().unwrap();
     let sampler = ShotSampler::new(&e.total_per_shot());
-    let mut avg = Averager::new(layout(&sc, "caliop"));
+    let mut avg = Averager::new(layout(&sc, "caliop"), e.n_bins());
     let regions = avg.regions().to_vec();
     let mut native_sum = vec![0u64; regions.len()];
     let mut downlinked = vec![0u64; regions.len()];

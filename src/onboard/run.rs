@@ -190,26 +190,27 @@ pub fn run(config: &Path, overrides: &[String], opts: &OnboardOptions) -> Result
             .collect();
         for (shot, native) in (start..end).zip(&drawn) {
             // the true signal this shot saw (its column), for the averaging bias
-            let truth = scene.as_ref().map(|s| {
-                let (col, _) = s.runs(shot)[0];
-                s.expected[col][0].signal.clone()
-            });
+            let truth = scene
+                .as_ref()
+                .map(|s| &s.expected[s.column_of_shot(shot)][0].signal);
             for (i, r) in runs.iter_mut().enumerate() {
-                if let Some(signal) = &truth {
+                if let Some(signal) = truth {
                     r.add_truth(signal);
                 }
-                let mut emitted: Vec<(usize, Vec<u64>)> = Vec::new();
-                r.averager
-                    .add_shot(native, |k, sums| emitted.push((k, sums.to_vec())));
-                for (k, sums) in emitted {
-                    for (s, &c) in r.stats[k].iter_mut().zip(&sums) {
+                let SchemeRun {
+                    averager, stats, ..
+                } = r;
+                let mut written = Ok(());
+                averager.add_shot(native, |k, sums| {
+                    for (s, &c) in stats[k].iter_mut().zip(sums) {
                         let x = c as f64;
                         *s = (s.0 + 1.0, s.1 + x, s.2 + x * x);
                     }
-                    if i == 0 {
-                        writer.write(k, &sums)?;
+                    if i == 0 && written.is_ok() {
+                        written = writer.write(k, sums);
                     }
-                }
+                });
+                written?;
             }
         }
     }

@@ -9,14 +9,14 @@ pub struct Averager {
     regions: Vec<RegionLayout>,
     /// Per region: its running sums (channels × bins) and the shots in them.
     pending: Vec<(Vec<u64>, u32)>,
-    channels: usize,
     n_bins: usize,
 }
 
 impl Averager {
-    /// An averager for one channel's `regions` (from [`super::Scheme::layout`]).
-    pub fn new(regions: Vec<RegionLayout>) -> Self {
-        Self::with_channels(regions, 1, 0)
+    /// An averager for one channel of `n_bins` native bins (`regions` from
+    /// [`super::Scheme::layout`]).
+    pub fn new(regions: Vec<RegionLayout>, n_bins: usize) -> Self {
+        Self::with_channels(regions, 1, n_bins)
     }
 
     /// An averager for `channels` channels of `n_bins` native bins each.
@@ -28,7 +28,6 @@ impl Averager {
         Averager {
             regions,
             pending,
-            channels,
             n_bins,
         }
     }
@@ -41,14 +40,9 @@ impl Averager {
     /// Adds one shot's native counts; `emit(region, sums)` receives every region profile
     /// completed by it (its shots summed and bins merged, integers only).
     pub fn add_shot(&mut self, native: &[u64], mut emit: impl FnMut(usize, &[u64])) {
-        let stride = if self.channels == 1 {
-            native.len()
-        } else {
-            self.n_bins
-        };
         for (k, (r, (sums, shots))) in self.regions.iter().zip(&mut self.pending).enumerate() {
             for (c, out) in sums.chunks_mut(r.bins).enumerate() {
-                let start = c * stride + r.first_bin;
+                let start = c * self.n_bins + r.first_bin;
                 let span = &native[start..start + r.merge * r.bins];
                 for (s, chunk) in out.iter_mut().zip(span.chunks_exact(r.merge)) {
                     *s += chunk.iter().sum::<u64>();

@@ -330,6 +330,12 @@ impl SceneModel {
             .collect()
     }
 
+    /// The column seen by the first shot of profile `p` (the only one in one-shot
+    /// profiles), without building the profile's runs.
+    pub fn column_of_shot(&self, p: u64) -> usize {
+        self.columns[&self.track.column_at(self.track.position_m(p, 0))]
+    }
+
     /// Draws channel `channel` of profile `p` into `acc`; `backgrounds` are the runs'
     /// background counts per shot per bin ([`run_backgrounds`](Self::run_backgrounds)).
     #[allow(clippy::too_many_arguments)]
