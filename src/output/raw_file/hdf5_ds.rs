@@ -64,3 +64,24 @@ pub fn attach_scales(ds: &Dataset, scales: &[&Dataset]) -> hdf5::Result<()> {
         Ok(())
     })
 }
+
+/// Writes one chunk of a chunked dataset as it is stored in the file (HDF5's direct chunk
+/// write, `H5Dwrite_chunk`): `bytes` have been through every filter of the dataset's
+/// pipeline (filter mask 0), `offset` is the chunk's first element.
+pub fn write_chunk(ds: &Dataset, offset: &[u64], bytes: &[u8]) -> hdf5::Result<()> {
+    use hdf5_sys::h5d::H5Dwrite_chunk;
+    use hdf5_sys::h5p::H5P_DEFAULT;
+    locked(|| {
+        hdf5::h5check(unsafe {
+            H5Dwrite_chunk(
+                ds.id(),
+                H5P_DEFAULT,
+                0,
+                offset.as_ptr(),
+                bytes.len(),
+                bytes.as_ptr().cast(),
+            )
+        })
+        .map(|_| ())
+    })
+}

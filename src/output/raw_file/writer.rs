@@ -1,25 +1,72 @@
-//! Streaming the profiles of a raw file: one row of (channel, bin) counts at a time,
-//! checked before it is written.
+//! Streaming the profiles of a raw file, checked before they are buffered, written a
+//! whole chunk at a time.
 //!
-//! Memory use is one row of counts plus one bit per profile (to check that each is
-//! written once), independent of the data volume. The writer is meant to be used from
-//! one thread (HDF5 calls are serialized anyway).
+//! Each (profile, channel, bin) variable (`counts`, the component counts, a changing
+//! scene's truth) is filled chunk by chunk in memory, in the shuffled layout of HDF5's
+//! shuffle filter ([`chunk::put_row`]). A chunk is complete when every one of its rows
+//! has come (the last chunk holds fewer; its rows past the end stay 0, the fill value, as
+//! HDF5 pads edge chunks); complete chunks wait in a queue, and when the queue holds
+//! [`FLUSH_BYTES`] (and at [`RawFileWriter::finish`]) they are deflated in parallel on
+//! rayon's pool (the run's `--threads`) and written in queue order by HDF5's direct chunk
+//! write. The (profile) variables (`time`, `n_shots`, `pulse_energy`, geolocation) are
+//! written [`COLUMN_BLOCK`] profiles per HDF5 call.
+//!
+//! Same bytes whatever the thread count: a chunk's bytes depend on its data only, the
+//! queue's order and the moments it is written depend only on the order of the calls.
+//!
+//! Memory: one bit per profile (written yet?), plus, for a writer that sends profiles in
+//! order, at most one chunk being filled per (profile, channel, bin) variable (about
+//! [`layout::TARGET_CHUNK_BYTES`], or one profile's row if that is larger), one block of
+//! the (profile) variables, and the queue: under [`FLUSH_BYTES`] plus one chunk of raw
+//! bytes, and while it is written, its compressed chunks. Profiles may come in any
+//! order; a chunk then stays in memory until all its rows have come.
 
+use std::collections::BTreeMap;
+use std::collections::btree_map::Entry;
 use std::path::{Path, PathBuf};
 
-use hdf5::Dataset;
+use rayon::prelude::*;
 
+use super::chunk;
+use super::hdf5_ds::write_chunk;
 use super::layout::{self, OpenFile};
 use super::{COMPONENT_NAMES, CountWidth, Dims, ProfileRecord, RawFileSpec};
 use crate::error::{Error, Result};
 use crate::output::safe_file::describe_hdf5_error;
 
-/// Conversion buffer for one row of counts at the file's width (reused across rows).
-enum RowBuf {
-    U16(Vec<u16>),
-    U32(Vec<u32>),
-    /// No conversion needed: rows are written straight from the caller's slice.
-    U64,
+/// Raw (uncompressed) bytes of complete chunks that trigger their compression and
+/// writing: a fixed size, not a function of the thread count, so that the sequence of
+/// HDF5 calls (and so the file's layout) is the same on any machine. 16 MiB keeps 32
+/// chunks of 512 KiB in a batch: work for many threads at once.
+pub const FLUSH_BYTES: usize = 16 << 20;
+/// Profiles per HDF5 call of the (profile) variables.
+pub const COLUMN_BLOCK: usize = 4096;
+
+/// A chunk being filled.
+struct OpenChunk {
+    /// Shuffled bytes, `chunk_rows × channels × bins` elements.
+    data: Vec<u8>,
+    /// Rows written into it so far.
+    present: usize,
+}
+
+/// A complete chunk waiting to be deflated and written.
+struct ReadyChunk {
+    /// Index in [`OpenFile::rows`].
+    var: usize,
+    /// Chunk index along profiles.
+    chunk: usize,
+    data: Vec<u8>,
+}
+
+/// [`COLUMN_BLOCK`] profiles of the (profile) variables being filled.
+struct ColumnBlock {
+    time: Vec<f64>,
+    n_shots: Vec<u64>,
+    pulse_energy: Vec<f64>,
+    /// The spec's (profile) variables, in its order.
+    values: Vec<Vec<f64>>,
+    present: usize,
 }
 
 /// Streams a raw lidar file, one profile at a time.
@@ -29,16 +76,25 @@ pub struct RawFileWriter {
     /// `None` once closed (by `finish`, or by `Drop`).
     open: Option<OpenFile>,
     n_per_profile: usize,
-    n_channels: usize,
     n_profiles: usize,
     count_width: CountWidth,
     components: bool,
     /// Dimensions and values per profile of each per-profile variable, in the spec's order.
     per_profile_sizes: Vec<(Dims, usize)>,
+    /// (bytes per element, profiles per chunk) of each of [`OpenFile::rows`].
+    row_layout: Vec<(usize, usize)>,
+    /// Chunks being filled, by chunk index, for each of [`OpenFile::rows`].
+    filling: Vec<BTreeMap<usize, OpenChunk>>,
+    /// Complete chunks, in the order they were completed.
+    ready: Vec<ReadyChunk>,
+    ready_bytes: usize,
+    /// Blocks of the (profile) variables being filled, by block index.
+    blocks: BTreeMap<usize, ColumnBlock>,
+    /// Why an earlier write failed: the file is then unusable.
+    failed: Option<String>,
     /// One bit per profile: written yet?
     written: Vec<u64>,
     n_written: usize,
-    buf: RowBuf,
 }
 
 impl RawFileWriter {
@@ -62,11 +118,14 @@ impl RawFileWriter {
                 describe_hdf5_error(&e.to_string())
             ))
         })?;
+        let row_layout: Vec<(usize, usize)> = open
+            .rows
+            .iter()
+            .map(|v| (v.elem_bytes, v.chunk_rows))
+            .collect();
         Ok(RawFileWriter {
             display: display.to_path_buf(),
-            open: Some(open),
             n_per_profile: spec.counts_per_profile(),
-            n_channels: spec.channels.len(),
             n_profiles: spec.n_profiles,
             count_width: spec.count_width,
             components: spec.components,
@@ -79,78 +138,57 @@ impl RawFileWriter {
                     _ => (v.dims, spec.counts_per_profile()),
                 })
                 .collect(),
+            filling: row_layout.iter().map(|_| BTreeMap::new()).collect(),
+            row_layout,
+            open: Some(open),
+            ready: Vec::new(),
+            ready_bytes: 0,
+            blocks: BTreeMap::new(),
+            failed: None,
             written,
             n_written: 0,
-            buf: match spec.count_width {
-                CountWidth::U16 => RowBuf::U16(Vec::new()),
-                CountWidth::U32 => RowBuf::U32(Vec::new()),
-                CountWidth::U64 => RowBuf::U64,
-            },
         })
     }
 
-    /// Profiles written so far.
+    /// Profiles written so far (accepted: a profile may still wait in memory for the rest
+    /// of its chunk; [`RawFileWriter::finish`] writes everything).
     pub fn profiles_written(&self) -> usize {
         self.n_written
     }
 
-    /// Writes one profile row (`counts`, the components if any, `time`, `n_shots`).
+    /// Writes one profile row (`counts`, the components if any, `time`, `n_shots`,
+    /// `pulse_energy`, the per-profile variables).
     ///
-    /// Everything is checked before anything is written, so a refused record leaves the
-    /// file as it was: errors if `rec.index` is out of range or already written, if a
+    /// Everything is checked before anything is buffered, so a refused record leaves the
+    /// writer as it was: errors if `rec.index` is out of range or already written, if a
     /// slice's length is not channels × bins, if components are missing or unexpected or
     /// do not sum to `counts`, if `time_s` is not finite, or if a count exceeds the
-    /// file's [`CountWidth`] (never wrapped or clamped).
+    /// file's [`CountWidth`] (never wrapped or clamped). A failure to write (a full disk)
+    /// leaves the writer unusable: every later call errors, and the caller drops the file.
     pub fn write_profile(&mut self, rec: &ProfileRecord) -> Result<()> {
+        self.usable()?;
         self.validate_record(rec)
             .map_err(|r| Error::output(&self.display, r))?;
-        let open = self
-            .open
-            .as_ref()
-            .ok_or_else(|| Error::output(&self.display, "the writer is already closed"))?;
+        if let Err(reason) = self.accept(rec) {
+            self.failed = Some(reason.clone());
+            return Err(Error::output(&self.display, reason));
+        }
         let row = rec.index;
-        let shape = (self.n_channels, self.n_per_profile / self.n_channels);
-        let result = (|| -> hdf5::Result<()> {
-            write_row(&open.counts, &mut self.buf, rec.counts, row, shape)?;
-            if let (Some(datasets), Some(parts)) = (&open.components, &rec.components) {
-                for (ds, part) in datasets.iter().zip(parts) {
-                    write_row(ds, &mut self.buf, part, row, shape)?;
-                }
-            }
-            open.time.write_slice(&[rec.time_s][..], row..row + 1)?;
-            open.n_shots.write_slice(&[rec.n_shots][..], row..row + 1)?;
-            open.pulse_energy
-                .write_slice(&[rec.pulse_energy_j][..], row..row + 1)?;
-            for ((ds, v), (dims, _)) in open
-                .per_profile
-                .iter()
-                .zip(rec.values)
-                .zip(&self.per_profile_sizes)
-            {
-                match dims {
-                    Dims::Profile => ds.write_slice(&v[..], row..row + 1)?,
-                    _ => ds.write_slice(ndarray_view(v, shape)?, (row, .., ..))?,
-                }
-            }
-            Ok(())
-        })();
-        result.map_err(|e| {
-            Error::output(
-                &self.display,
-                format!(
-                    "cannot write profile {row}: {}",
-                    describe_hdf5_error(&e.to_string())
-                ),
-            )
-        })?;
         self.written[row / 64] |= 1 << (row % 64);
         self.n_written += 1;
         Ok(())
     }
 
-    /// Checks that every profile was written and closes the file, flushing it. The
-    /// caller syncs and renames it (through [`crate::output::safe_file`]).
+    /// Writes several profiles, as [`RawFileWriter::write_profile`] one after the other.
+    pub fn write_profiles(&mut self, recs: &[ProfileRecord]) -> Result<()> {
+        recs.iter().try_for_each(|rec| self.write_profile(rec))
+    }
+
+    /// Checks that every profile was written, writes what is still buffered and closes
+    /// the file, flushing it. The caller syncs and renames it (through
+    /// [`crate::output::safe_file`]).
     pub fn finish(mut self) -> Result<()> {
+        self.usable()?;
         if self.n_written != self.n_profiles {
             let missing =
                 (0..self.n_profiles).find(|&i| self.written[i / 64] & (1 << (i % 64)) == 0);
@@ -164,6 +202,14 @@ impl RawFileWriter {
                 ),
             ));
         }
+        self.flush()
+            .map_err(|reason| Error::output(&self.display, reason))?;
+        if self.filling.iter().any(|f| !f.is_empty()) || !self.blocks.is_empty() {
+            return Err(Error::output(
+                &self.display,
+                "internal: every profile was written but a chunk is incomplete",
+            ));
+        }
         let open = self
             .open
             .take()
@@ -174,6 +220,170 @@ impl RawFileWriter {
                 format!("cannot close: {}", describe_hdf5_error(&e.to_string())),
             )
         })
+    }
+
+    /// Errors if the writer is closed or an earlier write failed.
+    fn usable(&self) -> Result<()> {
+        if let Some(why) = &self.failed {
+            return Err(Error::output(
+                &self.display,
+                format!("an earlier write failed ({why})"),
+            ));
+        }
+        if self.open.is_none() {
+            return Err(Error::output(&self.display, "the writer is already closed"));
+        }
+        Ok(())
+    }
+
+    /// Buffers a checked record; writes the blocks and chunks it completes.
+    fn accept(&mut self, rec: &ProfileRecord) -> std::result::Result<(), String> {
+        let row = rec.index;
+        self.put_row(0, row, rec.counts, |c| c)?;
+        let mut k = 1;
+        if let Some(parts) = &rec.components {
+            for part in parts {
+                self.put_row(k, row, part, |c| c)?;
+                k += 1;
+            }
+        }
+        let mut column_values = Vec::new();
+        for (i, v) in rec.values.iter().enumerate() {
+            match self.per_profile_sizes[i].0 {
+                Dims::Profile => column_values.push(v[0]),
+                _ => {
+                    self.put_row(k, row, v, f64::to_bits)?;
+                    k += 1;
+                }
+            }
+        }
+        self.put_columns(rec, &column_values)?;
+        if self.ready_bytes >= FLUSH_BYTES {
+            self.flush()?;
+        }
+        Ok(())
+    }
+
+    /// Puts profile `row` of (profile, channel, bin) variable `var` into its chunk, and
+    /// queues the chunk when it is complete.
+    fn put_row<T: Copy>(
+        &mut self,
+        var: usize,
+        row: usize,
+        values: &[T],
+        bits: impl Fn(T) -> u64,
+    ) -> std::result::Result<(), String> {
+        let (elem_bytes, chunk_rows) = self.row_layout[var];
+        let (c, r) = (row / chunk_rows, row % chunk_rows);
+        let elems = chunk_rows * self.n_per_profile;
+        let rows_in_chunk = chunk_rows.min(self.n_profiles - c * chunk_rows);
+        let open = match self.filling[var].entry(c) {
+            Entry::Occupied(e) => e.into_mut(),
+            Entry::Vacant(e) => e.insert(OpenChunk {
+                data: crate::resources::try_vec("a chunk of the raw file", elems * elem_bytes, 0u8)
+                    .map_err(|e| e.to_string())?,
+                present: 0,
+            }),
+        };
+        chunk::put_row(
+            &mut open.data,
+            elems,
+            r * self.n_per_profile,
+            elem_bytes,
+            values,
+            bits,
+        );
+        open.present += 1;
+        if open.present == rows_in_chunk
+            && let Some(done) = self.filling[var].remove(&c)
+        {
+            self.ready_bytes += done.data.len();
+            self.ready.push(ReadyChunk {
+                var,
+                chunk: c,
+                data: done.data,
+            });
+        }
+        Ok(())
+    }
+
+    /// Puts the (profile) values of a record into their block, and writes the block when
+    /// it is complete.
+    fn put_columns(
+        &mut self,
+        rec: &ProfileRecord,
+        values: &[f64],
+    ) -> std::result::Result<(), String> {
+        let (b, r) = (rec.index / COLUMN_BLOCK, rec.index % COLUMN_BLOCK);
+        let start = b * COLUMN_BLOCK;
+        let len = COLUMN_BLOCK.min(self.n_profiles - start);
+        let block = self.blocks.entry(b).or_insert_with(|| ColumnBlock {
+            time: vec![0.0; len],
+            n_shots: vec![0; len],
+            pulse_energy: vec![0.0; len],
+            values: vec![vec![0.0; len]; values.len()],
+            present: 0,
+        });
+        block.time[r] = rec.time_s;
+        block.n_shots[r] = rec.n_shots;
+        block.pulse_energy[r] = rec.pulse_energy_j;
+        for (column, &v) in block.values.iter_mut().zip(values) {
+            column[r] = v;
+        }
+        block.present += 1;
+        if block.present < len {
+            return Ok(());
+        }
+        let Some(block) = self.blocks.remove(&b) else {
+            return Ok(());
+        };
+        let open = self.open.as_ref().ok_or("the writer is already closed")?;
+        let range = start..start + len;
+        (|| -> hdf5::Result<()> {
+            open.time.write_slice(&block.time[..], range.clone())?;
+            open.n_shots.write_slice(&block.n_shots[..], range.clone())?;
+            open.pulse_energy
+                .write_slice(&block.pulse_energy[..], range.clone())?;
+            for (ds, column) in open.columns.iter().zip(&block.values) {
+                ds.write_slice(&column[..], range.clone())?;
+            }
+            Ok(())
+        })()
+        .map_err(|e| {
+            format!(
+                "cannot write profiles {}–{}: {}",
+                range.start,
+                range.end - 1,
+                describe_hdf5_error(&e.to_string())
+            )
+        })
+    }
+
+    /// Deflates the complete chunks in parallel and writes them in queue order.
+    fn flush(&mut self) -> std::result::Result<(), String> {
+        let ready = std::mem::take(&mut self.ready);
+        self.ready_bytes = 0;
+        if ready.is_empty() {
+            return Ok(());
+        }
+        let encoded: Vec<(usize, usize, Vec<u8>)> = ready
+            .into_par_iter()
+            .map(|c| (c.var, c.chunk, chunk::deflate(&c.data)))
+            .collect();
+        let open = self.open.as_ref().ok_or("the writer is already closed")?;
+        for (var, c, bytes) in encoded {
+            let v = &open.rows[var];
+            let first = c * v.chunk_rows;
+            write_chunk(&v.ds, &[first as u64, 0, 0], &bytes).map_err(|e| {
+                let last = (first + v.chunk_rows).min(self.n_profiles) - 1;
+                format!(
+                    "cannot write profiles {first}–{last} of `{}`: {}",
+                    v.name,
+                    describe_hdf5_error(&e.to_string())
+                )
+            })?;
+        }
+        Ok(())
     }
 
     /// All checks of `write_profile`, before anything is written.
@@ -265,35 +475,4 @@ impl Drop for RawFileWriter {
             let _ = open.close();
         }
     }
-}
-
-/// Writes row `row` of a (profile, channel, bin) count variable, converting to its width
-/// (the range was checked by `validate_record`).
-fn write_row(
-    ds: &Dataset,
-    buf: &mut RowBuf,
-    data: &[u64],
-    row: usize,
-    (channels, bins): (usize, usize),
-) -> hdf5::Result<()> {
-    let sel = (row, .., ..);
-    let shape = (channels, bins);
-    match buf {
-        RowBuf::U16(b) => {
-            b.clear();
-            b.extend(data.iter().map(|&c| c as u16));
-            ds.write_slice(ndarray_view(b, shape)?, sel)
-        }
-        RowBuf::U32(b) => {
-            b.clear();
-            b.extend(data.iter().map(|&c| c as u32));
-            ds.write_slice(ndarray_view(b, shape)?, sel)
-        }
-        RowBuf::U64 => ds.write_slice(ndarray_view(data, shape)?, sel),
-    }
-}
-
-/// A (channels, bins) view of a channel-major row.
-fn ndarray_view<T>(data: &[T], shape: (usize, usize)) -> hdf5::Result<ndarray::ArrayView2<'_, T>> {
-    ndarray::ArrayView2::from_shape(shape, data).map_err(|e| hdf5::Error::from(e.to_string()))
 }

@@ -1,0 +1,151 @@
+//! Whole chunks of the (profile, channel, bin) variables, encoded exactly as HDF5's filter
+//! pipeline `shuffle → deflate` stores them, so that they can be written with HDF5's
+//! direct chunk write (`H5Dwrite_chunk`) and read back through the dataset's declared
+//! filters by any HDF5 or netCDF-4 reader.
+//!
+//! * **Shuffle** (`H5Z_FILTER_SHUFFLE`, HDF5's `H5Zshuffle.c`): a chunk of `n` elements
+//!   of `s` bytes is stored as `s` byte planes of `n` bytes each, plane `j` holding byte
+//!   `j` (in the dataset's byte order) of every element: stored byte `j·n + i` is byte
+//!   `j` of element `i`. HDF5 shuffles the whole chunk buffer, edge chunks included (their
+//!   rows past the dataset's end hold the fill value, 0 here); a chunk of one element, or
+//!   of one-byte elements, is left as it is, which is the same layout. Chunks here always
+//!   hold a whole number of elements, so `H5Zshuffle.c`'s "leftover" bytes never occur.
+//!   Rows are scattered into their planes as they arrive ([`put_row`]), so a chunk
+//!   buffer is always in shuffled layout and needs no separate pass.
+//! * **Deflate** (`H5Z_FILTER_DEFLATE`): a zlib stream (RFC 1950: header, deflate data,
+//!   Adler-32), which HDF5 inflates with zlib whatever produced it. The compressor is
+//!   `miniz_oxide` at [`DEFLATE_LEVEL`] (chosen by measurement, see
+//!   `validation/reports/writer.md`): pure Rust with no CPU-dependent code path, so the
+//!   bytes of a chunk depend on its data (and the crate's version, pinned in
+//!   `Cargo.lock`) only, whatever the machine or thread that compressed it.
+
+/// Deflate level of every chunked variable: miniz_oxide's level 1 (greedy parsing, one
+/// probe) stores shuffled counts as compactly as zlib's level 1 at twice its speed.
+pub const DEFLATE_LEVEL: u8 = 1;
+
+/// Writes `row` into a chunk buffer in shuffled layout: the chunk holds `elems` elements
+/// of `elem_bytes` bytes (`buf.len() == elems · elem_bytes`), and the row's values are
+/// elements `at .. at + row.len()`. `bits` gives a value's bits in the low `8·elem_bytes`
+/// bits of a u64 (a count truncated to the file's width was range-checked before;
+/// `f64::to_bits` for floats), stored in the machine's byte order as the dataset's
+/// native type is.
+pub fn put_row<T: Copy>(
+    buf: &mut [u8],
+    elems: usize,
+    at: usize,
+    elem_bytes: usize,
+    row: &[T],
+    bits: impl Fn(T) -> u64,
+) {
+    debug_assert_eq!(buf.len(), elems * elem_bytes);
+    debug_assert!(at + row.len() <= elems);
+    for (j, plane) in buf.chunks_exact_mut(elems).enumerate() {
+        // byte j of the element as stored (native order)
+        let byte = if cfg!(target_endian = "little") {
+            j
+        } else {
+            elem_bytes - 1 - j
+        };
+        let shift = 8 * byte as u32;
+        for (d, &v) in plane[at..at + row.len()].iter_mut().zip(row) {
+            *d = (bits(v) >> shift) as u8;
+        }
+    }
+}
+
+/// Deflates a shuffled chunk into a zlib stream, as `H5Z_FILTER_DEFLATE` stores it.
+pub fn deflate(shuffled: &[u8]) -> Vec<u8> {
+    miniz_oxide::deflate::compress_to_vec_zlib(shuffled, DEFLATE_LEVEL)
+}
+
+/// Undoes [`deflate`] (any zlib stream); for checks.
+pub fn inflate(stored: &[u8]) -> Result<Vec<u8>, String> {
+    miniz_oxide::inflate::decompress_to_vec_zlib(stored)
+        .map_err(|e| format!("not a zlib stream: {e:?}"))
+}
+
+/// Undoes the shuffle of a chunk of `elem_bytes`-byte elements: back to the elements'
+/// bytes one after the other; for checks.
+pub fn unshuffle(shuffled: &[u8], elem_bytes: usize) -> Vec<u8> {
+    let n = shuffled.len() / elem_bytes.max(1);
+    let mut out = vec![0u8; shuffled.len()];
+    for (j, plane) in shuffled.chunks_exact(n.max(1)).enumerate() {
+        for (i, &b) in plane.iter().enumerate() {
+            out[i * elem_bytes + j] = b;
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// HDF5's shuffle, transcribed from `H5Z__filter_shuffle` in `H5Zshuffle.c`
+    /// (compression direction): `dest[i·n + j] = src[j·s + i]` for byte `i` of element
+    /// `j`, plus any leftover bytes copied at the end.
+    fn hdf5_shuffle(src: &[u8], s: usize) -> Vec<u8> {
+        let n = src.len() / s;
+        if s <= 1 || n <= 1 {
+            return src.to_vec();
+        }
+        let mut dest = vec![0u8; src.len()];
+        for i in 0..s {
+            for j in 0..n {
+                dest[i * n + j] = src[j * s + i];
+            }
+        }
+        let leftover = src.len() % s;
+        dest[n * s..].copy_from_slice(&src[n * s..n * s + leftover]);
+        dest
+    }
+
+    #[test]
+    fn rows_put_one_by_one_equal_hdf5_shuffle_of_the_whole_chunk() {
+        for (elem_bytes, rows, width) in [(2usize, 5usize, 7usize), (4, 3, 11), (8, 4, 5), (8, 1, 1)] {
+            let elems = rows * width;
+            let mut buf = vec![0u8; elems * elem_bytes];
+            let mut native = Vec::new();
+            // rows out of order, the last one missing (an edge chunk's padding)
+            let order: Vec<usize> = (0..rows.saturating_sub(1)).rev().collect();
+            let mask = if elem_bytes == 8 { u64::MAX } else { (1u64 << (8 * elem_bytes)) - 1 };
+            let value = |r: usize, k: usize| (0x0123_4567_89ab_cdefu64.wrapping_mul((r * width + k + 1) as u64)) & mask;
+            for &r in &order {
+                let row: Vec<u64> = (0..width).map(|k| value(r, k)).collect();
+                put_row(&mut buf, elems, r * width, elem_bytes, &row, |v| v);
+            }
+            for r in 0..rows {
+                for k in 0..width {
+                    let v = if order.contains(&r) { value(r, k) } else { 0 };
+                    native.extend_from_slice(&v.to_ne_bytes()[..elem_bytes]);
+                }
+            }
+            assert_eq!(buf, hdf5_shuffle(&native, elem_bytes), "{elem_bytes} B × {elems}");
+            assert_eq!(unshuffle(&buf, elem_bytes), native);
+        }
+    }
+
+    #[test]
+    fn f64_rows_keep_their_bits() {
+        let row = [1.5f64, -0.0, 3.25e-300, f64::MAX];
+        let mut buf = vec![0u8; 32];
+        put_row(&mut buf, 4, 0, 8, &row, f64::to_bits);
+        let back: Vec<f64> = unshuffle(&buf, 8)
+            .chunks_exact(8)
+            .map(|b| f64::from_ne_bytes(b.try_into().unwrap()))
+            .collect();
+        assert_eq!(back.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), row.map(f64::to_bits));
+    }
+
+    #[test]
+    fn deflate_makes_a_zlib_stream_that_inflates_back() {
+        let data: Vec<u8> = (0..100_000u32).map(|i| (i % 251 / 7) as u8).collect();
+        let z = deflate(&data);
+        // zlib header: CM = 8 (deflate), window 32 KiB, FCHECK makes it a multiple of 31
+        assert_eq!(z[0], 0x78);
+        assert_eq!((u16::from(z[0]) << 8 | u16::from(z[1])) % 31, 0);
+        assert!(z.len() < data.len() / 4);
+        assert_eq!(inflate(&z).unwrap(), data);
+        assert_eq!(deflate(&data), z, "the same data gives the same bytes");
+    }
+}
