@@ -530,7 +530,10 @@ pub fn run(
     let batch = ((4 << 20) / (n_bins * streams).max(1)).clamp(1, 64);
     let mut total_counts = 0u64;
     let mut drawing = Duration::ZERO;
-    for first_profile in (0..profiles).step_by(batch) {
+    // Batch k is drawn while batch k − 1 is handed to the writer (whose chunk compression
+    // runs on the same pool): the writer gets the profiles in order whatever the thread
+    // count, so the file's bytes do not depend on it.
+    let draw_batch = |first_profile: usize| {
         let last = (first_profile + batch).min(profiles);
         let draw_start = Instant::now();
         let drawn: Vec<DrawnProfile> = (first_profile..last)
@@ -542,7 +545,10 @@ pub fn run(
                 None => draw_profile(&channels, p as u64, shots, n_bins, components, &energy),
             })
             .collect();
-        drawing += draw_start.elapsed();
+        (first_profile, drawn, draw_start.elapsed())
+    };
+    let mut write_batch = |(first_profile, drawn, took): (usize, Vec<DrawnProfile>, Duration)| {
+        drawing += took;
         for (k, d) in drawn.iter().enumerate() {
             total_counts += d.counts.iter().sum::<u64>();
             let index = first_profile + k;
@@ -569,7 +575,20 @@ pub fn run(
                 values: &values,
             })?;
         }
-        progress.inc((last - first_profile) as u64);
+        progress.inc(drawn.len() as u64);
+        Ok::<(), Error>(())
+    };
+    let mut pending = None;
+    for first_profile in (0..profiles).step_by(batch) {
+        let (drawn, written) = rayon::join(
+            || draw_batch(first_profile),
+            || pending.take().map_or(Ok(()), &mut write_batch),
+        );
+        written?;
+        pending = Some(drawn);
+    }
+    if let Some(last) = pending {
+        write_batch(last)?;
     }
     writer.finish()?;
     outputs.commit()?;

@@ -39,6 +39,9 @@ use crate::output::safe_file::describe_hdf5_error;
 /// HDF5 calls (and so the file's layout) is the same on any machine. 16 MiB keeps 32
 /// chunks of 512 KiB in a batch: work for many threads at once.
 pub const FLUSH_BYTES: usize = 16 << 20;
+/// Chunk buffers kept for reuse once written (a buffer is taken for each new chunk, so
+/// the kept ones and the queue together stay under about [`FLUSH_BYTES`]).
+const MAX_SPARE: usize = 64;
 /// Profiles per HDF5 call of the (profile) variables.
 pub const COLUMN_BLOCK: usize = 4096;
 
@@ -90,6 +93,8 @@ pub struct RawFileWriter {
     ready_bytes: usize,
     /// Blocks of the (profile) variables being filled, by block index.
     blocks: BTreeMap<usize, ColumnBlock>,
+    /// Chunk buffers already written, for reuse (at most [`MAX_SPARE`]).
+    spare: Vec<Vec<u8>>,
     /// Why an earlier write failed: the file is then unusable.
     failed: Option<String>,
     /// One bit per profile: written yet?
@@ -144,6 +149,7 @@ impl RawFileWriter {
             ready: Vec::new(),
             ready_bytes: 0,
             blocks: BTreeMap::new(),
+            spare: Vec::new(),
             failed: None,
             written,
             n_written: 0,
@@ -279,11 +285,23 @@ impl RawFileWriter {
         let rows_in_chunk = chunk_rows.min(self.n_profiles - c * chunk_rows);
         let open = match self.filling[var].entry(c) {
             Entry::Occupied(e) => e.into_mut(),
-            Entry::Vacant(e) => e.insert(OpenChunk {
-                data: crate::resources::try_vec("a chunk of the raw file", elems * elem_bytes, 0u8)
-                    .map_err(|e| e.to_string())?,
-                present: 0,
-            }),
+            Entry::Vacant(e) => {
+                let size = elems * elem_bytes;
+                let data = match self.spare.pop() {
+                    // every byte of a full chunk is overwritten by its rows; an edge
+                    // chunk's rows past the end hold the fill value, 0
+                    Some(mut b) => {
+                        b.resize(size, 0);
+                        if rows_in_chunk < chunk_rows {
+                            b.fill(0);
+                        }
+                        b
+                    }
+                    None => crate::resources::try_vec("a chunk of the raw file", size, 0u8)
+                        .map_err(|e| e.to_string())?,
+                };
+                e.insert(OpenChunk { data, present: 0 })
+            }
         };
         chunk::put_row(
             &mut open.data,
@@ -341,7 +359,8 @@ impl RawFileWriter {
         let range = start..start + len;
         (|| -> hdf5::Result<()> {
             open.time.write_slice(&block.time[..], range.clone())?;
-            open.n_shots.write_slice(&block.n_shots[..], range.clone())?;
+            open.n_shots
+                .write_slice(&block.n_shots[..], range.clone())?;
             open.pulse_energy
                 .write_slice(&block.pulse_energy[..], range.clone())?;
             for (ds, column) in open.columns.iter().zip(&block.values) {
@@ -366,12 +385,16 @@ impl RawFileWriter {
         if ready.is_empty() {
             return Ok(());
         }
-        let encoded: Vec<(usize, usize, Vec<u8>)> = ready
+        let encoded: Vec<(usize, usize, std::result::Result<Vec<u8>, String>, Vec<u8>)> = ready
             .into_par_iter()
-            .map(|c| (c.var, c.chunk, chunk::deflate(&c.data)))
+            .map(|c| (c.var, c.chunk, chunk::deflate(&c.data), c.data))
             .collect();
         let open = self.open.as_ref().ok_or("the writer is already closed")?;
-        for (var, c, bytes) in encoded {
+        for (var, c, bytes, raw) in encoded {
+            if self.spare.len() < MAX_SPARE {
+                self.spare.push(raw);
+            }
+            let bytes = bytes?;
             let v = &open.rows[var];
             let first = c * v.chunk_rows;
             write_chunk(&v.ds, &[first as u64, 0, 0], &bytes).map_err(|e| {
@@ -412,7 +435,7 @@ impl RawFileWriter {
             ));
         }
         for (k, (v, &(_, want))) in rec.values.iter().zip(&self.per_profile_sizes).enumerate() {
-            if v.len() != want || v.iter().any(|x| !x.is_finite()) {
+            if v.len() != want || !v.iter().fold(true, |ok, x| ok & x.is_finite()) {
                 return Err(format!(
                     "profile {i}: per-profile variable {k} has {} values (want {want}) or a non-finite one",
                     v.len()
@@ -430,6 +453,11 @@ impl RawFileWriter {
                     "profile {i}: {what} has {} values, the file has {n} per profile",
                     data.len()
                 ));
+            }
+            // `max` is 2^k − 1, so every count fits when their bitwise OR does: one
+            // vectorized pass; the position is searched only on failure
+            if data.iter().fold(0, |acc, &c| acc | c) <= max {
+                return Ok(());
             }
             match data.iter().position(|&c| c > max) {
                 None => Ok(()),
