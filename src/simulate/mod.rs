@@ -862,8 +862,10 @@ const FILE_FIXED_BYTES: f64 = 64e3;
 /// Bytes per bin of the per-bin variables (about 25 f64 per bin).
 const FILE_BYTES_PER_BIN: f64 = 200.0;
 /// Single-threaded cost of the model, the file and its writes per stored count, ns
-/// (measured: 0.06–0.14 µs on scenario 1 and the CALIOP-like config).
-const FILE_NS_PER_COUNT: f64 = 150.0;
+/// (measured, `validation/reports/writer.md`: ~7 ns with u16 counts alone, the
+/// CALIOP-like config; ~20 ns on scenario 1's small file; ~110 ns with the orbit's five
+/// f64 truth values per count), rounded up for counts alone.
+const FILE_NS_PER_COUNT: f64 = 40.0;
 
 /// Estimated size of the raw file, bytes: per stored count the smaller of its width and
 /// the compressed Poisson entropy of its mean.
@@ -895,8 +897,13 @@ fn check_sizes(
 ) -> Result<()> {
     let streams = if components { 4 } else { 1 };
     let bins = totals.len() as f64;
-    // one bit per profile (written yet?), the batch of drawn rows, the samplers' tables
-    let memory = profiles as f64 / 8.0 + 64.0 * bins * 8.0 * 2.0 * streams as f64 + 64.0 * bins;
+    // one bit per profile (written yet?), the batch of drawn rows, the samplers' tables,
+    // the file writer's chunks (the count variables and, in a changing scene, five f64)
+    let threads = rayon::current_num_threads().max(1);
+    let writer =
+        crate::output::raw_file::writer::buffer_bytes(bins as usize * 8, streams + 5, threads);
+    let memory =
+        profiles as f64 / 8.0 + 64.0 * bins * 8.0 * 2.0 * streams as f64 + 64.0 * bins + writer;
     crate::resources::require_memory(&format!("simulating {profiles} profiles"), memory)?;
     let file = estimated_file_bytes(totals, shots, profiles, streams);
     crate::resources::require_disk("-o", &opts.output, file)?;
@@ -904,9 +911,8 @@ fn check_sizes(
         ResolvedMethod::Shot => ShotSampler::new(totals).strategy().est_ns_per_shot * shots as f64,
         _ => bins * cost::AGGREGATE_LARGE_NS,
     };
-    let threads = rayon::current_num_threads().max(1) as f64;
     let ns = profiles as f64
-        * (draw_ns_per_profile * streams.min(3) as f64 / threads
+        * (draw_ns_per_profile * streams.min(3) as f64 / threads as f64
             + bins * streams as f64 * FILE_NS_PER_COUNT);
     crate::resources::announce_duration(
         &format!("{profiles} profiles × {} bins", totals.len()),

@@ -17,8 +17,10 @@
 //! Memory: one bit per profile (written yet?), plus, for a writer that sends profiles in
 //! order, at most one chunk being filled per (profile, channel, bin) variable (about
 //! [`layout::TARGET_CHUNK_BYTES`], or one profile's row if that is larger), one block of
-//! the (profile) variables, and the queue: under [`FLUSH_BYTES`] plus one chunk of raw
-//! bytes, and while it is written, its compressed chunks. Profiles may come in any
+//! the (profile) variables, the queue (under [`FLUSH_BYTES`] plus one chunk of raw bytes,
+//! and while it is written, its compressed chunks), the written buffers kept for reuse
+//! (at most [`FLUSH_BYTES`]) and one compressor per worker thread: [`buffer_bytes`], e.g.
+//! about 60 MB for the orbit's six variables on two threads. Profiles may come in any
 //! order; a chunk then stays in memory until all its rows have come.
 
 use std::collections::BTreeMap;
@@ -39,11 +41,25 @@ use crate::output::safe_file::describe_hdf5_error;
 /// HDF5 calls (and so the file's layout) is the same on any machine. 16 MiB keeps 32
 /// chunks of 512 KiB in a batch: work for many threads at once.
 pub const FLUSH_BYTES: usize = 16 << 20;
-/// Chunk buffers kept for reuse once written (a buffer is taken for each new chunk, so
-/// the kept ones and the queue together stay under about [`FLUSH_BYTES`]).
-const MAX_SPARE: usize = 64;
+/// Bytes of written chunk buffers kept for reuse.
+const SPARE_BYTES: usize = FLUSH_BYTES;
 /// Profiles per HDF5 call of the (profile) variables.
 pub const COLUMN_BLOCK: usize = 4096;
+
+/// The most memory the writer's buffers take for a writer that sends profiles in order:
+/// one chunk being filled per (profile, channel, bin) variable (`variables` of them, rows
+/// of at most `row_bytes`), the queue of complete chunks and the buffers kept for reuse
+/// (each under [`FLUSH_BYTES`] plus a chunk), the compressed chunks of one batch (no
+/// larger than their input plus 1/8), and each of `threads` workers' compressor (its
+/// tables, ~300 kB, and room for a chunk and 1/8 plus 128 KiB).
+pub fn buffer_bytes(row_bytes: usize, variables: usize, threads: usize) -> f64 {
+    let chunk = layout::TARGET_CHUNK_BYTES.max(row_bytes) as f64;
+    let flush = FLUSH_BYTES as f64 + chunk;
+    variables as f64 * chunk
+        + 2.0 * flush
+        + 1.125 * flush
+        + threads as f64 * (300e3 + 1.125 * chunk + 131_072.0)
+}
 
 /// A chunk being filled.
 struct OpenChunk {
@@ -93,8 +109,9 @@ pub struct RawFileWriter {
     ready_bytes: usize,
     /// Blocks of the (profile) variables being filled, by block index.
     blocks: BTreeMap<usize, ColumnBlock>,
-    /// Chunk buffers already written, for reuse (at most [`MAX_SPARE`]).
+    /// Chunk buffers already written, for reuse (at most [`SPARE_BYTES`] in all).
     spare: Vec<Vec<u8>>,
+    spare_bytes: usize,
     /// Why an earlier write failed: the file is then unusable.
     failed: Option<String>,
     /// One bit per profile: written yet?
@@ -150,6 +167,7 @@ impl RawFileWriter {
             ready_bytes: 0,
             blocks: BTreeMap::new(),
             spare: Vec::new(),
+            spare_bytes: 0,
             failed: None,
             written,
             n_written: 0,
@@ -287,7 +305,9 @@ impl RawFileWriter {
             Entry::Occupied(e) => e.into_mut(),
             Entry::Vacant(e) => {
                 let size = elems * elem_bytes;
-                let data = match self.spare.pop() {
+                let spare = self.spare.pop();
+                self.spare_bytes -= spare.as_ref().map_or(0, Vec::len);
+                let data = match spare {
                     // every byte of a full chunk is overwritten by its rows; an edge
                     // chunk's rows past the end hold the fill value, 0
                     Some(mut b) => {
@@ -391,7 +411,8 @@ impl RawFileWriter {
             .collect();
         let open = self.open.as_ref().ok_or("the writer is already closed")?;
         for (var, c, bytes, raw) in encoded {
-            if self.spare.len() < MAX_SPARE {
+            if self.spare_bytes + raw.len() <= SPARE_BYTES {
+                self.spare_bytes += raw.len();
                 self.spare.push(raw);
             }
             let bytes = bytes?;
