@@ -1,9 +1,10 @@
 //! The HDF5 calls the `hdf5` crate does not make for us: dimension scales (`H5DS*`, from
-//! libhdf5_hl, built by the `hl` feature of `hdf5-metno-sys`), and the attribute
-//! helpers of the raw file (variable-length UTF-8 text, scalar numbers).
+//! libhdf5_hl, built by the `hl` feature of `hdf5-metno-sys`), the direct chunk write
+//! (`H5Dwrite_chunk`), and the attribute helpers of the raw file (variable-length UTF-8
+//! text, scalar numbers).
 //!
 //! HDF5 calls go through the `hdf5` crate, whose global lock serializes them; the
-//! dimension-scale calls are made under the same lock.
+//! dimension-scale and chunk calls are made under the same lock.
 
 use std::ffi::CString;
 

@@ -78,6 +78,9 @@ struct ReadyChunk {
     data: Vec<u8>,
 }
 
+/// A chunk's stored bytes, or why it could not be compressed.
+type Stored = std::result::Result<Vec<u8>, String>;
+
 /// [`COLUMN_BLOCK`] profiles of the (profile) variables being filled.
 struct ColumnBlock {
     time: Vec<f64>,
@@ -405,19 +408,23 @@ impl RawFileWriter {
         if ready.is_empty() {
             return Ok(());
         }
-        let encoded: Vec<(usize, usize, std::result::Result<Vec<u8>, String>, Vec<u8>)> = ready
+        // compressed in parallel, in any order; `collect` keeps the queue's order
+        let encoded: Vec<(ReadyChunk, Stored)> = ready
             .into_par_iter()
-            .map(|c| (c.var, c.chunk, chunk::deflate(&c.data), c.data))
+            .map(|c| {
+                let stored = chunk::deflate(&c.data);
+                (c, stored)
+            })
             .collect();
         let open = self.open.as_ref().ok_or("the writer is already closed")?;
-        for (var, c, bytes, raw) in encoded {
-            if self.spare_bytes + raw.len() <= SPARE_BYTES {
-                self.spare_bytes += raw.len();
-                self.spare.push(raw);
+        for (c, stored) in encoded {
+            let bytes = stored?;
+            if self.spare_bytes + c.data.len() <= SPARE_BYTES {
+                self.spare_bytes += c.data.len();
+                self.spare.push(c.data);
             }
-            let bytes = bytes?;
-            let v = &open.rows[var];
-            let first = c * v.chunk_rows;
+            let v = &open.rows[c.var];
+            let first = c.chunk * v.chunk_rows;
             write_chunk(&v.ds, &[first as u64, 0, 0], &bytes).map_err(|e| {
                 let last = (first + v.chunk_rows).min(self.n_profiles) - 1;
                 format!(
