@@ -150,35 +150,6 @@ fn check_all(path: &Path, spec: &RawFileSpec) {
     }
 }
 
-/// Chunk index, filter mask and stored size of every chunk of a dataset
-/// (`H5Dget_chunk_info`), in the order HDF5 lists them.
-fn chunk_info(ds: &hdf5::Dataset) -> Vec<(Vec<u64>, u32, u64)> {
-    use hdf5_sys::h5d::{H5Dget_chunk_info, H5Dget_num_chunks};
-    use hdf5_sys::h5s::H5S_ALL;
-    hdf5::sync::sync(|| unsafe {
-        let mut n = 0;
-        assert!(H5Dget_num_chunks(ds.id(), H5S_ALL, &mut n) >= 0);
-        (0..n)
-            .map(|k| {
-                let mut offset = vec![0u64; ds.ndim()];
-                let (mut mask, mut addr, mut size) = (0u32, 0u64, 0u64);
-                assert!(
-                    H5Dget_chunk_info(
-                        ds.id(),
-                        H5S_ALL,
-                        k,
-                        offset.as_mut_ptr(),
-                        &mut mask,
-                        &mut addr,
-                        &mut size,
-                    ) >= 0
-                );
-                (offset, mask, size)
-            })
-            .collect()
-    })
-}
-
 /// The stored bytes of one chunk (`H5Dread_chunk`).
 fn raw_chunk(ds: &hdf5::Dataset, offset: &[u64], size: u64) -> Vec<u8> {
     use hdf5_sys::h5d::H5Dread_chunk;
@@ -233,13 +204,13 @@ fn profiles_in_any_order_read_back_exactly_with_edge_chunks_and_components() {
             Some(vec![32, 2, 1000]),
             "f64 chunk rows of its own"
         );
-        let info = chunk_info(&counts);
+        let info = common::chunk_info(&counts);
         assert_eq!(info.len(), 300usize.div_ceil(rows));
         for (c, (offset, mask, _)) in info.iter().enumerate() {
             assert_eq!(offset, &vec![(c * rows) as u64, 0, 0]);
             assert_eq!(*mask, 0);
         }
-        assert_eq!(chunk_info(&a).len(), 300usize.div_ceil(32));
+        assert_eq!(common::chunk_info(&a).len(), 300usize.div_ceil(32));
     }
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -266,6 +237,26 @@ fn more_profiles_than_a_column_block_and_a_row_larger_than_a_chunk() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A copy of `ds` in `into`, written by HDF5 through its own filters (same chunks,
+/// shuffle, deflate 1).
+fn hdf5_pipeline_copy<T: hdf5::H5Type>(
+    ds: &hdf5::Dataset,
+    into: &hdf5::File,
+    name: &str,
+) -> hdf5::Dataset {
+    let v: Vec<T> = ds.read_raw().unwrap();
+    let c = into
+        .new_dataset::<T>()
+        .shape(ds.shape())
+        .chunk(ds.chunk().unwrap())
+        .shuffle()
+        .deflate(1)
+        .create(name)
+        .unwrap();
+    c.write_raw(&v).unwrap();
+    c
+}
+
 /// The writer's stored chunks inflate to exactly the bytes HDF5's own pipeline (shuffle,
 /// then deflate) produces from the same data: same layout, only the deflate encoder
 /// differs.
@@ -281,31 +272,11 @@ fn stored_chunks_unpack_to_hdf5s_own_shuffled_bytes() {
         let ds = f.dataset(name).unwrap();
         let chunk_dims = ds.chunk().unwrap();
         let copy = if elem == 4 {
-            let v: Vec<u32> = ds.read_raw().unwrap();
-            let c = theirs
-                .new_dataset::<u32>()
-                .shape(ds.shape())
-                .chunk(chunk_dims.clone())
-                .shuffle()
-                .deflate(1)
-                .create(name)
-                .unwrap();
-            c.write_raw(&v).unwrap();
-            c
+            hdf5_pipeline_copy::<u32>(&ds, &theirs, name)
         } else {
-            let v: Vec<f64> = ds.read_raw().unwrap();
-            let c = theirs
-                .new_dataset::<f64>()
-                .shape(ds.shape())
-                .chunk(chunk_dims.clone())
-                .shuffle()
-                .deflate(1)
-                .create(name)
-                .unwrap();
-            c.write_raw(&v).unwrap();
-            c
+            hdf5_pipeline_copy::<f64>(&ds, &theirs, name)
         };
-        let (a, b) = (chunk_info(&ds), chunk_info(&copy));
+        let (a, b) = (common::chunk_info(&ds), common::chunk_info(&copy));
         assert_eq!(a.len(), b.len());
         assert!(a.len() >= 2, "{name}: an edge chunk is tested");
         for ((oa, _, sa), (ob, _, sb)) in a.iter().zip(&b) {
