@@ -196,9 +196,14 @@ mod tests {
 
     #[test]
     fn rows_put_one_by_one_equal_hdf5_shuffle_of_the_whole_chunk() {
-        for (elem_bytes, rows, width) in
-            [(2usize, 5usize, 7usize), (4, 3, 11), (8, 4, 5), (8, 1, 1)]
-        {
+        for (elem_bytes, rows, width) in [
+            (2usize, 5usize, 7usize),
+            (4, 3, 11),
+            (8, 4, 5),
+            (8, 1, 1),
+            (8, 3, 37),
+            (8, 2, 16),
+        ] {
             let elems = rows * width;
             let mut buf = vec![0u8; elems * elem_bytes];
             let mut native = Vec::new();
