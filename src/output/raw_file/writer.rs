@@ -13,6 +13,8 @@
 //!
 //! Same bytes whatever the thread count: a chunk's bytes depend on its data only, the
 //! queue's order and the moments it is written depend only on the order of the calls.
+//! So the same spec and the same records in the same order give the same file: a writer
+//! fed profiles 0, 1, 2, … (as `simulate` does) writes the same bytes whoever feeds it.
 //!
 //! Memory: one bit per profile (written yet?), plus, for a writer that sends profiles in
 //! order, at most one chunk being filled per (profile, channel, bin) variable (about
@@ -204,11 +206,6 @@ impl RawFileWriter {
         self.written[row / 64] |= 1 << (row % 64);
         self.n_written += 1;
         Ok(())
-    }
-
-    /// Writes several profiles, as [`RawFileWriter::write_profile`] one after the other.
-    pub fn write_profiles(&mut self, recs: &[ProfileRecord]) -> Result<()> {
-        recs.iter().try_for_each(|rec| self.write_profile(rec))
     }
 
     /// Checks that every profile was written, writes what is still buffered and closes
