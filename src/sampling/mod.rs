@@ -48,14 +48,17 @@ mod aggregate;
 mod alias;
 pub mod approx;
 pub mod jitter;
+mod pmf_alias;
 mod shot;
 mod table;
 #[cfg(test)]
 mod tests;
 
 pub use aggregate::{AGGREGATE_CHUNK, AGGREGATE_INVERSION_MAX, add_aggregate, poisson_u64};
+pub use pmf_alias::{PMF_ALIAS_MAX_COLUMNS, PmfAlias, pmf_alias_columns};
 pub use shot::{
-    DENSE_TABLE_MAX, PathChoice, ShotSampler, ShotStrategy, StrategyKind, TOTAL_TABLE_MAX, cost,
+    DENSE_ALIAS_MAX, DENSE_TABLE_MAX, DenseMethod, PathChoice, ShotSampler, ShotStrategy,
+    StrategyKind, TOTAL_TABLE_MAX, cost,
 };
 
 use rand_pcg::Pcg64Mcg;
@@ -66,12 +69,27 @@ use rayon::prelude::*;
 /// at a time); the shot's count in a bin is the sum of its events.
 pub trait CountSink {
     fn add(&mut self, bin: usize, count: u32);
+
+    /// A count that may be 0 (reported only when it is not, unless the sink can take a
+    /// zero for free: an accumulator adds it without a branch that the draws of a bin
+    /// with `P(K = 0)` near ½ would mispredict).
+    #[inline(always)]
+    fn add_any(&mut self, bin: usize, count: u32) {
+        if count > 0 {
+            self.add(bin, count);
+        }
+    }
 }
 
 /// Accumulator: adds every event into `acc[bin]`.
 impl CountSink for [u64] {
     #[inline(always)]
     fn add(&mut self, bin: usize, count: u32) {
+        self[bin] += u64::from(count);
+    }
+
+    #[inline(always)]
+    fn add_any(&mut self, bin: usize, count: u32) {
         self[bin] += u64::from(count);
     }
 }

@@ -687,15 +687,14 @@ pub fn draw_scene_profile(
             };
         }
     }
-    let snr: Vec<f64> = (0..channels)
-        .flat_map(|k| {
-            let e = &sc.expected[runs[0].0][k];
-            let signal = &truth.signal[k * n_bins..(k + 1) * n_bins];
-            signal
-                .iter()
-                .zip(&background[k * n_bins..(k + 1) * n_bins])
-                .map(|(&s, &b)| crate::snr::eq4(s, b, e.dark, shots as f64))
-                .collect::<Vec<f64>>()
+    let snr: Vec<f64> = truth
+        .signal
+        .iter()
+        .zip(&background)
+        .enumerate()
+        .map(|(i, (&s, &b))| {
+            let dark = sc.expected[runs[0].0][i / n_bins].dark;
+            crate::snr::eq4(s, b, dark, shots as f64)
         })
         .collect();
     DrawnProfile {
