@@ -54,7 +54,10 @@ mod table;
 #[cfg(test)]
 mod tests;
 
-pub use aggregate::{AGGREGATE_CHUNK, AGGREGATE_INVERSION_MAX, add_aggregate, poisson_u64};
+pub use aggregate::{
+    AGGREGATE_CHUNK, AGGREGATE_INVERSION_MAX, AGGREGATE_PREBUILT_MAX, AggregateSampler,
+    add_aggregate, poisson_u64,
+};
 pub use pmf_alias::{PMF_ALIAS_MAX_COLUMNS, PmfAlias, pmf_alias_columns};
 pub use shot::{
     DENSE_ALIAS_MAX, DENSE_TABLE_MAX, DenseMethod, PathChoice, ShotSampler, ShotStrategy,
@@ -227,6 +230,19 @@ pub fn shot_profile(sampler: &ShotSampler, seed: u64, profile: u64, shots: u64, 
         })
         .expect("at least one block");
     acc.iter_mut().zip(&sum).for_each(|(a, b)| *a += b);
+}
+
+/// Accumulate one profile of `shots` shots by an [`AggregateSampler`] (samplers built
+/// once for the fixed means) into `acc`, from `stream_rng(seed, profile, AGGREGATE_STREAM)`.
+pub fn aggregate_profile_fixed(
+    sampler: &AggregateSampler,
+    seed: u64,
+    profile: u64,
+    shots: u64,
+    acc: &mut [u64],
+) {
+    let mut rng = stream_rng(seed, profile, AGGREGATE_STREAM);
+    sampler.add_profile(&mut rng, shots, acc);
 }
 
 /// Accumulate one profile of `shots` shots by [`add_aggregate`] (one exact

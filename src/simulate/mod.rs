@@ -269,8 +269,8 @@ impl RunEnergy {
 /// The sampler of one stream of counts (the total, or one component), built once per run.
 #[derive(Debug, Clone)]
 pub enum StreamSampler {
-    /// One Poisson(M·λ) draw per bin.
-    Aggregate(Vec<f64>),
+    /// One Poisson(M·λ) draw per bin, every bin's sampler built once.
+    Aggregate(sampling::AggregateSampler),
     /// One Poisson draw per bin of mean `(Σ_s f_s)·λ_sig + M·λ_rest`: exact given the
     /// profile's emitted energies, which are drawn first (M factors, no photons).
     AggregateEnergy {
@@ -315,7 +315,9 @@ impl StreamSampler {
         };
         let constant = energy.law.is_constant();
         match method {
-            ResolvedMethod::Aggregate if constant => StreamSampler::Aggregate(total()),
+            ResolvedMethod::Aggregate if constant => {
+                StreamSampler::Aggregate(sampling::AggregateSampler::new(&total()))
+            }
             ResolvedMethod::Aggregate | ResolvedMethod::AggregateNormal { .. } if !constant => {
                 StreamSampler::AggregateEnergy {
                     signal: signal.to_vec(),
@@ -350,8 +352,8 @@ impl StreamSampler {
     /// so any profile can be regenerated alone.
     pub fn profile_counts(&self, seed: u64, profile: u64, shots: u64, acc: &mut [u64]) {
         match self {
-            StreamSampler::Aggregate(l) => {
-                sampling::aggregate_profile(l, seed, profile, shots, acc)
+            StreamSampler::Aggregate(a) => {
+                sampling::aggregate_profile_fixed(a, seed, profile, shots, acc)
             }
             StreamSampler::AggregateEnergy {
                 signal,
