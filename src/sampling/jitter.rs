@@ -177,11 +177,13 @@ mod tests {
     }
 
     /// Mean and variance of a jittered bin: E = M·λ, Var = M·λ + M·σ²·λ² (law of total
-    /// variance over the shots' energies). 4000 profiles; |z| < 5 is a false-alarm rate
-    /// below 1e-6 per check.
+    /// variance over the shots' energies). 100,000 profiles; |z| < 5 is a false-alarm
+    /// rate below 1e-6 per check. Power: the variance without jitter (M·λ = 100 against
+    /// 108) is 16 standard deviations of the sample variance away, and is rejected at
+    /// z > 4.
     #[test]
     fn jitter_adds_the_expected_variance() {
-        let (lambda, sigma, m, profiles) = (2.0, 0.1, 50u64, 4000u64);
+        let (lambda, sigma, m, profiles) = (2.0, 0.2, 50u64, 100_000u64);
         let js = ModulatedShots::new(&[lambda], &[0.0], laser(sigma), None, 1.0 + 6.0 * sigma);
         let draws: Vec<f64> = (0..profiles)
             .map(|p| {
@@ -204,8 +206,9 @@ mod tests {
             ((var - v) / (2.0 * v * v / (n - 1.0)).sqrt()).abs() < 5.0,
             "var {var} vs {v}"
         );
-        // and it is distinguishable from no jitter (v = 100 vs 104): the test has power
-        assert!(var > mu);
+        // and it is distinguishable from no jitter (v = 100 vs 108): the test has power
+        let sd_var = (2.0 * v * v / (n - 1.0)).sqrt();
+        assert!((var - mu) / sd_var > 4.0, "var {var} vs no jitter {mu}");
     }
 
     #[test]
