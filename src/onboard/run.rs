@@ -183,7 +183,9 @@ pub fn run(config: &Path, overrides: &[String], opts: &OnboardOptions) -> Result
             .into_par_iter()
             .map(|p| match &scene {
                 Some(s) => {
-                    simulate::draw_scene_profile(s, seed, channels, p, n_bins, &energy).counts
+                    simulate::draw_scene_counts(s, seed, channels, p, n_bins, &energy)
+                        .0
+                        .counts
                 }
                 None => simulate::draw_profile(&samplers, p, 1, n_bins, false, &energy).counts,
             })

@@ -5,11 +5,15 @@
 //! profile accumulates `M` shots.
 //!
 //! * [`ShotSampler`]: exact draw of one shot, built once per set of means
-//!   and reused for every shot. It mixes three exact paths per bin (dense
-//!   table inversion, dense Ahrens–Dieter, and the sparse "Poisson total +
-//!   alias placement" path) by a cost model: see its docs and [`cost`].
-//! * [`add_aggregate`]: one Poisson(`M·λ_i`) draw per bin, exact when
-//!   nothing varies from shot to shot and the detector is linear.
+//!   and reused for every shot. It mixes four exact paths per bin (dense
+//!   table inversion, dense alias table over the PMF ([`PmfAlias`]), dense
+//!   Ahrens–Dieter, and the sparse "Poisson total + alias placement" path) by
+//!   a measured cost model: see its docs and [`cost`].
+//! * [`AggregateSampler`]: one Poisson(`M·λ_i`) draw per bin for fixed means,
+//!   every bin's sampler built once (a [`ShotSampler`] over `M·λ_i`); exact
+//!   when nothing varies from shot to shot and the detector is linear.
+//! * [`add_aggregate`]: the same draw for means that change from profile to
+//!   profile, computed on the fly (inversion or Ahrens–Dieter).
 //! * [`stream_rng`], [`shot_profile`], [`aggregate_profile`]: reproducible
 //!   streams. A profile's shots are cut into blocks of [`SHOT_BLOCK`] shots,
 //!   block `b` of profile `p` drawn from `stream_rng(seed, p, b)`, and the
@@ -21,7 +25,12 @@
 //! the same sampler feeds accumulators (`[u64]`), per-shot buffers
 //! ([`ShotCounts`]) or, later, a detector model.
 //!
-//! # Extension points (intended, not built)
+//! # Extension points
+//!
+//! Built since (see [`jitter`], `crate::detector`, `crate::onboard`): per-shot
+//! varying means by thinning, the dead-time detector as a sink, component
+//! colouring by separate streams, onboard sums through [`ShotSampler::for_each_shot`].
+//! The notes as first written:
 //!
 //! * **Per-shot varying means.** Pulse-energy jitter scales the signal part by
 //!   `e_s` per shot: keep a sampler for the signal and one for background +

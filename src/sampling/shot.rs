@@ -30,26 +30,30 @@ pub const TOTAL_TABLE_MAX: f64 = 512.0;
 
 /// Cost model, in ns, measured on the development machine (2-core AMD EPYC
 /// VM under load, `Pcg64Mcg`, accumulation into `[u64]`, 1000 bins unless
-/// said, each path forced alone with [`PathChoice`] as in
-/// `benches/sampler.rs`, best of 60 short runs). Only the ratios matter; a
+/// said, each path forced alone with [`PathChoice`]; `cargo run --release
+/// --example sampler_costs`, best of 15 runs). Only the ratios matter; a
 /// wrong estimate costs speed, never correctness.
 ///
 /// * dense inversion bin of mean λ, `q = P(K ≥ 1)`, `L` thresholds after the
 ///   first: `DENSE_BASE + DENSE_MISS·min(q, 1-q) + q·DENSE_PER_THRESHOLD·L`
 ///   (one `u64` and a compare; a mispredicted branch; a branch-free count);
-///   measured 1.5 ns (λ ≤ 0.01), 2.7 (0.1), 7.3 (0.5), 8.5 (1), 15 (10), 26 (30);
-/// * dense Ahrens–Dieter bin: `DENSE_PD` (measured 35–45 ns for λ ≥ 12);
-/// * sparse set of `n` bins and total mean `Λ`: `SPARSE_TOTAL` (`DENSE_PD`
-///   above [`TOTAL_TABLE_MAX`]) per shot plus `Λ·sparse_place(n)`, the cost
-///   of one count (one `u64`, an alias column, an increment), which grows once
-///   the alias table and accumulator leave the caches: measured 2.2 ns
-///   (1000 bins), 2.9 (10^4), 4.8 (3·10^4), 5.8 (10^5), ~40 (3·10^5).
+///   measured 1.4 ns (λ ≤ 0.01), 2.1 (0.05), 3.0 (0.1), 8.6 (0.5), 9.9 (1), 16 (10);
+/// * dense alias bin over the PMF ([`PmfAlias`]): [`cost::alias`] of its
+///   columns, measured 2.4 ns up to 64 columns (λ ≲ 10, whatever the count),
+///   3.9 (λ = 30), 5.3 (100), 7.0 (10^3), 8.2 (10^4), 19 (10^5: 8192 columns,
+///   128 MiB for the 1000 bins, out of the caches), hence [`DENSE_ALIAS_MAX`];
+/// * dense Ahrens–Dieter bin: `DENSE_PD` (measured 21 ns for λ ≥ 30);
+/// * sparse set of `n` bins and total mean `Λ`: the alias draw of its total
+///   (`DENSE_PD` above [`TOTAL_TABLE_MAX`]) per shot plus `Λ·sparse_place(n)`,
+///   the cost of one count (one `u64`, an alias column, an increment), which
+///   grows once the alias table and accumulator leave the caches: measured
+///   2.0 ns (1000 bins), 2.9 (10^4), 4.8 (3·10^4), 5.8 (10^5), ~40 (3·10^5).
 ///
 /// A bin costs about `λ·sparse_place` in the sparse set and at least
 /// `DENSE_BASE` in the dense set, the ratio falling with λ, so the sparse set
 /// is a prefix of the bins sorted by λ: [`ShotSampler::new`] evaluates every
 /// prefix (O(n log n)) and keeps the cheapest. On 1000 equal bins this puts
-/// λ ≲ 5.5 on the sparse path.
+/// λ ≲ 1 on the sparse path.
 pub mod cost {
     /// Per dense inversion bin: one `u64` and a compare.
     pub const DENSE_BASE: f64 = 1.55;

@@ -535,17 +535,26 @@ pub fn run(
     for first_profile in (0..profiles).step_by(batch) {
         let last = (first_profile + batch).min(profiles);
         let draw_start = Instant::now();
-        let drawn: Vec<DrawnProfile> = (first_profile..last)
+        let n_channels = lidar.channels.len();
+        let mut drawn: Vec<(DrawnProfile, Vec<f64>)> = (first_profile..last)
             .into_par_iter()
             .map(|p| match &scene {
-                Some(sc) => {
-                    draw_scene_profile(sc, seed, lidar.channels.len(), p as u64, n_bins, &energy)
-                }
-                None => draw_profile(&channels, p as u64, shots, n_bins, components, &energy),
+                Some(sc) => draw_scene_counts(sc, seed, n_channels, p as u64, n_bins, &energy),
+                None => (
+                    draw_profile(&channels, p as u64, shots, n_bins, components, &energy),
+                    Vec::new(),
+                ),
             })
             .collect();
         drawing += draw_start.elapsed();
-        for (k, d) in drawn.iter().enumerate() {
+        // the truth of a changing scene's profiles (the model, not the draw)
+        if let Some(sc) = &scene {
+            drawn.par_iter_mut().enumerate().for_each(|(k, (d, bkg))| {
+                d.values = scene_profile_values(sc, (first_profile + k) as u64, n_bins, bkg);
+            });
+        }
+        let drawn = drawn.into_iter().map(|(d, _)| d);
+        for (k, d) in drawn.enumerate() {
             total_counts += d.counts.iter().sum::<u64>();
             let index = first_profile + k;
             let place = orbit.as_ref().map(|o| {
@@ -660,57 +669,87 @@ pub fn draw_scene_profile(
     n_bins: usize,
     energy: &RunEnergy,
 ) -> DrawnProfile {
+    let (mut drawn, mean_backgrounds) = draw_scene_counts(sc, seed, channels, p, n_bins, energy);
+    drawn.values = scene_profile_values(sc, p, n_bins, &mean_backgrounds);
+    drawn
+}
+
+/// Draws the counts of profile `p` of a changing scene, every channel (no truth yet:
+/// [`scene_profile_values`]); also returns each channel's mean background per shot.
+pub fn draw_scene_counts(
+    sc: &scene::SceneModel,
+    seed: u64,
+    channels: usize,
+    p: u64,
+    n_bins: usize,
+    energy: &RunEnergy,
+) -> (DrawnProfile, Vec<f64>) {
     let runs = sc.runs(p);
     let shots = runs.iter().map(|r| r.1).sum::<u64>();
     let sums = scene::run_energy_sums(energy, p, shots, &runs);
     let mut counts = vec![0u64; channels * n_bins];
-    let mut background = Vec::with_capacity(channels * n_bins);
+    let mut mean_backgrounds = Vec::with_capacity(channels);
     for (k, acc) in counts.chunks_mut(n_bins).enumerate() {
         let bkg = sc.run_backgrounds(k, p, &runs);
         sc.draw(k, channel_seed(seed, k), p, &runs, &sums, &bkg, acc);
-        let mean: f64 = runs
-            .iter()
-            .zip(&bkg)
-            .map(|(r, b)| r.1 as f64 * b)
-            .sum::<f64>()
-            / shots as f64;
-        background.extend(std::iter::repeat_n(mean, n_bins));
+        let total: f64 = runs.iter().zip(&bkg).map(|(r, b)| r.1 as f64 * b).sum();
+        mean_backgrounds.push(total / shots as f64);
     }
-    let mut truth = sc.truth(&runs);
-    if sc.is_solar() {
-        // an ideal detector records what arrives; a dead-time one its stationary rate per
-        // bin (the transient at a sharp edge, O(τ/Δt), is not in this truth)
-        for (i, recorded) in truth.recorded.iter_mut().enumerate() {
-            let k = i / n_bins;
-            let arriving = truth.signal[i] + background[i] + sc.expected[runs[0].0][k].dark;
-            *recorded = match &sc.dead[k] {
-                Some(d) => d.stationary_rate(arriving / d.bin_width_s) * d.bin_width_s,
-                None => arriving,
-            };
-        }
-    }
-    let snr: Vec<f64> = truth
-        .signal
-        .iter()
-        .zip(&background)
-        .enumerate()
-        .map(|(i, (&s, &b))| {
-            let dark = sc.expected[runs[0].0][i / n_bins].dark;
-            crate::snr::eq4(s, b, dark, shots as f64)
-        })
-        .collect();
-    DrawnProfile {
+    let drawn = DrawnProfile {
         counts,
         components: None,
         energy_sum: sums.iter().sum(),
-        values: vec![
-            truth.signal,
-            background,
-            truth.recorded,
-            snr,
-            truth.attenuated_backscatter,
-        ],
+        values: Vec::new(),
+    };
+    (drawn, mean_backgrounds)
+}
+
+/// The rows of profile `p`'s per-profile variables in a changing scene, channel-major:
+/// expected signal, background, recorded counts, Eq. 4 S/N and attenuated backscatter
+/// (what the profile's shots saw on average); `mean_backgrounds` per channel as
+/// [`draw_scene_counts`] returns them.
+pub fn scene_profile_values(
+    sc: &scene::SceneModel,
+    p: u64,
+    n_bins: usize,
+    mean_backgrounds: &[f64],
+) -> Vec<Vec<f64>> {
+    let runs = sc.runs(p);
+    let shots = runs.iter().map(|r| r.1).sum::<u64>() as f64;
+    let mut truth = sc.truth(&runs);
+    let dark = |k: usize| sc.expected[runs[0].0][k].dark;
+    if sc.is_solar() {
+        // an ideal detector records what arrives; a dead-time one its stationary rate per
+        // bin (the transient at a sharp edge, O(τ/Δt), is not in this truth)
+        for (k, recorded) in truth.recorded.chunks_mut(n_bins).enumerate() {
+            let signal = &truth.signal[k * n_bins..(k + 1) * n_bins];
+            for (r, s) in recorded.iter_mut().zip(signal) {
+                let arriving = s + mean_backgrounds[k] + dark(k);
+                *r = match &sc.dead[k] {
+                    Some(d) => d.stationary_rate(arriving / d.bin_width_s) * d.bin_width_s,
+                    None => arriving,
+                };
+            }
+        }
     }
+    let mut background = Vec::with_capacity(truth.signal.len());
+    let mut snr = Vec::with_capacity(truth.signal.len());
+    for (k, signal) in truth.signal.chunks(n_bins).enumerate() {
+        let b = mean_backgrounds[k];
+        background.extend(std::iter::repeat_n(b, n_bins));
+        snr.extend(
+            signal
+                .iter()
+                .map(|&s| crate::snr::eq4(s, b, dark(k), shots)),
+        );
+    }
+    vec![
+        truth.signal,
+        background,
+        truth.recorded,
+        snr,
+        truth.attenuated_backscatter,
+    ]
 }
 
 /// Draws profile `p` of every channel's streams.
