@@ -17,8 +17,8 @@ use std::time::Instant;
 use lidarsim::sampling::{DenseMethod, PathChoice, ShotSampler, stream_rng};
 
 /// Means measured, per shot-bin.
-const MEANS: [f64; 14] = [
-    1e-3, 0.01, 0.05, 0.1, 0.25, 0.5, 1.0, 3.0, 10.0, 30.0, 100.0, 1e3, 1e4, 1e5,
+const MEANS: [f64; 15] = [
+    1e-3, 0.01, 0.05, 0.1, 0.25, 0.5, 1.0, 3.0, 10.0, 30.0, 100.0, 1e3, 1e4, 1e5, 1e6,
 ];
 
 fn main() {

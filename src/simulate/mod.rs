@@ -761,35 +761,29 @@ pub fn draw_profile(
     components: bool,
     energy: &RunEnergy,
 ) -> DrawnProfile {
-    let per_channel: Vec<Vec<Vec<u64>>> = channels
-        .iter()
-        .map(|streams| {
-            streams
-                .iter()
-                .map(|(sampler, stream_seed)| {
-                    let mut acc = vec![0u64; n_bins];
-                    sampler.profile_counts(*stream_seed, p, shots, &mut acc);
-                    acc
-                })
-                .collect()
-        })
-        .collect();
-    let counts: Vec<u64> = per_channel
-        .iter()
-        .flat_map(|streams| (0..n_bins).map(move |i| streams.iter().map(|s| s[i]).sum::<u64>()))
-        .collect();
-    let components = components.then(|| {
-        std::array::from_fn(|c| {
-            per_channel
-                .iter()
-                .flat_map(|s| s[c].iter().copied())
-                .collect()
-        })
-    });
+    let len = channels.len() * n_bins;
+    let mut counts = vec![0u64; len];
+    let mut parts: Option<[Vec<u64>; 3]> =
+        components.then(|| std::array::from_fn(|_| vec![0; len]));
+    for (k, streams) in channels.iter().enumerate() {
+        let bins = k * n_bins..(k + 1) * n_bins;
+        for (c, (sampler, stream_seed)) in streams.iter().enumerate() {
+            match parts.as_mut() {
+                // component c of channel k, added into the channel's counts too
+                Some(parts) => {
+                    let part = &mut parts[c][bins.clone()];
+                    sampler.profile_counts(*stream_seed, p, shots, part);
+                    let acc = &mut counts[bins.clone()];
+                    acc.iter_mut().zip(part.iter()).for_each(|(a, x)| *a += x);
+                }
+                None => sampler.profile_counts(*stream_seed, p, shots, &mut counts[bins.clone()]),
+            }
+        }
+    }
     let energy_seed = energy.seed.unwrap_or_default();
     DrawnProfile {
         counts,
-        components,
+        components: parts,
         energy_sum: energy.law.profile_sum(energy_seed, p, shots),
         values: Vec::new(),
     }
