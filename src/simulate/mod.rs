@@ -646,18 +646,10 @@ pub fn changing_scene(
             "--components is not available for a scene that changes along the track yet".into(),
         ));
     }
-    if *method == ResolvedMethod::Shot && !energy.law.is_constant() {
-        return Err(Error::Unsupported(
-            "a scene that changes along the track is drawn shot by shot with a constant pulse \
-             energy only (this version); use --method aggregate, or set \
-             instrument.pulse_energy_jitter = 0 and no energy_drift"
-                .into(),
-        ));
-    }
     if matches!(method, ResolvedMethod::AggregateNormal { .. }) {
         *method = ResolvedMethod::Aggregate;
     }
-    scene::SceneModel::new(lidar, seed, profiles as u64, *method).map(Some)
+    scene::SceneModel::new(lidar, seed, profiles as u64, *method, *energy).map(Some)
 }
 
 /// Draws profile `p` of a changing scene, every channel, with the profile's truth.
@@ -686,19 +678,19 @@ pub fn draw_scene_counts(
 ) -> (DrawnProfile, Vec<f64>) {
     let runs = sc.runs(p);
     let shots = runs.iter().map(|r| r.1).sum::<u64>();
-    let sums = scene::run_energy_sums(energy, p, shots, &runs);
+    let energies = scene::ProfileEnergies::new(energy, p, shots);
     let mut counts = vec![0u64; channels * n_bins];
     let mut mean_backgrounds = Vec::with_capacity(channels);
     for (k, acc) in counts.chunks_mut(n_bins).enumerate() {
         let bkg = sc.run_backgrounds(k, p, &runs);
-        sc.draw(k, channel_seed(seed, k), p, &runs, &sums, &bkg, acc);
+        sc.draw(k, channel_seed(seed, k), p, &runs, &energies, &bkg, acc);
         let total: f64 = runs.iter().zip(&bkg).map(|(r, b)| r.1 as f64 * b).sum();
         mean_backgrounds.push(total / shots as f64);
     }
     let drawn = DrawnProfile {
         counts,
         components: None,
-        energy_sum: sums.iter().sum(),
+        energy_sum: energies.run_sums(&runs).iter().sum(),
         values: Vec::new(),
     };
     (drawn, mean_backgrounds)

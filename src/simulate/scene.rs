@@ -53,7 +53,7 @@ fn add_background<R: rand::Rng, S: CountSink + ?Sized>(
     if total <= 0.0 {
         return;
     }
-    if per_bin >= BACKGROUND_PER_BIN_DENSE && per_bin <= sampling::DENSE_ALIAS_MAX {
+    if (BACKGROUND_PER_BIN_DENSE..=sampling::DENSE_ALIAS_MAX).contains(&per_bin) {
         let table = sampling::PmfAlias::new(per_bin);
         for bin in 0..bins {
             sink.add_any(bin, table.count_for(rng.next_u64()));
@@ -189,7 +189,13 @@ pub struct ProfileTruth {
 impl SceneModel {
     /// Builds every column of `lidar`'s scene for a run of `profiles` profiles drawn by
     /// `method` from `seed`.
-    pub fn new(lidar: &Lidar, seed: u64, profiles: u64, method: ResolvedMethod) -> Result<Self> {
+    pub fn new(
+        lidar: &Lidar,
+        seed: u64,
+        profiles: u64,
+        method: ResolvedMethod,
+        energy: RunEnergy,
+    ) -> Result<Self> {
         let first = lidar.first();
         let shots = first.shots_per_profile();
         // a curtain file is the same scene as its segments
@@ -244,8 +250,13 @@ impl SceneModel {
                             // a solar background is placed per run ([`add_background`])
                             let sky = if solar { 0.0 } else { e.background };
                             let rest = vec![sky + e.dark; e.n_bins()];
-                            StreamSampler::new(ResolvedMethod::Shot, &e.signal, &rest, 0.0)
-                                .through_detector(c.instrument.dead_time)
+                            StreamSampler::with_energy(
+                                ResolvedMethod::Shot,
+                                &e.signal,
+                                &rest,
+                                energy,
+                            )
+                            .through_detector(c.instrument.dead_time)
                         })
                         .collect(),
                 );
@@ -353,7 +364,8 @@ impl SceneModel {
     }
 
     /// Draws channel `channel` of profile `p` into `acc`; `backgrounds` are the runs'
-    /// background counts per shot per bin ([`run_backgrounds`](Self::run_backgrounds)).
+    /// background counts per shot per bin ([`run_backgrounds`](Self::run_backgrounds)),
+    /// `energies` the profile's pulse energies ([`ProfileEnergies`]).
     #[allow(clippy::too_many_arguments)]
     pub fn draw(
         &self,
@@ -361,7 +373,7 @@ impl SceneModel {
         seed: u64,
         p: u64,
         runs: &[(usize, u64)],
-        energy_sums: &[f64],
+        energies: &ProfileEnergies,
         backgrounds: &[f64],
         acc: &mut [u64],
     ) {
@@ -375,7 +387,7 @@ impl SceneModel {
                     .map(|(r, b)| r.1 as f64 / m * b)
                     .sum::<f64>();
             let mut lambda = vec![rest; acc.len()];
-            for (&(col, _), &f) in runs.iter().zip(energy_sums) {
+            for (&(col, _), f) in runs.iter().zip(energies.run_sums(runs)) {
                 let signal = &self.expected[col][channel].signal;
                 lambda
                     .iter_mut()
@@ -384,21 +396,13 @@ impl SceneModel {
             }
             sampling::aggregate_profile(&lambda, seed, p, self.shots, acc);
         } else {
+            let mut first = 0usize;
             for (j, &(col, n)) in runs.iter().enumerate() {
+                let sky = self.sunlight.as_ref().map(|_| backgrounds[j]);
+                let factors = energies.run(first, n);
+                first += n as usize;
                 let sampler = &self.samplers[col][channel];
-                match (&self.sunlight, sampler) {
-                    (Some(_), StreamSampler::DeadTimed(photons, dead)) => {
-                        let s = run_seed(seed, j);
-                        sunlit_dead_time_run(photons, dead, backgrounds[j], s, p, n, acc);
-                    }
-                    (Some(_), _) => {
-                        sampler.profile_counts(run_seed(seed, j), p, n, acc);
-                        let mut rng = sampling::stream_rng(run_seed(seed, j) ^ SKY_STREAM, p, 0);
-                        let bins = acc.len();
-                        add_background(&mut rng, n as f64 * backgrounds[j], bins, acc);
-                    }
-                    (None, _) => sampler.profile_counts(run_seed(seed, j), p, n, acc),
-                }
+                draw_run(sampler, run_seed(seed, j), p, n, factors, sky, acc);
             }
         }
     }
@@ -435,27 +439,92 @@ fn add_scaled(dst: &mut [f64], src: &[f64], w: f64) {
     dst.iter_mut().zip(src).for_each(|(d, s)| *d += w * s);
 }
 
-/// The summed energy factors of each run of profile `p` (the shot counts at constant
-/// energy): the factors of the profile's blocks, cut at the runs' boundaries.
-pub fn run_energy_sums(energy: &RunEnergy, p: u64, shots: u64, runs: &[(usize, u64)]) -> Vec<f64> {
-    if energy.law.is_constant() {
-        return runs.iter().map(|r| r.1 as f64).collect();
+/// The pulse energies of one profile's shots, relative to the nominal energy: none drawn
+/// at constant energy (every factor 1), else the profile's factors in shot order, cut
+/// at the runs' boundaries by [`run`](Self::run) and [`run_sums`](Self::run_sums).
+pub struct ProfileEnergies(Option<Vec<f64>>);
+
+impl ProfileEnergies {
+    /// The energies of profile `p` of `shots` shots: the factors of its blocks.
+    pub fn new(energy: &RunEnergy, p: u64, shots: u64) -> Self {
+        if energy.law.is_constant() {
+            return ProfileEnergies(None);
+        }
+        let seed = energy.seed.unwrap_or_default();
+        let mut factors = Vec::with_capacity(shots as usize);
+        let mut block = Vec::new();
+        for b in 0..shots.div_ceil(SHOT_BLOCK) {
+            energy.law.block_factors(seed, p, shots, b, &mut block);
+            factors.extend_from_slice(&block);
+        }
+        ProfileEnergies(Some(factors))
     }
-    let seed = energy.seed.unwrap_or_default();
-    let mut factors = Vec::with_capacity(shots as usize);
-    let mut block = Vec::new();
-    for b in 0..shots.div_ceil(SHOT_BLOCK) {
-        energy.law.block_factors(seed, p, shots, b, &mut block);
-        factors.extend_from_slice(&block);
+
+    /// The factors of the `n` shots from shot `first` on (`None` at constant energy).
+    pub fn run(&self, first: usize, n: u64) -> Option<&[f64]> {
+        self.0.as_ref().map(|f| &f[first..first + n as usize])
     }
-    let mut start = 0usize;
-    runs.iter()
-        .map(|&(_, n)| {
-            let sum = factors[start..start + n as usize].iter().sum();
-            start += n as usize;
-            sum
-        })
-        .collect()
+
+    /// The summed factors of each run (the shot counts at constant energy).
+    pub fn run_sums(&self, runs: &[(usize, u64)]) -> Vec<f64> {
+        let mut first = 0usize;
+        runs.iter()
+            .map(|&(_, n)| {
+                let sum = self.run(first, n).map_or(n as f64, |f| f.iter().sum());
+                first += n as usize;
+                sum
+            })
+            .collect()
+    }
+}
+
+/// Draws one run of `n` shots of one column and channel into `acc`, from `seed` (the
+/// run's) and its streams: the column's shot sampler (its pulse energies `factors` where
+/// they vary), and, under the sun, `sky` background counts per shot per bin: placed into
+/// each shot before a dead-time detector records it, else added for the whole run.
+fn draw_run(
+    sampler: &StreamSampler,
+    seed: u64,
+    p: u64,
+    n: u64,
+    factors: Option<&[f64]>,
+    sky: Option<f64>,
+    acc: &mut [u64],
+) {
+    let bins = acc.len();
+    let mut sky_rng = sampling::stream_rng(seed ^ SKY_STREAM, p, 0);
+    let per_shot_sky = match sampler {
+        StreamSampler::DeadTimed(photons, dead) => {
+            if let Some(b) = sky {
+                return sunlit_dead_time_run(photons, dead, b, seed, p, n, acc);
+            }
+            sampler.profile_counts(seed, p, n, acc);
+            false
+        }
+        StreamSampler::Modulated(m) => {
+            let factors = factors.expect("a modulated sampler draws with the run's energies");
+            match sky.filter(|_| m.has_detector()) {
+                Some(b) => {
+                    let mut add_sky = |shot: &mut ShotCounts| {
+                        add_background(&mut sky_rng, b, bins, shot);
+                    };
+                    m.add_run(seed, p, factors, acc, &mut add_sky);
+                    true
+                }
+                None => {
+                    m.add_run(seed, p, factors, acc, &mut |_| {});
+                    false
+                }
+            }
+        }
+        _ => {
+            sampler.profile_counts(seed, p, n, acc);
+            false
+        }
+    };
+    if let (Some(b), false) = (sky, per_shot_sky) {
+        add_background(&mut sky_rng, n as f64 * b, bins, acc);
+    }
 }
 
 /// The config with its curtain file, if any, turned into segments.
