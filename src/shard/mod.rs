@@ -247,15 +247,17 @@ pub fn check_cover(
     for (i, &(path, shard)) in pieces.iter().enumerate() {
         if let Some(j) = order[shard.index] {
             let r = rows(shard);
-            return Err(Error::output(
-                path,
+            let reason = if pieces[j].0 == path {
+                format!("given twice (shard {shard})")
+            } else {
                 format!(
                     "overlaps {}: both are shard {shard} ({what} {}–{})",
                     pieces[j].0.display(),
                     r.start,
                     r.end.saturating_sub(1)
-                ),
-            ));
+                )
+            };
+            return Err(Error::output(path, reason));
         }
         order[shard.index] = Some(i);
     }
@@ -267,13 +269,12 @@ pub fn check_cover(
                 count: first.count,
             };
             let r = rows(s);
-            format!("{s} ({what} {}–{})", r.start, r.end.saturating_sub(1))
+            format!("shard {s} ({what} {}–{})", r.start, r.end.saturating_sub(1))
         })
         .collect();
     if !missing.is_empty() {
         return Err(Error::Unsupported(format!(
-            "a gap: shard{} {} of the run {} missing; give every shard once",
-            if missing.len() > 1 { "s" } else { "" },
+            "a gap: {} of the run {} missing; give every shard once",
             missing.join(", "),
             if missing.len() > 1 { "are" } else { "is" }
         )));
