@@ -18,7 +18,7 @@ use hdf5::Dataset;
 use hdf5::types::VarLenUnicode;
 use ndarray::{Ix1, Ix3, s};
 
-use super::{Shard, check_cover, run_id, stored_lidar};
+use super::{RunIdentity, Shard, check_cover, check_same_run, run_id, stored_lidar};
 use crate::error::{Error, Result};
 use crate::output::raw_file::{COMPONENT_NAMES, Dims, ProfileRecord, RawFileSpec, RawFileWriter};
 use crate::output::safe_file::{OutputId, Outputs, describe_hdf5_error};
@@ -108,45 +108,15 @@ impl ShardFile {
         })
     }
 
-    /// Refuses a shard of another run than `first`'s, naming what differs.
-    fn same_run_as(&self, first: &ShardFile) -> Result<()> {
-        let differs = [
-            ("config", first.config != self.config, String::new()),
-            (
-                "seed",
-                first.seed != self.seed,
-                format!(" ({} vs {})", self.seed, first.seed),
-            ),
-            (
-                "method",
-                first.method != self.method,
-                format!(" ({} vs {})", self.method, first.method),
-            ),
-            (
-                "shard count N",
-                first.shard.count != self.shard.count,
-                format!(" ({} vs {})", self.shard.count, first.shard.count),
-            ),
-            (
-                "profiles",
-                first.run_profiles != self.run_profiles,
-                format!(" ({} vs {})", self.run_profiles, first.run_profiles),
-            ),
-            (
-                "run_id",
-                first.run_id != self.run_id,
-                format!(" ({} vs {})", self.run_id, first.run_id),
-            ),
-        ];
-        match differs.into_iter().find(|d| d.1) {
-            None => Ok(()),
-            Some((what, _, values)) => Err(Error::output(
-                &self.path,
-                format!(
-                    "a shard of another run than {}: its {what} differs{values}",
-                    first.path.display()
-                ),
-            )),
+    /// What makes it a shard of its run.
+    fn identity(&self) -> RunIdentity {
+        RunIdentity {
+            config: self.config.clone(),
+            seed: self.seed,
+            method: self.method.clone(),
+            shard_count: self.shard.count,
+            total: self.run_profiles,
+            run_id: self.run_id.clone(),
         }
     }
 
@@ -237,8 +207,14 @@ pub fn prepare(out: &Path, shards: &[PathBuf]) -> Result<Merge> {
     let Some(first) = files.first() else {
         return Err(Error::Unsupported("merge needs at least one shard".into()));
     };
+    let identities: Vec<RunIdentity> = files.iter().map(ShardFile::identity).collect();
+    let pieces: Vec<(&Path, &RunIdentity)> = files
+        .iter()
+        .map(|f| f.path.as_path())
+        .zip(&identities)
+        .collect();
+    check_same_run(&pieces, "shard", "profiles")?;
     for f in &files {
-        f.same_run_as(first)?;
         f.holds_its_rows()?;
     }
     let pieces: Vec<(&Path, Shard)> = files.iter().map(|f| (f.path.as_path(), f.shard)).collect();
@@ -391,20 +367,15 @@ fn copy_rows(f: &ShardFile, spec: &RawFileSpec, writer: &mut RawFileWriter) -> R
             .collect::<hdf5::Result<_>>()
             .map_err(fail)?;
         for r in 0..b - a {
-            fn row(v: &[u64], r: usize, n: usize) -> &[u64] {
-                &v[r * n..(r + 1) * n]
-            }
-            let row = |v| row(v, r, n);
-            let row_values: Vec<&[f64]> =
-                values.iter().map(|(v, w)| &v[r * w..(r + 1) * w]).collect();
+            let row_values: Vec<&[f64]> = values.iter().map(|(v, w)| row(v, r, *w)).collect();
             writer.write_profile(&ProfileRecord {
                 index: f.first_profile + a + r,
                 time_s: time[r],
                 n_shots: shots[r],
                 pulse_energy_j: energy[r],
-                counts: row(&counts),
+                counts: row(&counts, r, n),
                 components: match &parts[..] {
-                    [s, bg, d] => Some([row(s), row(bg), row(d)]),
+                    [s, bg, d] => Some([row(s, r, n), row(bg, r, n), row(d, r, n)]),
                     _ => None,
                 },
                 values: &row_values,
@@ -412,4 +383,9 @@ fn copy_rows(f: &ShardFile, spec: &RawFileSpec, writer: &mut RawFileWriter) -> R
         }
     }
     Ok(())
+}
+
+/// Row `r` of rows of `width` values laid end to end.
+fn row<T>(rows: &[T], r: usize, width: usize) -> &[T] {
+    &rows[r * width..(r + 1) * width]
 }

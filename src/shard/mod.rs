@@ -231,6 +231,57 @@ pub fn stored_lidar(config: &str, config_file: &str) -> Result<Lidar> {
     Lidar::from_loaded(loaded)
 }
 
+/// What makes pieces of a run (shard files, validation partials) belong to one run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunIdentity {
+    /// The resolved config.
+    pub config: String,
+    /// The seed.
+    pub seed: u64,
+    /// The method used.
+    pub method: String,
+    /// N.
+    pub shard_count: usize,
+    /// Profiles (or realizations) of the whole run.
+    pub total: usize,
+    /// The run's hash ([`run_id`], [`fingerprint`]).
+    pub run_id: String,
+}
+
+/// Refuses pieces of different runs: each of `pieces` (a file and its identity) against
+/// the first, naming the file, the field that differs and its two values. `kind` names
+/// the pieces (`shard`, `partial`), `total` what the run counts (`profiles`).
+pub fn check_same_run(pieces: &[(&Path, &RunIdentity)], kind: &str, total: &str) -> Result<()> {
+    let Some(&(first_path, f)) = pieces.first() else {
+        return Ok(());
+    };
+    for &(path, p) in pieces {
+        let pair = |a: &dyn std::fmt::Display, b: &dyn std::fmt::Display| format!(" ({a} vs {b})");
+        let differs = [
+            ("config", f.config != p.config, String::new()),
+            ("seed", f.seed != p.seed, pair(&p.seed, &f.seed)),
+            ("method", f.method != p.method, pair(&p.method, &f.method)),
+            (
+                "shard count N",
+                f.shard_count != p.shard_count,
+                pair(&p.shard_count, &f.shard_count),
+            ),
+            (total, f.total != p.total, pair(&p.total, &f.total)),
+            ("run_id", f.run_id != p.run_id, pair(&p.run_id, &f.run_id)),
+        ];
+        if let Some((what, _, values)) = differs.into_iter().find(|d| d.1) {
+            return Err(Error::output(
+                path,
+                format!(
+                    "a {kind} of another run than {}: its {what} differs{values}",
+                    first_path.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Checks that `pieces` (a name and a shard each, every shard of the same count) cover
 /// the run exactly once, and gives their order by shard index. A shard given twice is
 /// an overlap, a missing one a gap; both are refused naming the files or the shard and

@@ -17,7 +17,7 @@ use super::{Report, Sums, ValidateOptions, Validation};
 use crate::config::Method;
 use crate::error::{Error, Result};
 use crate::scenario::Lidar;
-use crate::shard::{Shard, check_cover, fingerprint, stored_lidar};
+use crate::shard::{RunIdentity, Shard, check_cover, check_same_run, fingerprint, stored_lidar};
 
 /// `format` of the partials this version writes.
 pub const PARTIAL_FORMAT: &str = "lidarsim validate partial 1";
@@ -121,35 +121,17 @@ pub fn read(path: &Path) -> Result<Partial> {
     Ok(p)
 }
 
-/// Refuses a partial of another run than `first`'s, naming what differs.
-fn same_run(path: &Path, p: &Partial, first: (&Path, &Partial)) -> Result<()> {
-    let (first_path, f) = first;
-    let pair = |a: &dyn std::fmt::Display, b: &dyn std::fmt::Display| format!(" ({a} vs {b})");
-    let differs = [
-        ("config", f.config != p.config, String::new()),
-        ("seed", f.seed != p.seed, pair(&p.seed, &f.seed)),
-        ("method", f.method != p.method, pair(&p.method, &f.method)),
-        (
-            "shard count N",
-            f.shard_count != p.shard_count,
-            pair(&p.shard_count, &f.shard_count),
-        ),
-        (
-            "realizations",
-            f.realizations != p.realizations,
-            pair(&p.realizations, &f.realizations),
-        ),
-        ("run_id", f.run_id != p.run_id, pair(&p.run_id, &f.run_id)),
-    ];
-    match differs.into_iter().find(|d| d.1) {
-        None => Ok(()),
-        Some((what, _, values)) => Err(Error::output(
-            path,
-            format!(
-                "a partial of another run than {}: its {what} differs{values}",
-                first_path.display()
-            ),
-        )),
+impl Partial {
+    /// What makes it a piece of its run.
+    fn identity(&self) -> RunIdentity {
+        RunIdentity {
+            config: self.config.clone(),
+            seed: self.seed,
+            method: self.method.clone(),
+            shard_count: self.shard_count,
+            total: self.realizations,
+            run_id: self.run_id.clone(),
+        }
     }
 }
 
@@ -162,9 +144,15 @@ pub fn combine(paths: &[PathBuf]) -> Result<Report> {
             "--combine needs at least one partial".into(),
         ));
     };
+    let identities: Vec<RunIdentity> = parts.iter().map(Partial::identity).collect();
+    let same: Vec<(&Path, &RunIdentity)> = paths
+        .iter()
+        .map(PathBuf::as_path)
+        .zip(&identities)
+        .collect();
+    check_same_run(&same, "partial", "realizations")?;
     let mut pieces = Vec::with_capacity(parts.len());
     for (path, p) in paths.iter().zip(&parts) {
-        same_run(path, p, (first_path, first))?;
         let shard = Shard::new(p.shard_index, p.shard_count)
             .map_err(|why| Error::output(path, format!("shard_index/shard_count: {why}")))?;
         if shard.rows(p.realizations) != (p.first..p.end) {
