@@ -363,6 +363,64 @@ fn merge_refuses_other_runs_gaps_overlaps_and_strangers() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+#[test]
+fn merge_refuses_a_run_it_would_rebuild_differently() {
+    // the config names a molecular profile file, changed between the shards and the merge
+    let dir = scratch("rebuild");
+    std::fs::create_dir_all(dir.join("cfg")).unwrap();
+    std::fs::create_dir_all(dir.join("atmospheres")).unwrap();
+    std::fs::copy(
+        config_path("ground/profile_file_example.toml"),
+        dir.join("cfg/run.toml"),
+    )
+    .unwrap();
+    let profile = dir.join("atmospheres/us76_1km.txt");
+    std::fs::copy(config_path("atmospheres/us76_1km.txt"), &profile).unwrap();
+    for k in 0..2 {
+        let (shard, out) = (format!("{k}/2"), format!("s{k}.h5"));
+        let args = [
+            "simulate",
+            "cfg/run.toml",
+            "--profiles",
+            "4",
+            "--shard",
+            &shard,
+            "-o",
+            &out,
+        ];
+        ok(lidarsim(&dir, &args, &[]));
+    }
+    ok(lidarsim(&dir, &["merge", "same.h5", "s0.h5", "s1.h5"], &[]));
+    // the same file with the pressure of its first row 1 % higher
+    let text = std::fs::read_to_string(&profile).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let row = lines
+        .iter()
+        .position(|l| {
+            l.split_whitespace()
+                .next()
+                .is_some_and(|x| x.parse::<f64>().is_ok())
+        })
+        .unwrap();
+    lines[row] = lines[row]
+        .split_whitespace()
+        .enumerate()
+        .map(|(i, x)| match (i, x.parse::<f64>()) {
+            (1, Ok(v)) => format!("{:e}", v * 1.01),
+            _ => x.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join(" ");
+    std::fs::write(&profile, lines.join("\n") + "\n").unwrap();
+    refused(
+        &dir,
+        &["merge", "m.h5", "s0.h5", "s1.h5"],
+        &["s0.h5", "cannot rebuild its run"],
+        "m.h5",
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// `validate` on `cfg`: whole, then 4 shards combined; both outputs (stdout, exit code).
 fn validate_whole_and_combined(
     dir: &Path,

@@ -228,9 +228,9 @@ pub fn prepare(out: &Path, shards: &[PathBuf]) -> Result<Merge> {
             &first.path,
             format!(
                 "this lidarsim cannot rebuild its run: the file it would write differs from \
-                 the shards' (run_id {rebuilt} vs {}); merge with the lidarsim that wrote them, \
-                 from the directory where they ran (the config {} names its files relative \
-                 to it)",
+                 the shards' (run_id {rebuilt} vs {}): another lidarsim version, or a file \
+                 the config {} names changed or read from another directory; merge with the \
+                 lidarsim that wrote the shards, where they ran",
                 first.run_id, first.config_file
             ),
         ));
