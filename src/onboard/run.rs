@@ -239,7 +239,7 @@ pub fn run(config: &Path, overrides: &[String], opts: &OnboardOptions) -> Result
                 seed: Some(seed),
                 profiles: Some(total as usize),
                 method: Some(Method::Shot),
-                command_line: std::env::args().collect::<Vec<_>>().join(" "),
+                command_line: crate::output::raw_file::content::history_command(std::env::args()),
                 ..Default::default()
             };
             simulate::run(&lidar, &raw_opts, outputs, id).map(|_| ())

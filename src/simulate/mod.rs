@@ -52,6 +52,19 @@ impl ResolvedMethod {
             ResolvedMethod::AggregateNormal { .. } => "aggregate-normal",
         }
     }
+
+    /// The method a file's `method` attribute names (`threshold`: its
+    /// `normal_approximation_threshold`, for `aggregate-normal`).
+    pub fn from_name(name: &str, threshold: Option<f64>) -> Option<Self> {
+        match (name, threshold) {
+            ("shot", _) => Some(ResolvedMethod::Shot),
+            ("aggregate", _) => Some(ResolvedMethod::Aggregate),
+            ("aggregate-normal", Some(threshold)) => {
+                Some(ResolvedMethod::AggregateNormal { threshold })
+            }
+            _ => None,
+        }
+    }
 }
 
 /// Approximate cost of one profile by each method, ns (constants measured in
@@ -161,8 +174,11 @@ pub struct RunOptions {
     pub components: Option<bool>,
     /// Show a progress bar (on a terminal only).
     pub progress: bool,
-    /// The command line, recorded in the file's `history`.
+    /// The command line, recorded in the file's `history`
+    /// ([`content::history_command`] says which arguments it keeps).
     pub command_line: String,
+    /// Write this shard of the run only (`--shard K/N`, [`crate::shard`]).
+    pub shard: Option<crate::shard::Shard>,
 }
 
 /// What a run did, for the closing summary.
@@ -172,6 +188,8 @@ pub struct RunSummary {
     pub output: PathBuf,
     /// Profiles written.
     pub profiles: usize,
+    /// With `--shard`: the shard, the profiles it wrote and the run's profiles.
+    pub shard: Option<(crate::shard::Shard, std::ops::Range<usize>, usize)>,
     /// Bins per profile.
     pub bins: usize,
     /// Shots per profile.
@@ -194,9 +212,17 @@ impl std::fmt::Display for RunSummary {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let shot_bins = self.profiles as f64 * self.shots_per_profile as f64 * self.bins as f64;
         let rate = |d: Duration| shot_bins / d.as_secs_f64().max(1e-9);
+        let shard = match &self.shard {
+            Some((s, rows, of)) if !rows.is_empty() => format!(
+                " (shard {s}: profiles {}–{} of {of})",
+                rows.start,
+                rows.end - 1
+            ),
+            _ => String::new(),
+        };
         write!(
             f,
-            "Wrote {}: {} profiles × {} bins, {} shots per profile, {} counts in all; method {}, seed {}. \
+            "Wrote {}{shard}: {} profiles × {} bins, {} shots per profile, {} counts in all; method {}, seed {}. \
              {:.3} s in all ({:.3e} shot-bins/s), of which drawing {:.3} s ({:.3e} shot-bins/s).",
             self.output.display(),
             self.profiles,
@@ -461,15 +487,35 @@ pub fn run_energy(lidar: &Lidar, seed: u64, duration_s: f64) -> Result<RunEnergy
     })
 }
 
-/// Runs the Monte Carlo of every channel of `lidar` and writes the raw file as output
-/// `raw` of `outputs` (the command's output set, committed here when the file is complete).
-pub fn run(
-    lidar: &Lidar,
-    opts: &RunOptions,
-    outputs: Outputs,
-    raw: OutputId,
-) -> Result<RunSummary> {
-    let start = Instant::now();
+/// What a run is before any count is drawn: the resolved seed, method, model and scene,
+/// and the raw file of the whole run. `simulate` draws from it; `merge`
+/// ([`crate::shard::merge`]) builds it again from a shard's stored config, so that both
+/// write the same file.
+pub struct RunPlan {
+    /// Seed of the counts.
+    pub seed: u64,
+    /// Profiles of the whole run.
+    pub profiles: usize,
+    /// Component-resolved counts.
+    pub components: bool,
+    /// The method used.
+    pub method: ResolvedMethod,
+    /// Every channel's per-shot expectations (the scene's first column).
+    pub expected: Vec<ExpectedProfile>,
+    /// The emitted energies.
+    pub energy: RunEnergy,
+    /// The scene model where the scene changes along the track.
+    pub scene: Option<scene::SceneModel>,
+    /// Per-shot means of every bin of every channel.
+    pub totals: Vec<f64>,
+    /// The raw file of the whole run.
+    pub spec: RawFileSpec,
+}
+
+/// Resolves a run's options against its config and builds everything but the counts.
+/// `resolved` is the method of a run already drawn (`merge`, from the shards' `method`);
+/// `None` resolves `opts.method` (and `auto`'s tolerance) as `simulate` does.
+pub fn plan(lidar: &Lidar, opts: &RunOptions, resolved: Option<ResolvedMethod>) -> Result<RunPlan> {
     let first = lidar.first();
     let cfg = &first.loaded.config;
     let seed = opts.seed.unwrap_or(cfg.simulation.seed);
@@ -481,13 +527,16 @@ pub fn run(
     let requested = opts.method.unwrap_or(cfg.simulation.method);
     let tolerance = opts.tolerance.or(cfg.simulation.tolerance);
     check_detector(lidar, components)?;
-    let mut method = resolve_method(requested, lidar)?;
+    let mut method = match resolved {
+        Some(m) => m,
+        None => resolve_method(requested, lidar)?,
+    };
     let expected = lidar.expected()?;
     let shots = first.shots_per_profile();
     let profile_time_s = shots as f64 / first.instrument.rep_rate_hz;
     let energy = run_energy(lidar, seed, profiles as f64 * profile_time_s)?;
     let totals: Vec<f64> = expected.iter().flat_map(|e| e.total_per_shot()).collect();
-    if let Some(t) = tolerance {
+    if let (Some(t), None) = (tolerance, resolved) {
         if requested != Method::Auto {
             return Err(Error::Unsupported(format!(
                 "--tolerance chooses among methods: use it with --method auto, not {}",
@@ -497,9 +546,7 @@ pub fn run(
         let approximable = method == ResolvedMethod::Aggregate && energy.law.is_constant();
         method = fastest_within_totals(t, &totals, shots, approximable);
     }
-    let n_bins = first.geometry.n_bins;
     let scene = changing_scene(lidar, seed, profiles, &mut method, components, &energy)?;
-    check_sizes(&totals, method, shots, profiles, components, opts)?;
     let spec = raw_file_spec(
         lidar,
         &expected,
@@ -512,6 +559,56 @@ pub fn run(
         opts,
         scene.as_ref(),
     )?;
+    Ok(RunPlan {
+        seed,
+        profiles,
+        components,
+        method,
+        expected,
+        energy,
+        scene,
+        totals,
+        spec,
+    })
+}
+
+/// Runs the Monte Carlo of every channel of `lidar` and writes the raw file as output
+/// `raw` of `outputs` (the command's output set, committed here when the file is complete):
+/// the whole run, or with [`RunOptions::shard`] that shard's profiles only
+/// ([`crate::shard`]).
+pub fn run(
+    lidar: &Lidar,
+    opts: &RunOptions,
+    outputs: Outputs,
+    raw: OutputId,
+) -> Result<RunSummary> {
+    let start = Instant::now();
+    let first = lidar.first();
+    let cfg = &first.loaded.config;
+    let RunPlan {
+        seed,
+        profiles,
+        components,
+        method,
+        expected,
+        energy,
+        scene,
+        totals,
+        spec,
+    } = plan(lidar, opts, None)?;
+    let shots = first.shots_per_profile();
+    let profile_time_s = shots as f64 / first.instrument.rep_rate_hz;
+    let n_bins = first.geometry.n_bins;
+    // --- shards: this process writes `rows` of the run (all of them without --shard)
+    let (rows, spec) = match opts.shard {
+        Some(shard) => {
+            let rows = shard.rows_of(profiles, "profiles")?;
+            let spec = crate::shard::shard_spec(spec, shard, rows.clone());
+            (rows, spec)
+        }
+        None => (0..profiles, spec),
+    };
+    check_sizes(&totals, method, shots, rows.len(), components, opts)?;
     let mut writer = RawFileWriter::create(outputs.temp_path(raw)?, &opts.output, &spec)?;
     let orbit = orbit_of(lidar)?;
 
@@ -526,14 +623,14 @@ pub fn run(
         })
         .collect();
     let nominal_energy_j = cfg.instrument.pulse_energy_j;
-    let progress = progress_bar(opts.progress, profiles);
+    let progress = progress_bar(opts.progress, rows.len());
     let streams = channels.len() * channels[0].len();
     // batch size: bounded memory (at most 32 MiB of counts) and a lively progress bar
     let batch = ((4 << 20) / (n_bins * streams).max(1)).clamp(1, 64);
     let mut total_counts = 0u64;
     let mut drawing = Duration::ZERO;
-    for first_profile in (0..profiles).step_by(batch) {
-        let last = (first_profile + batch).min(profiles);
+    for first_profile in rows.clone().step_by(batch) {
+        let last = (first_profile + batch).min(rows.end);
         let draw_start = Instant::now();
         let n_channels = lidar.channels.len();
         let mut drawn: Vec<(DrawnProfile, Vec<f64>)> = (first_profile..last)
@@ -568,7 +665,7 @@ pub fn run(
                 .chain(place.iter().flat_map(|p| p.iter().map(|v| &v[..])))
                 .collect();
             writer.write_profile(&ProfileRecord {
-                index,
+                index: index - rows.start,
                 time_s: index as f64 * profile_time_s + 0.5 * profile_time_s,
                 n_shots: shots,
                 pulse_energy_j: nominal_energy_j * d.energy_sum / shots as f64,
@@ -587,7 +684,8 @@ pub fn run(
     progress.finish_and_clear();
     Ok(RunSummary {
         output: opts.output.clone(),
-        profiles,
+        profiles: rows.len(),
+        shard: opts.shard.map(|s| (s, rows, profiles)),
         bins: n_bins,
         shots_per_profile: shots,
         total_counts,
@@ -834,6 +932,7 @@ fn raw_file_spec(
     Ok(RawFileSpec {
         n_bins: first.geometry.n_bins,
         n_profiles: profiles,
+        first_profile: 0,
         channels: lidar.channel_names(),
         count_width: CountWidth::for_max_count(max_mean)?,
         components,
