@@ -4,8 +4,10 @@
 # 7,960 profiles of 15 shots (119,400 shots, one 98.7 min orbit, the scene changing
 # along it: segments, broken cloud, day and night), against numpy's Generator.poisson
 # drawing the same per-shot means (each profile's own, from the file's per-profile
-# truth) shot by shot, one thread each, in one run. Also the peak memory of half and
-# the whole orbit (flat: the run streams its profiles). Needs python3 with numpy, h5py.
+# truth) shot by shot, one thread each, in one run. Prints the ratio for the drawing of
+# the counts alone and for lidarsim's whole run (model, per-profile truth, file). Also
+# the peak memory of half and the whole orbit (flat: the run streams its profiles).
+# Needs python3 with numpy, h5py.
 #   bash benches/orbit_side_by_side.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -17,11 +19,11 @@ trap 'rm -rf "$tmp"' EXIT
 for n in 3980 7960; do
   echo "== lidarsim simulate --method shot --threads 1 --profiles $n"
   /usr/bin/time -f "peak memory %M kB" "$bin" simulate "$cfg" -o "$tmp/orbit.h5" \
-    --method shot --threads 1 --profiles "$n" 2>&1 | grep -v "^lidarsim: warning"
+    --method shot --threads 1 --profiles "$n" 2>&1 | grep -v "^lidarsim: warning" | tee "$tmp/summary"
 done
 echo "== numpy Generator.poisson, the same per-shot means, shot by shot"
-OMP_NUM_THREADS=1 python3 - "$tmp/orbit.h5" <<'PY'
-import sys, time
+OMP_NUM_THREADS=1 python3 - "$tmp/orbit.h5" "$tmp/summary" <<'PY'
+import re, sys, time
 import h5py
 import numpy as np
 f = h5py.File(sys.argv[1])
@@ -38,4 +40,9 @@ for p in range(sig.shape[0]):
     elapsed += time.perf_counter() - t0
     draws += x.size * shots
 print(f"numpy: {draws:.4g} draws in {elapsed:.3f} s ({draws / elapsed:.3g} draws/s)")
+summary = open(sys.argv[2]).read()
+whole = float(re.search(r"([0-9.]+) s in all", summary).group(1))
+drawing = float(re.search(r"of which drawing ([0-9.]+) s", summary).group(1))
+print(f"lidarsim / numpy: drawing the counts {elapsed / drawing:.1f}x faster, "
+      f"the whole run (model, truth, file) {elapsed / whole:.1f}x faster")
 PY

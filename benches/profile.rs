@@ -1,5 +1,6 @@
 //! Whole-profile throughput on the paper's scenario 1 (issue 3): one profile of
-//! 10 Hz × 100 s (1000 shots) and 250 Hz × 1000 s (250,000 shots), by the `shot` and
+//! 10 Hz × 100 s (1000 shots), 10 Hz × 1000 s (10,000 shots: issue 11's aggregate
+//! against shot case) and 250 Hz × 1000 s (250,000 shots), by the `shot` and
 //! `aggregate` methods, plus a low-energy variant (E0 = 1 mJ, every λ ≤ 0.7).
 //! Throughput is in shot-bins (shots × bins) per second.
 //!
@@ -33,6 +34,13 @@ fn profile_bench(c: &mut Criterion) {
             vec![
                 "instrument.rep_rate_hz=10",
                 "acquisition.accumulation_time_s=100",
+            ],
+        ),
+        (
+            "s1_10Hz_1000s",
+            vec![
+                "instrument.rep_rate_hz=10",
+                "acquisition.accumulation_time_s=1000",
             ],
         ),
         (

@@ -55,6 +55,7 @@ fn main() {
     let spec = RawFileSpec {
         n_bins: bins,
         n_profiles: profiles,
+        first_profile: 0,
         channels: (0..channels).map(|c| format!("ch{c}")).collect(),
         count_width: width,
         components: false,

@@ -65,6 +65,11 @@ pub fn tolerance(s: &str) -> Result<f64, String> {
     }
 }
 
+/// `--shard`: `K/N` (0 ≤ K < N) or `auto` ([`crate::shard::ShardArg`]).
+pub fn shard(s: &str) -> Result<crate::shard::ShardArg, String> {
+    s.parse()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -251,6 +251,12 @@ pub fn simulate_as(
              ground-based stations only",
         ));
     }
+    if format == OutputFormat::Scc && opts.shard.is_some() {
+        return Err(Error::Unsupported(
+            "--shard writes raw shard files for `lidarsim merge`; --format scc takes a whole run"
+                .into(),
+        ));
+    }
     let mut outputs = outputs_for(lidar.first());
     let out = outputs.add("-o", &opts.output, Stream::Binary)?;
     let pool = match threads {
@@ -395,25 +401,88 @@ pub fn validate(
         .map(|p| outputs.add("--json", p, Stream::Text))
         .transpose()?;
     let report = validate::run(&lidar, opts)?;
+    publish_report(outputs, json, opts.json.as_deref(), &report)
+}
+
+/// `lidarsim validate --shard K/N --partial PART.json`: shard `shard`'s sufficient
+/// statistics, for `validate --combine`.
+pub fn validate_partial(
+    config: &Path,
+    overrides: &[String],
+    opts: &validate::ValidateOptions,
+    shard: crate::shard::Shard,
+    partial: &Path,
+) -> Result<()> {
+    let lidar = Lidar::load(config, overrides)?;
+    let mut outputs = outputs_for(lidar.first());
+    let id = outputs.add("--partial", partial, Stream::Text)?;
+    let p = validate::partial::partial(&lidar, opts, shard)?;
+    outputs.write(id, |w| {
+        serde_json::to_writer(&mut *w, &p).map_err(std::io::Error::other)?;
+        writeln!(w)
+    })?;
+    outputs.commit()?;
+    eprintln!(
+        "Wrote {}: shard {shard} of the validation, realizations {}–{} of {}; \
+         `lidarsim validate --combine` the partials of every shard for the verdict.",
+        partial.display(),
+        p.first,
+        p.end - 1,
+        p.realizations
+    );
+    Ok(())
+}
+
+/// `lidarsim validate --combine PART.json ...`: the single run's table and JSON from the
+/// partials of its shards; `Ok(consistent)`.
+pub fn validate_combine(partials: &[PathBuf], json: Option<&Path>) -> Result<bool> {
+    let mut outputs = Outputs::new(partials.iter().map(PathBuf::as_path));
+    let json_id = json
+        .map(|p| outputs.add("--json", p, Stream::Text))
+        .transpose()?;
+    let report = validate::partial::combine(partials)?;
+    publish_report(outputs, json_id, json, &report)
+}
+
+/// Writes a validation's JSON (output `json` of `outputs`, at `json_path`) and prints
+/// its table (on stderr when the JSON holds stdout) and warning; `Ok(consistent)`.
+fn publish_report(
+    mut outputs: Outputs,
+    json: Option<crate::output::safe_file::OutputId>,
+    json_path: Option<&Path>,
+    report: &validate::Report,
+) -> Result<bool> {
     if let Some(id) = json {
         outputs.write(id, |w| {
-            serde_json::to_writer_pretty(&mut *w, &report).map_err(std::io::Error::other)?;
+            serde_json::to_writer_pretty(&mut *w, report).map_err(std::io::Error::other)?;
             writeln!(w)
         })?;
     }
-    let table_to_stderr = opts.json.as_deref() == Some(Path::new("-"));
+    let table_to_stderr = json_path == Some(Path::new("-"));
     outputs.commit()?;
     if table_to_stderr {
         // the JSON holds standard output; the table for a person goes to stderr
-        validate::write_table(&mut std::io::stderr(), &report).map_err(|e| Error::Io {
+        validate::write_table(&mut std::io::stderr(), report).map_err(|e| Error::Io {
             path: "<stderr>".into(),
             source: e,
         })?;
     } else {
-        to_stdout(|w| validate::write_table(w, &report))?;
+        to_stdout(|w| validate::write_table(w, report))?;
     }
     if let Some(w) = &report.warning {
         eprintln!("{w}");
     }
     Ok(report.consistent)
+}
+
+/// `lidarsim merge OUT.h5 SHARD.h5 ...`: the shards of one run into the file of the
+/// whole run ([`crate::shard::merge`]), then one line on stderr.
+pub fn merge(out: &Path, shards: &[PathBuf]) -> Result<()> {
+    let m = crate::shard::merge::prepare(out, shards)?;
+    let inputs = input_files(m.lidar.first());
+    let mut outputs = Outputs::new(shards.iter().chain(&inputs).map(PathBuf::as_path));
+    let id = outputs.add("OUT.h5", out, Stream::Binary)?;
+    let summary = m.write(outputs, id)?;
+    eprintln!("{summary}");
+    Ok(())
 }

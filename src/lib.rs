@@ -21,6 +21,7 @@ pub mod resources;
 pub mod sampling;
 pub mod scenario;
 pub mod scene;
+pub mod shard;
 pub mod signal;
 pub mod simulate;
 pub mod snr;

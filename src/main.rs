@@ -5,6 +5,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use lidarsim::cli_values;
+use lidarsim::shard::ShardArg;
 
 /// Help and version go to stdout as clap prints them; a usage error is one line.
 fn usage_error(e: clap::Error) -> ExitCode {
@@ -108,6 +109,18 @@ enum Command {
         /// raw (HDF5 raw lidar file) or scc (EARLINET SCC raw NetCDF, ground runs).
         #[arg(long, value_enum, default_value_t = lidarsim::commands::OutputFormat::Raw)]
         format: lidarsim::commands::OutputFormat,
+        /// Write shard K of N of the run only (its profiles, for `merge`); `auto` reads
+        /// K and N from an array job's environment (SLURM_ARRAY_TASK_ID, ...).
+        #[arg(long, value_name = "K/N|auto", value_parser = cli_values::shard)]
+        shard: Option<ShardArg>,
+    },
+    /// Merges the shards of a run (`simulate --shard K/N`) into the file of the whole run.
+    Merge {
+        /// The merged raw file (the file the whole run writes).
+        output: PathBuf,
+        /// Every shard of the run, once, in any order.
+        #[arg(required = true, value_name = "SHARD.h5")]
+        shards: Vec<PathBuf>,
     },
     /// Onboard averaging of shot-level counts: the downlinked product and the report.
     Onboard {
@@ -184,8 +197,9 @@ enum Command {
     },
     /// Statistical check of the simulator against Eq. 4; exit 0 when consistent, 1 when not.
     Validate {
-        /// Scenario config (TOML).
-        config: PathBuf,
+        /// Scenario config (TOML); not with --combine.
+        #[arg(required_unless_present = "combine")]
+        config: Option<PathBuf>,
         /// Override a config key (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
@@ -199,8 +213,19 @@ enum Command {
         #[arg(long, allow_negative_numbers = true, value_parser = cli_values::seed)]
         seed: Option<u64>,
         /// Also write the full report (every bin) as JSON.
-        #[arg(long, value_name = "PATH")]
+        #[arg(long, value_name = "PATH", conflicts_with = "partial")]
         json: Option<PathBuf>,
+        /// Draw shard K of N of the realizations only (K/N, or auto from an array job's
+        /// environment); with --partial.
+        #[arg(long, value_name = "K/N|auto", value_parser = cli_values::shard, requires = "partial")]
+        shard: Option<ShardArg>,
+        /// Write the shard's sufficient statistics (JSON) for --combine; with --shard.
+        #[arg(long, value_name = "PART.json", requires = "shard")]
+        partial: Option<PathBuf>,
+        /// The verdict of the whole run from the partials of all its shards.
+        #[arg(long, value_name = "PART.json", num_args = 1..,
+              conflicts_with_all = ["config", "set", "shard", "partial", "method", "seed", "realizations"])]
+        combine: Vec<PathBuf>,
     },
 }
 
@@ -240,18 +265,29 @@ fn main() -> ExitCode {
             tolerance,
             threads,
             format,
-        } => {
-            let opts = lidarsim::simulate::RunOptions {
-                output: output.clone(),
-                seed: *seed,
-                profiles: *profiles,
-                method: *method,
-                components: components.then_some(true),
-                tolerance: *tolerance,
-                progress: std::io::IsTerminal::is_terminal(&std::io::stderr()),
-                command_line: std::env::args().collect::<Vec<_>>().join(" "),
-            };
-            lidarsim::commands::simulate_as(config, set, &opts, *threads, *format).map(|()| true)
+            shard,
+        } => shard
+            .map(ShardArg::resolve)
+            .transpose()
+            .and_then(|shard| {
+                let opts = lidarsim::simulate::RunOptions {
+                    output: output.clone(),
+                    seed: *seed,
+                    profiles: *profiles,
+                    method: *method,
+                    components: components.then_some(true),
+                    tolerance: *tolerance,
+                    progress: std::io::IsTerminal::is_terminal(&std::io::stderr()),
+                    command_line: lidarsim::output::raw_file::content::history_command(
+                        std::env::args(),
+                    ),
+                    shard,
+                };
+                lidarsim::commands::simulate_as(config, set, &opts, *threads, *format)
+            })
+            .map(|()| true),
+        Command::Merge { output, shards } => {
+            lidarsim::commands::merge(output, shards).map(|()| true)
         }
         Command::Onboard {
             config,
@@ -311,6 +347,9 @@ fn main() -> ExitCode {
             method,
             seed,
             json,
+            shard,
+            partial,
+            combine,
         } => {
             let opts = lidarsim::validate::ValidateOptions {
                 realizations: *realizations,
@@ -318,7 +357,21 @@ fn main() -> ExitCode {
                 seed: *seed,
                 json: json.clone(),
             };
-            lidarsim::commands::validate(config, set, &opts)
+            match (config, shard, partial) {
+                _ if !combine.is_empty() => {
+                    lidarsim::commands::validate_combine(combine, json.as_deref())
+                }
+                (Some(config), Some(shard), Some(partial)) => shard
+                    .resolve()
+                    .and_then(|s| {
+                        lidarsim::commands::validate_partial(config, set, &opts, s, partial)
+                    })
+                    .map(|()| true),
+                (Some(config), ..) => lidarsim::commands::validate(config, set, &opts),
+                (None, ..) => Err(lidarsim::error::Error::Unsupported(
+                    "validate needs a CONFIG, or --combine PART.json ...".into(),
+                )),
+            }
         }
     };
     match result {

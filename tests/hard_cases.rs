@@ -19,8 +19,8 @@ use std::time::Instant;
 use common::{config_path, scenario};
 use lidarsim::output::raw_file::CountWidth;
 use lidarsim::sampling::{
-    AGGREGATE_CHUNK, AGGREGATE_INVERSION_MAX, DENSE_TABLE_MAX, PathChoice, ShotSampler,
-    StrategyKind, TOTAL_TABLE_MAX, poisson_u64, shot_profile, stream_rng,
+    AGGREGATE_CHUNK, AGGREGATE_INVERSION_MAX, DENSE_ALIAS_MAX, DENSE_TABLE_MAX, PathChoice,
+    ShotSampler, StrategyKind, TOTAL_TABLE_MAX, poisson_u64, shot_profile, stream_rng,
 };
 use lidarsim::simulate::{ResolvedMethod, StreamSampler};
 use statrs::distribution::{ChiSquared, ContinuousCDF, Discrete, Normal, Poisson};
@@ -626,8 +626,8 @@ fn single_shot_profiles_have_the_same_law_by_shot_and_aggregate() {
 // ------------------------------------------------------------------ 10^7 shots
 
 /// 10^7 shots in one profile on the shot path (a 3 mJ laser and a bright cirrus, lidar
-/// ratio 2 sr, so that the profile uses every shot path: dense table, dense
-/// Ahrens–Dieter and sparse bins; ~2e9 counts in all): identical with 1 and 2 rayon
+/// ratio 2 sr, so that the profile uses both the dense alias tables and the sparse
+/// path; ~2e9 counts in all): identical with 1 and 2 rayon
 /// threads and to the binary's file (the profile regenerated alone), and every bin's
 /// total within |z| < 5 of M·λ_i. False alarm: 334 × 5.7e-7 = 1.9e-4. Power: the total
 /// against 1.01·M·Σλ gives z > 100.
@@ -653,8 +653,8 @@ fn ten_million_shots_in_one_profile() {
         StreamSampler::Shot(s) => {
             let st = s.strategy();
             assert!(
-                st.dense_table_bins > 0 && st.dense_pd_bins > 0 && st.sparse_bins > 0,
-                "every path of the shot sampler: {st}"
+                st.dense_alias_bins > 0 && st.sparse_bins > 0,
+                "the dense alias and the sparse path: {st}"
             )
         }
         _ => panic!("not the shot sampler"),
@@ -1010,25 +1010,45 @@ fn sixty_degrees_off_nadir() {
 
 // ------------------------------------------------------------------ switch points
 
-/// Shot sampler, dense table ↔ Ahrens–Dieter at DENSE_TABLE_MAX = 30: one λ vector with
-/// 100 bins at 30(1 − 1e-9) and 100 at 30(1 + 1e-9) through `ShotSampler::new`, which
-/// puts the first on the table and the second on `rand_distr::Poisson`. 20,000 shots:
-/// each side against Poisson(30) (the laws differ by 1e-9) and the sides against each
-/// other, chi-square p > 1e-6. False alarm: 3e-6. Power: Poisson(30.3) is rejected.
+/// Shot sampler, the dense methods' switch points: table inversion ↔ alias over the PMF
+/// at DENSE_TABLE_MAX (every bin dense, `PathChoice::AllDense`: the cost model would put
+/// such faint bins on the sparse path) and alias ↔ Ahrens–Dieter at DENSE_ALIAS_MAX
+/// (through `ShotSampler::new`). Each: 100 bins at the switch·(1 − 1e-9) and 100 at
+/// switch·(1 + 1e-9), 200,000 and 20,000 shots: each side against Poisson(switch) and the sides
+/// against each other, chi-square p > 1e-6. False alarm: 6e-6. Power: Poisson(1.01·switch)
+/// is rejected on each side.
 #[test]
-fn switch_dense_table_to_ahrens_dieter() {
-    let (lo, hi) = (
-        DENSE_TABLE_MAX * (1.0 - 1e-9),
-        DENSE_TABLE_MAX * (1.0 + 1e-9),
-    );
-    let lambda: Vec<f64> = (0..200).map(|i| if i % 2 == 0 { lo } else { hi }).collect();
-    let s = ShotSampler::new(&lambda);
-    let st = s.strategy();
-    assert_eq!((st.dense_table_bins, st.dense_pd_bins), (100, 100), "{st}");
-    let below: Vec<usize> = (0..200).step_by(2).collect();
-    let above: Vec<usize> = (1..200).step_by(2).collect();
-    let h = shot_histograms(&s, 30, 20_000, &[&below, &above]);
-    assert_both_sides_poisson(&h, DENSE_TABLE_MAX, ["table", "Ahrens–Dieter"]);
+fn switch_dense_table_alias_ahrens_dieter() {
+    for (switch, choice, shots, sides) in [
+        (
+            DENSE_TABLE_MAX,
+            PathChoice::AllDense,
+            200_000,
+            ["table", "alias"],
+        ),
+        (
+            DENSE_ALIAS_MAX,
+            PathChoice::Auto,
+            20_000,
+            ["alias", "Ahrens–Dieter"],
+        ),
+    ] {
+        let (lo, hi) = (switch * (1.0 - 1e-9), switch * (1.0 + 1e-9));
+        let lambda: Vec<f64> = (0..200).map(|i| if i % 2 == 0 { lo } else { hi }).collect();
+        let s = ShotSampler::with_choice(&lambda, choice);
+        let st = s.strategy();
+        let counts = [st.dense_table_bins, st.dense_alias_bins, st.dense_pd_bins];
+        let want = if switch == DENSE_TABLE_MAX {
+            [100, 100, 0]
+        } else {
+            [0, 100, 100]
+        };
+        assert_eq!(counts, want, "{st}");
+        let below: Vec<usize> = (0..200).step_by(2).collect();
+        let above: Vec<usize> = (1..200).step_by(2).collect();
+        let h = shot_histograms(&s, 30, shots, &[&below, &above]);
+        assert_both_sides_poisson(&h, switch, sides);
+    }
 }
 
 /// Both sides of a switch point fit Poisson(`mean`) (p > 1e-6 each), a mean 1 % higher is
@@ -1112,7 +1132,7 @@ fn switch_sparse_total_table_to_ahrens_dieter() {
 
 /// Shot sampler, the cost model's sparse ↔ dense split: 1000 faint bins (λ = 0.01, sparse)
 /// plus a 60-bin ramp λ*(1 + (j − 30)·1e-9) around the λ* where `ShotSampler::new` moves a
-/// bin from the sparse to the dense path (found by bisection, about 4–5). The split falls
+/// bin from the sparse to the dense path (found by bisection, about 1). The split falls
 /// inside the ramp; 200,000 shots: each side against Poisson(λ*) and against each other,
 /// chi-square p > 1e-6. False alarm: 3e-6. Power: Poisson(1.01 λ*) is rejected.
 #[test]
@@ -1125,14 +1145,14 @@ fn switch_sparse_to_dense_at_the_cost_model_split() {
     };
     // bisection: is one extra bin of λ sparse?
     let sparse = |l: f64| with(&[l]).sparse_bins == 1001;
-    let (mut lo, mut hi) = (0.05, DENSE_TABLE_MAX);
+    let (mut lo, mut hi) = (0.05, 30.0);
     assert!(sparse(lo) && !sparse(hi));
     for _ in 0..100 {
         let mid = 0.5 * (lo + hi);
         if sparse(mid) { lo = mid } else { hi = mid }
     }
     let star = 0.5 * (lo + hi);
-    assert!((1.0..20.0).contains(&star), "λ* = {star}");
+    assert!((0.3..20.0).contains(&star), "λ* = {star}");
     let ramp: Vec<f64> = (0..60)
         .map(|j| star * (1.0 + (j as f64 - 30.0) * 1e-9))
         .collect();
@@ -1143,7 +1163,7 @@ fn switch_sparse_to_dense_at_the_cost_model_split() {
     assert_eq!(st.kind, StrategyKind::Hybrid, "{st}");
     let in_ramp = st.sparse_bins - 1000; // the ramp's lowest bins are the sparse ones
     assert!(
-        (1..60).contains(&in_ramp) && st.dense_table_bins == 60 - in_ramp,
+        (1..60).contains(&in_ramp) && st.dense_alias_bins == 60 - in_ramp,
         "λ* = {star}: {st}"
     );
     let sparse_side: Vec<usize> = (1000..1000 + in_ramp).collect();

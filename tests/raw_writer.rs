@@ -56,6 +56,7 @@ fn spec(
     RawFileSpec {
         n_bins,
         n_profiles,
+        first_profile: 0,
         channels: (0..channels).map(|c| format!("ch{c}")).collect(),
         count_width: width,
         components,

@@ -393,3 +393,80 @@ fn a_fixed_sun_enters_the_deterministic_model() {
     let got = day.expected().unwrap().background;
     assert!((got / want - 1.0).abs() < 1e-12, "{got} vs {want}");
 }
+
+/// Pulse-energy jitter along a changing scene, shot by shot: each run of shots is drawn
+/// with its own pulses' energies (thinning, `sampling::jitter`). Given the energies, the
+/// shot path and `aggregate` (exact given the energies, which both read from the laser's
+/// stream) have the same Poisson law per profile and bin, so over the orbit's bright bins
+/// (200 profiles, the cirrus, broken cloud, surface and daylight) their difference `d`
+/// has mean 0 and `Σ d²/(c_shot + c_aggregate)` is a chi-square per term of mean 1:
+/// |z| < 5 for both (false alarm ~1e-6). Power: a shot path that ignores the energies
+/// (constant pulses) leaves the profile-to-profile energy variance in `d`, and its
+/// chi-square is rejected (z > 5). Dead time with jitter and daylight runs too.
+#[test]
+fn jitter_along_a_changing_scene_at_shot_level() {
+    use lidarsim::simulate::{ResolvedMethod, changing_scene, draw_scene_counts, run_energy};
+    let lidar = common::lidar(
+        "instruments/caliop_orbit.toml",
+        &["instrument.pulse_energy_jitter=0.15"],
+    );
+    let (seed, profiles) = (9u64, 200usize);
+    let n_bins = lidar.first().geometry.n_bins;
+    let energy = run_energy(&lidar, seed, 200.0).unwrap();
+    let scene = |method: ResolvedMethod, energy| {
+        let mut m = method;
+        changing_scene(&lidar, seed, profiles, &mut m, false, &energy)
+            .unwrap()
+            .unwrap()
+    };
+    let aggregate = scene(ResolvedMethod::Aggregate, energy);
+    let constant = lidarsim::simulate::RunEnergy::jitter(0.0);
+    let stats = |shot_energy| {
+        let shot = scene(ResolvedMethod::Shot, shot_energy);
+        let (mut sum_d, mut sum_v, mut chi2, mut terms) = (0.0, 0.0, 0.0, 0usize);
+        for p in 0..profiles as u64 {
+            let a = draw_scene_counts(&aggregate, seed, 1, p, n_bins, &energy).0;
+            let s = draw_scene_counts(&shot, seed, 1, p, n_bins, &shot_energy).0;
+            for (&x, &y) in s.counts.iter().zip(&a.counts) {
+                let v = (x + y) as f64;
+                if v > 200.0 {
+                    let d = x as f64 - y as f64;
+                    sum_d += d;
+                    sum_v += v;
+                    chi2 += d * d / v;
+                    terms += 1;
+                }
+            }
+        }
+        let n = terms as f64;
+        (sum_d / sum_v.sqrt(), (chi2 - n) / (2.0 * n).sqrt(), terms)
+    };
+    let (z_mean, z_chi2, terms) = stats(energy);
+    assert!(terms > 2000, "{terms} bright bins");
+    assert!(
+        z_mean.abs() < 5.0 && z_chi2.abs() < 5.0,
+        "{z_mean} {z_chi2}"
+    );
+    let (_, z_wrong, _) = stats(constant);
+    eprintln!(
+        "jitter scene: z_mean {z_mean:.2}, z_chi2 {z_chi2:.2} over {terms} bins; constant pulses z_chi2 {z_wrong:.1}"
+    );
+    assert!(z_wrong > 5.0, "constant pulses not told apart: {z_wrong}");
+    // dead time, jitter and daylight together, shot by shot, through the command
+    let (dir, f) = orbit_run(
+        "jitter-dead",
+        &[
+            "--profiles",
+            "20",
+            "--method",
+            "shot",
+            "--set",
+            "instrument.pulse_energy_jitter=0.15",
+            "--set",
+            "instrument.detector={dead_time_s=3.5e-9}",
+        ],
+    );
+    let energies = read(&f, "pulse_energy");
+    assert!(energies.iter().any(|&e| (e / 0.110 - 1.0).abs() > 0.01));
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -183,7 +183,9 @@ pub fn run(config: &Path, overrides: &[String], opts: &OnboardOptions) -> Result
             .into_par_iter()
             .map(|p| match &scene {
                 Some(s) => {
-                    simulate::draw_scene_profile(s, seed, channels, p, n_bins, &energy).counts
+                    simulate::draw_scene_counts(s, seed, channels, p, n_bins, &energy)
+                        .0
+                        .counts
                 }
                 None => simulate::draw_profile(&samplers, p, 1, n_bins, false, &energy).counts,
             })
@@ -237,7 +239,7 @@ pub fn run(config: &Path, overrides: &[String], opts: &OnboardOptions) -> Result
                 seed: Some(seed),
                 profiles: Some(total as usize),
                 method: Some(Method::Shot),
-                command_line: std::env::args().collect::<Vec<_>>().join(" "),
+                command_line: crate::output::raw_file::content::history_command(std::env::args()),
                 ..Default::default()
             };
             simulate::run(&lidar, &raw_opts, outputs, id).map(|_| ())

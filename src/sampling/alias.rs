@@ -17,7 +17,8 @@
 //! takes one `u64` `x`: its top `b` bits pick the column (exactly uniform), its
 //! low `64-b` bits are compared with the column's integer threshold. The bin
 //! is therefore returned with probability exactly `W_i / 2^64`: within
-//! `(n+1)·2^-64` of `w_i/Σw`.
+//! `(n+1)·2^-64` of `w_i/Σw` for every bin but the heaviest, which also takes the
+//! rounding of `Σw` (summed with compensation: about `2^11` more units).
 
 /// One column: `bins[0]` (its own bin) when the low bits are `< thr`, else
 /// `bins[1]` (the alias); selected by index, without a branch.
@@ -43,7 +44,20 @@ impl AliasTable {
         let b = (n.next_power_of_two().trailing_zeros()).max(1);
         let ncols = 1usize << b;
         let cap: u128 = 1u128 << (64 - b);
-        let total: f64 = weights.iter().sum();
+        // Neumaier's compensated sum (Neumaier 1974): the total to about one ulp whatever
+        // the number of weights, so the rounding remainder given to the heaviest bin
+        // below stays within about n + 2^11 units of 2^-64.
+        let (mut total, mut carry) = (0.0f64, 0.0f64);
+        for &x in weights {
+            let t = total + x;
+            carry += if total.abs() >= x.abs() {
+                (total - t) + x
+            } else {
+                (x - t) + total
+            };
+            total = t;
+        }
+        let total = total + carry;
         assert!(
             total > 0.0 && total.is_finite(),
             "alias weights must have a positive finite sum"
@@ -114,6 +128,11 @@ impl AliasTable {
     pub(crate) fn bin_for(&self, x: u64) -> usize {
         let c = &self.cols[(x >> self.shift) as usize];
         c.bins[usize::from((x & self.mask) >= c.thr)] as usize
+    }
+
+    /// Number of columns (a power of two; 16 bytes each).
+    pub(crate) fn columns(&self) -> usize {
+        self.cols.len()
     }
 
     /// Realised probability of each column entry, for tests: `(bin, P)` pairs summed by bin.

@@ -5,11 +5,15 @@
 //! profile accumulates `M` shots.
 //!
 //! * [`ShotSampler`]: exact draw of one shot, built once per set of means
-//!   and reused for every shot. It mixes three exact paths per bin (dense
-//!   table inversion, dense Ahrens–Dieter, and the sparse "Poisson total +
-//!   alias placement" path) by a cost model: see its docs and [`cost`].
-//! * [`add_aggregate`]: one Poisson(`M·λ_i`) draw per bin, exact when
-//!   nothing varies from shot to shot and the detector is linear.
+//!   and reused for every shot. It mixes four exact paths per bin (dense
+//!   table inversion, dense alias table over the PMF ([`PmfAlias`]), dense
+//!   Ahrens–Dieter, and the sparse "Poisson total + alias placement" path) by
+//!   a measured cost model: see its docs and [`cost`].
+//! * [`AggregateSampler`]: one Poisson(`M·λ_i`) draw per bin for fixed means,
+//!   every bin's sampler built once (a [`ShotSampler`] over `M·λ_i`); exact
+//!   when nothing varies from shot to shot and the detector is linear.
+//! * [`add_aggregate`]: the same draw for means that change from profile to
+//!   profile, computed on the fly (inversion or Ahrens–Dieter).
 //! * [`stream_rng`], [`shot_profile`], [`aggregate_profile`]: reproducible
 //!   streams. A profile's shots are cut into blocks of [`SHOT_BLOCK`] shots,
 //!   block `b` of profile `p` drawn from `stream_rng(seed, p, b)`, and the
@@ -21,7 +25,12 @@
 //! the same sampler feeds accumulators (`[u64]`), per-shot buffers
 //! ([`ShotCounts`]) or, later, a detector model.
 //!
-//! # Extension points (intended, not built)
+//! # Extension points
+//!
+//! Built since (see [`jitter`], `crate::detector`, `crate::onboard`): per-shot
+//! varying means by thinning, the dead-time detector as a sink, component
+//! colouring by separate streams, onboard sums through [`ShotSampler::for_each_shot`].
+//! The notes as first written:
 //!
 //! * **Per-shot varying means.** Pulse-energy jitter scales the signal part by
 //!   `e_s` per shot: keep a sampler for the signal and one for background +
@@ -48,14 +57,20 @@ mod aggregate;
 mod alias;
 pub mod approx;
 pub mod jitter;
+mod pmf_alias;
 mod shot;
 mod table;
 #[cfg(test)]
 mod tests;
 
-pub use aggregate::{AGGREGATE_CHUNK, AGGREGATE_INVERSION_MAX, add_aggregate, poisson_u64};
+pub use aggregate::{
+    AGGREGATE_CHUNK, AGGREGATE_INVERSION_MAX, AGGREGATE_PREBUILT_MAX, AggregateSampler,
+    add_aggregate, poisson_u64,
+};
+pub use pmf_alias::{PMF_ALIAS_MAX_COLUMNS, PmfAlias, pmf_alias_columns};
 pub use shot::{
-    DENSE_TABLE_MAX, PathChoice, ShotSampler, ShotStrategy, StrategyKind, TOTAL_TABLE_MAX, cost,
+    DENSE_ALIAS_MAX, DENSE_TABLE_MAX, DenseMethod, PathChoice, ShotSampler, ShotStrategy,
+    StrategyKind, TOTAL_TABLE_MAX, cost,
 };
 
 use rand_pcg::Pcg64Mcg;
@@ -66,12 +81,27 @@ use rayon::prelude::*;
 /// at a time); the shot's count in a bin is the sum of its events.
 pub trait CountSink {
     fn add(&mut self, bin: usize, count: u32);
+
+    /// A count that may be 0 (reported only when it is not, unless the sink can take a
+    /// zero for free: an accumulator adds it without a branch that the draws of a bin
+    /// with `P(K = 0)` near ½ would mispredict).
+    #[inline(always)]
+    fn add_any(&mut self, bin: usize, count: u32) {
+        if count > 0 {
+            self.add(bin, count);
+        }
+    }
 }
 
 /// Accumulator: adds every event into `acc[bin]`.
 impl CountSink for [u64] {
     #[inline(always)]
     fn add(&mut self, bin: usize, count: u32) {
+        self[bin] += u64::from(count);
+    }
+
+    #[inline(always)]
+    fn add_any(&mut self, bin: usize, count: u32) {
         self[bin] += u64::from(count);
     }
 }
@@ -209,6 +239,19 @@ pub fn shot_profile(sampler: &ShotSampler, seed: u64, profile: u64, shots: u64, 
         })
         .expect("at least one block");
     acc.iter_mut().zip(&sum).for_each(|(a, b)| *a += b);
+}
+
+/// Accumulate one profile of `shots` shots by an [`AggregateSampler`] (samplers built
+/// once for the fixed means) into `acc`, from `stream_rng(seed, profile, AGGREGATE_STREAM)`.
+pub fn aggregate_profile_fixed(
+    sampler: &AggregateSampler,
+    seed: u64,
+    profile: u64,
+    shots: u64,
+    acc: &mut [u64],
+) {
+    let mut rng = stream_rng(seed, profile, AGGREGATE_STREAM);
+    sampler.add_profile(&mut rng, shots, acc);
 }
 
 /// Accumulate one profile of `shots` shots by [`add_aggregate`] (one exact

@@ -9,13 +9,19 @@ use rand_distr::{Distribution, Poisson};
 
 use super::CountSink;
 use super::alias::AliasTable;
-use super::table::{TABLE_LAMBDA_LIMIT, count_above, poisson_pmf, tail_thresholds};
+use super::pmf_alias::{PmfAlias, pmf_alias_columns};
+use super::table::{count_above, tail_thresholds};
 
-/// Largest per-bin mean drawn densely by table inversion (≤ ~70 thresholds,
-/// ≤ ~600 bytes per bin); above it a prebuilt [`rand_distr::Poisson`]
-/// (Ahrens–Dieter 1982) is used per bin. The table is still the faster of the
-/// two here (measured ~26 vs ~40 ns per draw at λ = 30, see [`cost`]).
-pub const DENSE_TABLE_MAX: f64 = 30.0;
+/// Largest per-bin mean drawn densely by table inversion (one compare when the
+/// count is 0, a count of the thresholds otherwise); above it an alias table over
+/// the PMF ([`PmfAlias`]: one `u64` and one column whatever the count), which is
+/// the cheaper of the two from here on (measured, see [`cost`]).
+pub const DENSE_TABLE_MAX: f64 = 0.07;
+
+/// Largest per-bin mean drawn densely by an alias table over the PMF (tables of at
+/// most [`super::PMF_ALIAS_MAX_COLUMNS`] columns, 64 KiB); above it a prebuilt
+/// [`rand_distr::Poisson`] (Ahrens–Dieter 1982) per bin.
+pub const DENSE_ALIAS_MAX: f64 = 4.0e4;
 
 /// Largest sparse-set total `Σλ` whose shot total `N` is drawn from an alias
 /// table over the (truncated at `2^-72`) Poisson PMF; above it a prebuilt
@@ -24,26 +30,30 @@ pub const TOTAL_TABLE_MAX: f64 = 512.0;
 
 /// Cost model, in ns, measured on the development machine (2-core AMD EPYC
 /// VM under load, `Pcg64Mcg`, accumulation into `[u64]`, 1000 bins unless
-/// said, each path forced alone with [`PathChoice`] as in
-/// `benches/sampler.rs`, best of 60 short runs). Only the ratios matter; a
+/// said, each path forced alone with [`PathChoice`]; `cargo run --release
+/// --example sampler_costs`, best of 15 runs). Only the ratios matter; a
 /// wrong estimate costs speed, never correctness.
 ///
 /// * dense inversion bin of mean λ, `q = P(K ≥ 1)`, `L` thresholds after the
 ///   first: `DENSE_BASE + DENSE_MISS·min(q, 1-q) + q·DENSE_PER_THRESHOLD·L`
 ///   (one `u64` and a compare; a mispredicted branch; a branch-free count);
-///   measured 1.5 ns (λ ≤ 0.01), 2.7 (0.1), 7.3 (0.5), 8.5 (1), 15 (10), 26 (30);
-/// * dense Ahrens–Dieter bin: `DENSE_PD` (measured 35–45 ns for λ ≥ 12);
-/// * sparse set of `n` bins and total mean `Λ`: `SPARSE_TOTAL` (`DENSE_PD`
-///   above [`TOTAL_TABLE_MAX`]) per shot plus `Λ·sparse_place(n)`, the cost
-///   of one count (one `u64`, an alias column, an increment), which grows once
-///   the alias table and accumulator leave the caches: measured 2.2 ns
-///   (1000 bins), 2.9 (10^4), 4.8 (3·10^4), 5.8 (10^5), ~40 (3·10^5).
+///   measured 1.4 ns (λ ≤ 0.01), 2.1 (0.05), 3.0 (0.1), 8.6 (0.5), 9.9 (1), 16 (10);
+/// * dense alias bin over the PMF ([`PmfAlias`]): [`cost::alias`] of its
+///   columns, measured 2.4 ns up to 64 columns (λ ≲ 10, whatever the count),
+///   3.9 (λ = 30), 5.3 (100), 7.0 (10^3), 8.2 (10^4), 19 (10^5: 8192 columns,
+///   128 MiB for the 1000 bins, out of the caches), hence [`DENSE_ALIAS_MAX`];
+/// * dense Ahrens–Dieter bin: `DENSE_PD` (measured 21 ns for λ ≥ 30);
+/// * sparse set of `n` bins and total mean `Λ`: the alias draw of its total
+///   (`DENSE_PD` above [`TOTAL_TABLE_MAX`]) per shot plus `Λ·sparse_place(n)`,
+///   the cost of one count (one `u64`, an alias column, an increment), which
+///   grows once the alias table and accumulator leave the caches: measured
+///   2.0 ns (1000 bins), 2.9 (10^4), 4.8 (3·10^4), 5.8 (10^5), ~40 (3·10^5).
 ///
 /// A bin costs about `λ·sparse_place` in the sparse set and at least
 /// `DENSE_BASE` in the dense set, the ratio falling with λ, so the sparse set
 /// is a prefix of the bins sorted by λ: [`ShotSampler::new`] evaluates every
 /// prefix (O(n log n)) and keeps the cheapest. On 1000 equal bins this puts
-/// λ ≲ 5.5 on the sparse path.
+/// λ ≲ 1 on the sparse path.
 pub mod cost {
     /// Per dense inversion bin: one `u64` and a compare.
     pub const DENSE_BASE: f64 = 1.55;
@@ -52,9 +62,16 @@ pub mod cost {
     /// Per threshold counted after a hit in a dense inversion bin.
     pub const DENSE_PER_THRESHOLD: f64 = 0.35;
     /// Per dense Ahrens–Dieter bin (`rand_distr::Poisson`).
-    pub const DENSE_PD: f64 = 40.0;
-    /// Per shot, drawing the sparse total from its alias table.
-    pub const SPARSE_TOTAL: f64 = 2.7;
+    pub const DENSE_PD: f64 = 21.0;
+    /// Per draw from an alias table over a PMF of at most 64 columns (1 KiB).
+    pub const ALIAS_BASE: f64 = 2.4;
+    /// Extra per draw for each doubling of the table past 64 columns (cache).
+    pub const ALIAS_PER_DOUBLING: f64 = 1.4;
+
+    /// Cost of one draw from an alias table of `columns` columns.
+    pub fn alias(columns: usize) -> f64 {
+        ALIAS_BASE + ALIAS_PER_DOUBLING * (columns as f64 / 64.0).max(1.0).log2()
+    }
     /// Per sparse count while alias table + accumulator fit in L1/L2 (≤ 64 KiB).
     pub const SPARSE_PLACE: f64 = 2.2;
     /// Extra per sparse count for each doubling of that working set past 64 KiB.
@@ -81,8 +98,11 @@ pub mod cost {
 pub enum PathChoice {
     /// The cheapest split by the cost model ([`cost`]); what [`ShotSampler::new`] uses.
     Auto,
-    /// Every bin on the dense path.
+    /// Every bin on the dense path, each by [`DenseMethod::for_mean`].
     AllDense,
+    /// Every bin on the dense path by the one method given (tests and benchmarks:
+    /// `Inversion` needs λ ≤ 600, `Alias` λ < 4·10^9).
+    Dense(DenseMethod),
     /// Every bin (with λ > 0) on the sparse path.
     AllSparse,
     /// Bins with `0 < λ < threshold` sparse, the rest dense.
@@ -110,6 +130,8 @@ pub struct ShotStrategy {
     pub bins: usize,
     /// Dense bins drawn by table inversion.
     pub dense_table_bins: usize,
+    /// Dense bins drawn by an alias table over their PMF.
+    pub dense_alias_bins: usize,
     /// Dense bins drawn by a prebuilt `rand_distr::Poisson`.
     pub dense_pd_bins: usize,
     /// Bins on the sparse path.
@@ -126,10 +148,11 @@ impl fmt::Display for ShotStrategy {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "{:?}: {} bins = {} dense-table + {} dense-PD + {} sparse (Σλ = {:.4}) + {} idle; ~{:.1} ns/shot",
+            "{:?}: {} bins = {} dense-table + {} dense-alias + {} dense-PD + {} sparse (Σλ = {:.4}) + {} idle; ~{:.1} ns/shot",
             self.kind,
             self.bins,
             self.dense_table_bins,
+            self.dense_alias_bins,
             self.dense_pd_bins,
             self.sparse_bins,
             self.sparse_mean,
@@ -141,8 +164,8 @@ impl fmt::Display for ShotStrategy {
 
 #[derive(Clone, Debug)]
 enum TotalSampler {
-    /// Alias table over `k = 0..kmax` with the Poisson PMF as weights.
-    Table(AliasTable),
+    /// Alias table over the Poisson PMF.
+    Table(PmfAlias),
     Pd(Poisson<f64>),
 }
 
@@ -188,39 +211,74 @@ pub struct ShotSampler {
     /// `d_rest[d_off[i]..d_off[i+1]]` are bin `i`'s `T_2, …, T_kmax` (`len + 1` offsets).
     d_off: Box<[u32]>,
     d_rest: Box<[u64]>,
+    /// Dense bins drawn by an alias table over their PMF.
+    d_alias: Box<[(u32, PmfAlias)]>,
     /// Dense Ahrens–Dieter bins.
     d_pd: Box<[(u32, Poisson<f64>)]>,
     sparse: Option<SparseSet>,
     strategy: ShotStrategy,
 }
 
-fn dense_cost(lambda: f64) -> f64 {
-    if lambda <= DENSE_TABLE_MAX {
-        let q = -(-lambda).exp_m1();
-        // Thresholds after the first: j >= 2 with P(K >= j) >= 2^-64, estimated
-        // allocation-free by the PMF terms (the tail is within a small factor of them).
-        let mut p = (-lambda).exp() * lambda; // p_1
-        let mut j = 1.0;
-        let mut rest = 0.0;
-        loop {
-            j += 1.0;
-            p *= lambda / j;
-            if j > lambda && p < 5.421e-20 {
-                break;
-            }
-            rest += 1.0;
+/// How one dense bin is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DenseMethod {
+    /// Table inversion ([`super::table`]), `λ ≤` [`DENSE_TABLE_MAX`].
+    Inversion,
+    /// Alias table over the PMF ([`PmfAlias`]), `λ ≤` [`DENSE_ALIAS_MAX`].
+    Alias,
+    /// A prebuilt `rand_distr::Poisson` (Ahrens–Dieter), above.
+    Rejection,
+}
+
+impl DenseMethod {
+    /// The method for a dense bin of mean `lambda`.
+    pub fn for_mean(lambda: f64) -> DenseMethod {
+        if lambda <= DENSE_TABLE_MAX {
+            DenseMethod::Inversion
+        } else if lambda <= DENSE_ALIAS_MAX {
+            DenseMethod::Alias
+        } else {
+            DenseMethod::Rejection
         }
-        cost::DENSE_BASE + cost::DENSE_MISS * q.min(1.0 - q) + q * cost::DENSE_PER_THRESHOLD * rest
-    } else {
-        cost::DENSE_PD
     }
+}
+
+/// Cost-model estimate of one dense draw of mean `lambda` by `method`, ns.
+fn dense_cost_by(lambda: f64, method: DenseMethod) -> f64 {
+    match method {
+        DenseMethod::Inversion => {
+            let q = -(-lambda).exp_m1();
+            // Thresholds after the first: j >= 2 with P(K >= j) >= 2^-64, estimated
+            // allocation-free by the PMF terms (the tail is within a small factor of them).
+            let mut p = (-lambda).exp() * lambda; // p_1
+            let mut j = 1.0;
+            let mut rest = 0.0;
+            loop {
+                j += 1.0;
+                p *= lambda / j;
+                if j > lambda && p < 5.421e-20 {
+                    break;
+                }
+                rest += 1.0;
+            }
+            cost::DENSE_BASE
+                + cost::DENSE_MISS * q.min(1.0 - q)
+                + q * cost::DENSE_PER_THRESHOLD * rest
+        }
+        DenseMethod::Alias => cost::alias(pmf_alias_columns(lambda)),
+        DenseMethod::Rejection => cost::DENSE_PD,
+    }
+}
+
+fn dense_cost(lambda: f64) -> f64 {
+    dense_cost_by(lambda, DenseMethod::for_mean(lambda))
 }
 
 fn sparse_cost(n: usize, mean: f64) -> f64 {
     if n == 0 {
         0.0
     } else if mean <= TOTAL_TABLE_MAX {
-        cost::SPARSE_TOTAL + mean * cost::sparse_place(n)
+        cost::alias(pmf_alias_columns(mean)) + mean * cost::sparse_place(n)
     } else {
         cost::DENSE_PD + mean * cost::sparse_place(n)
     }
@@ -255,7 +313,7 @@ impl ShotSampler {
         let lam = |i: u32| lambda_per_bin[i as usize];
 
         let n_sparse = match choice {
-            PathChoice::AllDense => 0,
+            PathChoice::AllDense | PathChoice::Dense(_) => 0,
             PathChoice::AllSparse => order.len(),
             PathChoice::SparseBelow(t) => order.iter().take_while(|&&i| lam(i) < t).count(),
             PathChoice::Auto => {
@@ -288,28 +346,35 @@ impl ShotSampler {
         let mut d_bin = Vec::new();
         let mut d_off = vec![0u32];
         let mut d_rest = Vec::new();
+        let mut d_alias = Vec::new();
         let mut d_pd = Vec::new();
         let mut idle = bins - order.len();
         let mut est = 0.0;
         for &i in &dense_ids {
             let l = lam(i);
-            if l <= DENSE_TABLE_MAX {
-                let thr = tail_thresholds(l);
-                if thr.is_empty() {
-                    idle += 1; // P(K >= 1) < 2^-64: never counts
-                    continue;
+            let method = match choice {
+                PathChoice::Dense(m) => m,
+                _ => DenseMethod::for_mean(l),
+            };
+            match method {
+                DenseMethod::Inversion => {
+                    let thr = tail_thresholds(l);
+                    if thr.is_empty() {
+                        idle += 1; // P(K >= 1) < 2^-64: never counts
+                        continue;
+                    }
+                    d_first.push(thr[0]);
+                    d_bin.push(i);
+                    d_rest.extend_from_slice(&thr[1..]);
+                    d_off.push(u32::try_from(d_rest.len()).expect("dense table too large"));
                 }
-                d_first.push(thr[0]);
-                d_bin.push(i);
-                d_rest.extend_from_slice(&thr[1..]);
-                d_off.push(u32::try_from(d_rest.len()).expect("dense table too large"));
-            } else {
-                d_pd.push((
+                DenseMethod::Alias => d_alias.push((i, PmfAlias::new(l))),
+                DenseMethod::Rejection => d_pd.push((
                     i,
                     Poisson::new(l).expect("lambda out of range for rand_distr::Poisson"),
-                ));
+                )),
             }
-            est += dense_cost(l);
+            est += dense_cost_by(l, method);
         }
 
         // Sparse bins.
@@ -325,15 +390,10 @@ impl ShotSampler {
         } else {
             let w: Vec<f64> = sparse_ids.iter().map(|&i| lam(i)).collect();
             let total = if sparse_mean <= TOTAL_TABLE_MAX {
-                let pmf = poisson_pmf(sparse_mean);
-                let ks: Vec<u32> = (0..pmf.len() as u32).collect();
-                TotalSampler::Table(AliasTable::new(&pmf, &ks))
+                TotalSampler::Table(PmfAlias::new(sparse_mean))
             } else {
                 TotalSampler::Pd(Poisson::new(sparse_mean).expect("sparse total out of range"))
             };
-            debug_assert!(
-                sparse_mean <= TABLE_LAMBDA_LIMIT || matches!(total, TotalSampler::Pd(_))
-            );
             est += sparse_cost(sparse_ids.len(), sparse_mean);
             Some(SparseSet {
                 total,
@@ -341,7 +401,7 @@ impl ShotSampler {
             })
         };
 
-        let n_dense = d_first.len() + d_pd.len();
+        let n_dense = d_first.len() + d_alias.len() + d_pd.len();
         let kind = match (n_dense > 0, sparse.is_some()) {
             (false, false) => StrategyKind::Empty,
             (true, false) => StrategyKind::Dense,
@@ -352,6 +412,7 @@ impl ShotSampler {
             kind,
             bins,
             dense_table_bins: d_first.len(),
+            dense_alias_bins: d_alias.len(),
             dense_pd_bins: d_pd.len(),
             sparse_bins: sparse_ids.len(),
             sparse_mean,
@@ -364,6 +425,7 @@ impl ShotSampler {
             d_bin: d_bin.into_boxed_slice(),
             d_off: d_off.into_boxed_slice(),
             d_rest: d_rest.into_boxed_slice(),
+            d_alias: d_alias.into_boxed_slice(),
             d_pd: d_pd.into_boxed_slice(),
             sparse,
             strategy,
@@ -403,6 +465,10 @@ impl ShotSampler {
                 sink.add(bin as usize, k);
             }
         }
+        // Dense alias tables over the PMF: one u64 each.
+        for (bin, table) in self.d_alias.iter() {
+            sink.add_any(*bin as usize, table.count_for(rng.next_u64()));
+        }
         // Dense Ahrens–Dieter.
         for (bin, pd) in self.d_pd.iter() {
             let k: f64 = pd.sample(rng);
@@ -413,7 +479,7 @@ impl ShotSampler {
         // Sparse: total, then placement.
         if let Some(sp) = &self.sparse {
             let n = match &sp.total {
-                TotalSampler::Table(t) => t.bin_for(rng.next_u64()) as u64,
+                TotalSampler::Table(t) => u64::from(t.count_for(rng.next_u64())),
                 TotalSampler::Pd(p) => p.sample(rng) as u64,
             };
             for _ in 0..n {

@@ -147,25 +147,63 @@ fn tail_thresholds_edge_cases() {
     }
 }
 
+/// Deterministic: [`PmfAlias`] (the dense alias path and the sparse path's shot total)
+/// realises P(K = k) to within 1e-15 absolute of the forward-recurrence PMF up to
+/// λ = 512; up to λ = 10^6, to within 1e-8 relative plus 2^-60 absolute (the table's
+/// integer weights are units of 2^-64) of statrs' PMF (whose log-gamma form is itself
+/// off by ~1e-10 relative at λ = 4·10^4, against mpmath), and with successive cells
+/// above 1e-6 in the ratio λ/(k+1) to 1e-11; mean λ and variance λ; a table built for 1.001·λ is told
+/// apart (its mean is off by 0.1 %).
 #[test]
 fn pmf_alias_realises_poisson() {
-    // Deterministic: the alias table over the PMF (the sparse path's shot
-    // total) realises P(N = k) to within 1e-15 absolute, and its mean is λ.
-    for l in [1e-6, 0.7, 11.48, 100.0, TOTAL_TABLE_MAX] {
-        let pmf = poisson_pmf(l);
-        let ks: Vec<u32> = (0..pmf.len() as u32).collect();
-        let p = AliasTable::new(&pmf, &ks).probabilities(pmf.len());
-        let mut mean = 0.0;
-        for k in 0..pmf.len() {
-            assert!(
-                (p[k] - pmf[k]).abs() < 1e-15,
-                "λ={l}, k={k}: {} vs {}",
-                p[k],
-                pmf[k]
-            );
-            mean += k as f64 * p[k];
+    for l in [
+        1e-6,
+        0.07,
+        0.7,
+        11.48,
+        100.0,
+        TOTAL_TABLE_MAX,
+        1e4,
+        4e4,
+        1e6,
+    ] {
+        let (k0, w) = super::pmf_alias::pmf_window(l);
+        let len = k0 as usize + w.len();
+        let p = PmfAlias::new(l).probabilities(len);
+        let exact = PoissonPmf::new(l).unwrap();
+        let small = (l <= 600.0).then(|| poisson_pmf(l));
+        let (mut mean, mut second) = (0.0, 0.0);
+        for (k, &pk) in p.iter().enumerate() {
+            match &small {
+                Some(pmf) => {
+                    let want = pmf.get(k).copied().unwrap_or(0.0);
+                    assert!((pk - want).abs() < 1e-15, "λ={l}, k={k}: {pk} vs {want}");
+                }
+                None => {
+                    let want = exact.pmf(k as u64);
+                    let tol = 1e-8 * want + (2.0f64).powi(-60);
+                    assert!((pk - want).abs() < tol, "λ={l}, k={k}: {pk} vs {want}");
+                    if pk > 1e-6 && p[k + 1] > 1e-6 {
+                        let ratio = p[k + 1] / pk * (k + 1) as f64 / l;
+                        assert!((ratio - 1.0).abs() < 1e-11, "λ={l}, k={k}: ratio {ratio}");
+                    }
+                }
+            }
+            mean += k as f64 * pk;
+            second += (k as f64 - l).powi(2) * pk;
         }
         assert!((mean - l).abs() < 1e-12 * l.max(1.0), "λ={l}: mean {mean}");
+        assert!(
+            (second - l).abs() < 1e-9 * l.max(1.0),
+            "λ={l}: variance {second}"
+        );
+        // power: the table of a 0.1 % larger mean has a visibly larger mean
+        if l >= 0.07 {
+            let (q0, qw) = super::pmf_alias::pmf_window(l * 1.001);
+            let q = PmfAlias::new(l * 1.001).probabilities(q0 as usize + qw.len());
+            let wrong: f64 = q.iter().enumerate().map(|(k, &x)| k as f64 * x).sum();
+            assert!(wrong - l > 0.5e-3 * l, "λ={l}: {wrong}");
+        }
     }
 }
 
@@ -323,27 +361,30 @@ fn wrong_sampler_is_rejected() {
 /// Continuity across every switch point: λ just below and just above each
 /// threshold gives the Poisson law (chi-square against Poisson at the
 /// threshold; the laws differ by 2e-9 relative, far below resolution).
-/// Switch points: dense table ↔ Ahrens–Dieter (DENSE_TABLE_MAX), sparse total
-/// table ↔ Ahrens–Dieter (TOTAL_TABLE_MAX), and the Auto dense ↔ sparse
-/// split (found from the sampler itself).
-/// False alarm: 6 tests at 1e-6 → 6e-6.
+/// Switch points: dense table ↔ alias over the PMF (DENSE_TABLE_MAX), alias ↔
+/// Ahrens–Dieter (DENSE_ALIAS_MAX), sparse total table ↔ Ahrens–Dieter
+/// (TOTAL_TABLE_MAX), and the Auto dense ↔ sparse split (found from the sampler
+/// itself).
+/// False alarm: 8 tests at 1e-6 → 8e-6.
 #[test]
 fn continuity_at_switch_points() {
     let eps = 1e-9;
-    // Dense table ↔ rand_distr::Poisson.
-    for (j, l) in [DENSE_TABLE_MAX * (1.0 - eps), DENSE_TABLE_MAX * (1.0 + eps)]
-        .into_iter()
-        .enumerate()
-    {
-        let s = ShotSampler::with_choice(&[l; 50], PathChoice::AllDense);
-        let expect_pd = l > DENSE_TABLE_MAX;
-        assert_eq!(s.strategy().dense_pd_bins == 50, expect_pd);
-        let hist = shot_histogram(&s, &mut stream_rng(5000, j as u64, 0), 4000);
-        assert_poisson_fit(
-            &hist,
-            DENSE_TABLE_MAX,
-            &format!("dense switch {}", s.strategy()),
-        );
+    let dense = |s: &ShotSampler| {
+        let st = s.strategy();
+        [st.dense_table_bins, st.dense_alias_bins, st.dense_pd_bins]
+    };
+    for (switch, lo_side) in [(DENSE_TABLE_MAX, 0), (DENSE_ALIAS_MAX, 1)] {
+        for (j, l) in [switch * (1.0 - eps), switch * (1.0 + eps)]
+            .into_iter()
+            .enumerate()
+        {
+            let s = ShotSampler::with_choice(&[l; 50], PathChoice::AllDense);
+            let mut want = [0; 3];
+            want[lo_side + j] = 50;
+            assert_eq!(dense(&s), want, "{}", s.strategy());
+            let hist = shot_histogram(&s, &mut stream_rng(5000, j as u64, lo_side as u64), 4000);
+            assert_poisson_fit(&hist, switch, &format!("dense switch {}", s.strategy()));
+        }
     }
     // Sparse total table ↔ rand_distr::Poisson: 64 bins with Σλ just around TOTAL_TABLE_MAX.
     for (j, f) in [1.0 - eps, 1.0 + eps].into_iter().enumerate() {
@@ -358,7 +399,7 @@ fn continuity_at_switch_points() {
     }
     // Auto split: find the λ where a uniform vector of 100 bins flips from sparse to dense.
     let kind = |l: f64| ShotSampler::new(&[l; 100]).strategy().kind;
-    let (mut lo, mut hi) = (1e-3, DENSE_TABLE_MAX);
+    let (mut lo, mut hi) = (1e-3, 30.0);
     assert_eq!(kind(lo), StrategyKind::Sparse);
     assert_ne!(kind(hi), StrategyKind::Sparse);
     for _ in 0..60 {

@@ -52,6 +52,19 @@ impl ResolvedMethod {
             ResolvedMethod::AggregateNormal { .. } => "aggregate-normal",
         }
     }
+
+    /// The method a file's `method` attribute names (`threshold`: its
+    /// `normal_approximation_threshold`, for `aggregate-normal`).
+    pub fn from_name(name: &str, threshold: Option<f64>) -> Option<Self> {
+        match (name, threshold) {
+            ("shot", _) => Some(ResolvedMethod::Shot),
+            ("aggregate", _) => Some(ResolvedMethod::Aggregate),
+            ("aggregate-normal", Some(threshold)) => {
+                Some(ResolvedMethod::AggregateNormal { threshold })
+            }
+            _ => None,
+        }
+    }
 }
 
 /// Approximate cost of one profile by each method, ns (constants measured in
@@ -161,8 +174,11 @@ pub struct RunOptions {
     pub components: Option<bool>,
     /// Show a progress bar (on a terminal only).
     pub progress: bool,
-    /// The command line, recorded in the file's `history`.
+    /// The command line, recorded in the file's `history`
+    /// ([`content::history_command`] says which arguments it keeps).
     pub command_line: String,
+    /// Write this shard of the run only (`--shard K/N`, [`crate::shard`]).
+    pub shard: Option<crate::shard::Shard>,
 }
 
 /// What a run did, for the closing summary.
@@ -172,6 +188,8 @@ pub struct RunSummary {
     pub output: PathBuf,
     /// Profiles written.
     pub profiles: usize,
+    /// With `--shard`: the shard, the profiles it wrote and the run's profiles.
+    pub shard: Option<(crate::shard::Shard, std::ops::Range<usize>, usize)>,
     /// Bins per profile.
     pub bins: usize,
     /// Shots per profile.
@@ -194,9 +212,17 @@ impl std::fmt::Display for RunSummary {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let shot_bins = self.profiles as f64 * self.shots_per_profile as f64 * self.bins as f64;
         let rate = |d: Duration| shot_bins / d.as_secs_f64().max(1e-9);
+        let shard = match &self.shard {
+            Some((s, rows, of)) if !rows.is_empty() => format!(
+                " (shard {s}: profiles {}–{} of {of})",
+                rows.start,
+                rows.end - 1
+            ),
+            _ => String::new(),
+        };
         write!(
             f,
-            "Wrote {}: {} profiles × {} bins, {} shots per profile, {} counts in all; method {}, seed {}. \
+            "Wrote {}{shard}: {} profiles × {} bins, {} shots per profile, {} counts in all; method {}, seed {}. \
              {:.3} s in all ({:.3e} shot-bins/s), of which drawing {:.3} s ({:.3e} shot-bins/s).",
             self.output.display(),
             self.profiles,
@@ -269,8 +295,8 @@ impl RunEnergy {
 /// The sampler of one stream of counts (the total, or one component), built once per run.
 #[derive(Debug, Clone)]
 pub enum StreamSampler {
-    /// One Poisson(M·λ) draw per bin.
-    Aggregate(Vec<f64>),
+    /// One Poisson(M·λ) draw per bin, every bin's sampler built once.
+    Aggregate(sampling::AggregateSampler),
     /// One Poisson draw per bin of mean `(Σ_s f_s)·λ_sig + M·λ_rest`: exact given the
     /// profile's emitted energies, which are drawn first (M factors, no photons).
     AggregateEnergy {
@@ -315,7 +341,9 @@ impl StreamSampler {
         };
         let constant = energy.law.is_constant();
         match method {
-            ResolvedMethod::Aggregate if constant => StreamSampler::Aggregate(total()),
+            ResolvedMethod::Aggregate if constant => {
+                StreamSampler::Aggregate(sampling::AggregateSampler::new(&total()))
+            }
             ResolvedMethod::Aggregate | ResolvedMethod::AggregateNormal { .. } if !constant => {
                 StreamSampler::AggregateEnergy {
                     signal: signal.to_vec(),
@@ -350,8 +378,8 @@ impl StreamSampler {
     /// so any profile can be regenerated alone.
     pub fn profile_counts(&self, seed: u64, profile: u64, shots: u64, acc: &mut [u64]) {
         match self {
-            StreamSampler::Aggregate(l) => {
-                sampling::aggregate_profile(l, seed, profile, shots, acc)
+            StreamSampler::Aggregate(a) => {
+                sampling::aggregate_profile_fixed(a, seed, profile, shots, acc)
             }
             StreamSampler::AggregateEnergy {
                 signal,
@@ -459,15 +487,35 @@ pub fn run_energy(lidar: &Lidar, seed: u64, duration_s: f64) -> Result<RunEnergy
     })
 }
 
-/// Runs the Monte Carlo of every channel of `lidar` and writes the raw file as output
-/// `raw` of `outputs` (the command's output set, committed here when the file is complete).
-pub fn run(
-    lidar: &Lidar,
-    opts: &RunOptions,
-    outputs: Outputs,
-    raw: OutputId,
-) -> Result<RunSummary> {
-    let start = Instant::now();
+/// What a run is before any count is drawn: the resolved seed, method, model and scene,
+/// and the raw file of the whole run. `simulate` draws from it; `merge`
+/// ([`crate::shard::merge`]) builds it again from a shard's stored config, so that both
+/// write the same file.
+pub struct RunPlan {
+    /// Seed of the counts.
+    pub seed: u64,
+    /// Profiles of the whole run.
+    pub profiles: usize,
+    /// Component-resolved counts.
+    pub components: bool,
+    /// The method used.
+    pub method: ResolvedMethod,
+    /// Every channel's per-shot expectations (the scene's first column).
+    pub expected: Vec<ExpectedProfile>,
+    /// The emitted energies.
+    pub energy: RunEnergy,
+    /// The scene model where the scene changes along the track.
+    pub scene: Option<scene::SceneModel>,
+    /// Per-shot means of every bin of every channel.
+    pub totals: Vec<f64>,
+    /// The raw file of the whole run.
+    pub spec: RawFileSpec,
+}
+
+/// Resolves a run's options against its config and builds everything but the counts.
+/// `resolved` is the method of a run already drawn (`merge`, from the shards' `method`);
+/// `None` resolves `opts.method` (and `auto`'s tolerance) as `simulate` does.
+pub fn plan(lidar: &Lidar, opts: &RunOptions, resolved: Option<ResolvedMethod>) -> Result<RunPlan> {
     let first = lidar.first();
     let cfg = &first.loaded.config;
     let seed = opts.seed.unwrap_or(cfg.simulation.seed);
@@ -479,13 +527,16 @@ pub fn run(
     let requested = opts.method.unwrap_or(cfg.simulation.method);
     let tolerance = opts.tolerance.or(cfg.simulation.tolerance);
     check_detector(lidar, components)?;
-    let mut method = resolve_method(requested, lidar)?;
+    let mut method = match resolved {
+        Some(m) => m,
+        None => resolve_method(requested, lidar)?,
+    };
     let expected = lidar.expected()?;
     let shots = first.shots_per_profile();
     let profile_time_s = shots as f64 / first.instrument.rep_rate_hz;
     let energy = run_energy(lidar, seed, profiles as f64 * profile_time_s)?;
     let totals: Vec<f64> = expected.iter().flat_map(|e| e.total_per_shot()).collect();
-    if let Some(t) = tolerance {
+    if let (Some(t), None) = (tolerance, resolved) {
         if requested != Method::Auto {
             return Err(Error::Unsupported(format!(
                 "--tolerance chooses among methods: use it with --method auto, not {}",
@@ -495,9 +546,7 @@ pub fn run(
         let approximable = method == ResolvedMethod::Aggregate && energy.law.is_constant();
         method = fastest_within_totals(t, &totals, shots, approximable);
     }
-    let n_bins = first.geometry.n_bins;
     let scene = changing_scene(lidar, seed, profiles, &mut method, components, &energy)?;
-    check_sizes(&totals, method, shots, profiles, components, opts)?;
     let spec = raw_file_spec(
         lidar,
         &expected,
@@ -510,6 +559,56 @@ pub fn run(
         opts,
         scene.as_ref(),
     )?;
+    Ok(RunPlan {
+        seed,
+        profiles,
+        components,
+        method,
+        expected,
+        energy,
+        scene,
+        totals,
+        spec,
+    })
+}
+
+/// Runs the Monte Carlo of every channel of `lidar` and writes the raw file as output
+/// `raw` of `outputs` (the command's output set, committed here when the file is complete):
+/// the whole run, or with [`RunOptions::shard`] that shard's profiles only
+/// ([`crate::shard`]).
+pub fn run(
+    lidar: &Lidar,
+    opts: &RunOptions,
+    outputs: Outputs,
+    raw: OutputId,
+) -> Result<RunSummary> {
+    let start = Instant::now();
+    let first = lidar.first();
+    let cfg = &first.loaded.config;
+    let RunPlan {
+        seed,
+        profiles,
+        components,
+        method,
+        expected,
+        energy,
+        scene,
+        totals,
+        spec,
+    } = plan(lidar, opts, None)?;
+    let shots = first.shots_per_profile();
+    let profile_time_s = shots as f64 / first.instrument.rep_rate_hz;
+    let n_bins = first.geometry.n_bins;
+    // --- shards: this process writes `rows` of the run (all of them without --shard)
+    let (rows, spec) = match opts.shard {
+        Some(shard) => {
+            let rows = shard.rows_of(profiles, "profiles")?;
+            let spec = crate::shard::shard_spec(spec, shard, rows.clone());
+            (rows, spec)
+        }
+        None => (0..profiles, spec),
+    };
+    check_sizes(&totals, method, shots, rows.len(), components, opts)?;
     let mut writer = RawFileWriter::create(outputs.temp_path(raw)?, &opts.output, &spec)?;
     let orbit = orbit_of(lidar)?;
 
@@ -524,7 +623,7 @@ pub fn run(
         })
         .collect();
     let nominal_energy_j = cfg.instrument.pulse_energy_j;
-    let progress = progress_bar(opts.progress, profiles);
+    let progress = progress_bar(opts.progress, rows.len());
     let streams = channels.len() * channels[0].len();
     // batch size: bounded memory (at most 32 MiB of counts) and a lively progress bar
     let batch = ((4 << 20) / (n_bins * streams).max(1)).clamp(1, 64);
@@ -534,18 +633,28 @@ pub fn run(
     // runs on the same pool): the writer gets the profiles in order whatever the thread
     // count, so the file's bytes do not depend on it.
     let draw_batch = |first_profile: usize| {
-        let last = (first_profile + batch).min(profiles);
+        let last = (first_profile + batch).min(rows.end);
         let draw_start = Instant::now();
-        let drawn: Vec<DrawnProfile> = (first_profile..last)
+        let n_channels = lidar.channels.len();
+        let mut drawn: Vec<(DrawnProfile, Vec<f64>)> = (first_profile..last)
             .into_par_iter()
             .map(|p| match &scene {
-                Some(sc) => {
-                    draw_scene_profile(sc, seed, lidar.channels.len(), p as u64, n_bins, &energy)
-                }
-                None => draw_profile(&channels, p as u64, shots, n_bins, components, &energy),
+                Some(sc) => draw_scene_counts(sc, seed, n_channels, p as u64, n_bins, &energy),
+                None => (
+                    draw_profile(&channels, p as u64, shots, n_bins, components, &energy),
+                    Vec::new(),
+                ),
             })
             .collect();
-        (first_profile, drawn, draw_start.elapsed())
+        let took = draw_start.elapsed();
+        // the truth of a changing scene's profiles (the model, not the draw)
+        if let Some(sc) = &scene {
+            drawn.par_iter_mut().enumerate().for_each(|(k, (d, bkg))| {
+                d.values = scene_profile_values(sc, (first_profile + k) as u64, n_bins, bkg);
+            });
+        }
+        let drawn: Vec<DrawnProfile> = drawn.into_iter().map(|(d, _)| d).collect();
+        (first_profile, drawn, took)
     };
     let mut write_batch = |(first_profile, drawn, took): (usize, Vec<DrawnProfile>, Duration)| {
         drawing += took;
@@ -563,7 +672,7 @@ pub fn run(
                 .chain(place.iter().flat_map(|p| p.iter().map(|v| &v[..])))
                 .collect();
             writer.write_profile(&ProfileRecord {
-                index,
+                index: index - rows.start,
                 time_s: index as f64 * profile_time_s + 0.5 * profile_time_s,
                 n_shots: shots,
                 pulse_energy_j: nominal_energy_j * d.energy_sum / shots as f64,
@@ -579,7 +688,7 @@ pub fn run(
         Ok::<(), Error>(())
     };
     let mut pending = None;
-    for first_profile in (0..profiles).step_by(batch) {
+    for first_profile in rows.clone().step_by(batch) {
         let (drawn, written) = rayon::join(
             || draw_batch(first_profile),
             || pending.take().map_or(Ok(()), &mut write_batch),
@@ -595,7 +704,8 @@ pub fn run(
     progress.finish_and_clear();
     Ok(RunSummary {
         output: opts.output.clone(),
-        profiles,
+        profiles: rows.len(),
+        shard: opts.shard.map(|s| (s, rows, profiles)),
         bins: n_bins,
         shots_per_profile: shots,
         total_counts,
@@ -654,18 +764,10 @@ pub fn changing_scene(
             "--components is not available for a scene that changes along the track yet".into(),
         ));
     }
-    if *method == ResolvedMethod::Shot && !energy.law.is_constant() {
-        return Err(Error::Unsupported(
-            "a scene that changes along the track is drawn shot by shot with a constant pulse \
-             energy only (this version); use --method aggregate, or set \
-             instrument.pulse_energy_jitter = 0 and no energy_drift"
-                .into(),
-        ));
-    }
     if matches!(method, ResolvedMethod::AggregateNormal { .. }) {
         *method = ResolvedMethod::Aggregate;
     }
-    scene::SceneModel::new(lidar, seed, profiles as u64, *method).map(Some)
+    scene::SceneModel::new(lidar, seed, profiles as u64, *method, *energy).map(Some)
 }
 
 /// Draws profile `p` of a changing scene, every channel, with the profile's truth.
@@ -677,58 +779,87 @@ pub fn draw_scene_profile(
     n_bins: usize,
     energy: &RunEnergy,
 ) -> DrawnProfile {
+    let (mut drawn, mean_backgrounds) = draw_scene_counts(sc, seed, channels, p, n_bins, energy);
+    drawn.values = scene_profile_values(sc, p, n_bins, &mean_backgrounds);
+    drawn
+}
+
+/// Draws the counts of profile `p` of a changing scene, every channel (no truth yet:
+/// [`scene_profile_values`]); also returns each channel's mean background per shot.
+pub fn draw_scene_counts(
+    sc: &scene::SceneModel,
+    seed: u64,
+    channels: usize,
+    p: u64,
+    n_bins: usize,
+    energy: &RunEnergy,
+) -> (DrawnProfile, Vec<f64>) {
     let runs = sc.runs(p);
     let shots = runs.iter().map(|r| r.1).sum::<u64>();
-    let sums = scene::run_energy_sums(energy, p, shots, &runs);
+    let energies = scene::ProfileEnergies::new(energy, p, shots);
     let mut counts = vec![0u64; channels * n_bins];
-    let mut background = Vec::with_capacity(channels * n_bins);
+    let mut mean_backgrounds = Vec::with_capacity(channels);
     for (k, acc) in counts.chunks_mut(n_bins).enumerate() {
         let bkg = sc.run_backgrounds(k, p, &runs);
-        sc.draw(k, channel_seed(seed, k), p, &runs, &sums, &bkg, acc);
-        let mean: f64 = runs
-            .iter()
-            .zip(&bkg)
-            .map(|(r, b)| r.1 as f64 * b)
-            .sum::<f64>()
-            / shots as f64;
-        background.extend(std::iter::repeat_n(mean, n_bins));
+        sc.draw(k, channel_seed(seed, k), p, &runs, &energies, &bkg, acc);
+        let total: f64 = runs.iter().zip(&bkg).map(|(r, b)| r.1 as f64 * b).sum();
+        mean_backgrounds.push(total / shots as f64);
     }
+    let drawn = DrawnProfile {
+        counts,
+        components: None,
+        energy_sum: energies.run_sums(&runs).iter().sum(),
+        values: Vec::new(),
+    };
+    (drawn, mean_backgrounds)
+}
+
+/// The rows of profile `p`'s per-profile variables in a changing scene, channel-major:
+/// expected signal, background, recorded counts, Eq. 4 S/N and attenuated backscatter
+/// (what the profile's shots saw on average); `mean_backgrounds` per channel as
+/// [`draw_scene_counts`] returns them.
+pub fn scene_profile_values(
+    sc: &scene::SceneModel,
+    p: u64,
+    n_bins: usize,
+    mean_backgrounds: &[f64],
+) -> Vec<Vec<f64>> {
+    let runs = sc.runs(p);
+    let shots = runs.iter().map(|r| r.1).sum::<u64>() as f64;
     let mut truth = sc.truth(&runs);
+    let dark = |k: usize| sc.expected[runs[0].0][k].dark;
     if sc.is_solar() {
         // an ideal detector records what arrives; a dead-time one its stationary rate per
         // bin (the transient at a sharp edge, O(τ/Δt), is not in this truth)
-        for (i, recorded) in truth.recorded.iter_mut().enumerate() {
-            let k = i / n_bins;
-            let arriving = truth.signal[i] + background[i] + sc.expected[runs[0].0][k].dark;
-            *recorded = match &sc.dead[k] {
-                Some(d) => d.stationary_rate(arriving / d.bin_width_s) * d.bin_width_s,
-                None => arriving,
-            };
+        for (k, recorded) in truth.recorded.chunks_mut(n_bins).enumerate() {
+            let signal = &truth.signal[k * n_bins..(k + 1) * n_bins];
+            for (r, s) in recorded.iter_mut().zip(signal) {
+                let arriving = s + mean_backgrounds[k] + dark(k);
+                *r = match &sc.dead[k] {
+                    Some(d) => d.stationary_rate(arriving / d.bin_width_s) * d.bin_width_s,
+                    None => arriving,
+                };
+            }
         }
     }
-    let snr: Vec<f64> = (0..channels)
-        .flat_map(|k| {
-            let e = &sc.expected[runs[0].0][k];
-            let signal = &truth.signal[k * n_bins..(k + 1) * n_bins];
+    let mut background = Vec::with_capacity(truth.signal.len());
+    let mut snr = Vec::with_capacity(truth.signal.len());
+    for (k, signal) in truth.signal.chunks(n_bins).enumerate() {
+        let b = mean_backgrounds[k];
+        background.extend(std::iter::repeat_n(b, n_bins));
+        snr.extend(
             signal
                 .iter()
-                .zip(&background[k * n_bins..(k + 1) * n_bins])
-                .map(|(&s, &b)| crate::snr::eq4(s, b, e.dark, shots as f64))
-                .collect::<Vec<f64>>()
-        })
-        .collect();
-    DrawnProfile {
-        counts,
-        components: None,
-        energy_sum: sums.iter().sum(),
-        values: vec![
-            truth.signal,
-            background,
-            truth.recorded,
-            snr,
-            truth.attenuated_backscatter,
-        ],
+                .map(|&s| crate::snr::eq4(s, b, dark(k), shots)),
+        );
     }
+    vec![
+        truth.signal,
+        background,
+        truth.recorded,
+        snr,
+        truth.attenuated_backscatter,
+    ]
 }
 
 /// Draws profile `p` of every channel's streams.
@@ -740,35 +871,29 @@ pub fn draw_profile(
     components: bool,
     energy: &RunEnergy,
 ) -> DrawnProfile {
-    let per_channel: Vec<Vec<Vec<u64>>> = channels
-        .iter()
-        .map(|streams| {
-            streams
-                .iter()
-                .map(|(sampler, stream_seed)| {
-                    let mut acc = vec![0u64; n_bins];
-                    sampler.profile_counts(*stream_seed, p, shots, &mut acc);
-                    acc
-                })
-                .collect()
-        })
-        .collect();
-    let counts: Vec<u64> = per_channel
-        .iter()
-        .flat_map(|streams| (0..n_bins).map(move |i| streams.iter().map(|s| s[i]).sum::<u64>()))
-        .collect();
-    let components = components.then(|| {
-        std::array::from_fn(|c| {
-            per_channel
-                .iter()
-                .flat_map(|s| s[c].iter().copied())
-                .collect()
-        })
-    });
+    let len = channels.len() * n_bins;
+    let mut counts = vec![0u64; len];
+    let mut parts: Option<[Vec<u64>; 3]> =
+        components.then(|| std::array::from_fn(|_| vec![0; len]));
+    for (k, streams) in channels.iter().enumerate() {
+        let bins = k * n_bins..(k + 1) * n_bins;
+        for (c, (sampler, stream_seed)) in streams.iter().enumerate() {
+            match parts.as_mut() {
+                // component c of channel k, added into the channel's counts too
+                Some(parts) => {
+                    let part = &mut parts[c][bins.clone()];
+                    sampler.profile_counts(*stream_seed, p, shots, part);
+                    let acc = &mut counts[bins.clone()];
+                    acc.iter_mut().zip(part.iter()).for_each(|(a, x)| *a += x);
+                }
+                None => sampler.profile_counts(*stream_seed, p, shots, &mut counts[bins.clone()]),
+            }
+        }
+    }
     let energy_seed = energy.seed.unwrap_or_default();
     DrawnProfile {
         counts,
-        components,
+        components: parts,
         energy_sum: energy.law.profile_sum(energy_seed, p, shots),
         values: Vec::new(),
     }
@@ -827,6 +952,7 @@ fn raw_file_spec(
     Ok(RawFileSpec {
         n_bins: first.geometry.n_bins,
         n_profiles: profiles,
+        first_profile: 0,
         channels: lidar.channel_names(),
         count_width: CountWidth::for_max_count(max_mean)?,
         components,

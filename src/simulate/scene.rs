@@ -34,10 +34,15 @@ const COLUMN_BYTES_PER_BIN: f64 = 200.0;
 /// Seed offset of a solar background's stream.
 const SKY_STREAM: u64 = 0x5C7B_ACC6_0000_0001;
 
-/// Adds background counts of mean `per_bin` in every bin of `acc` (the run's shots
-/// together): the total `N ~ Poisson(per_bin·bins)` placed uniformly (a multinomial
-/// split of a Poisson total is independent Poissons), each by the multiply-shift map of a
-/// 64-bit uniform (bias ≤ bins/2⁶⁴). Cost O(N + 1).
+/// Adds background counts of mean `per_bin` in every bin of `sink` (the run's shots
+/// together), exactly, by the cheaper of two ways (`sampling::cost`):
+///
+/// * sparse (`per_bin` below [`BACKGROUND_PER_BIN_DENSE`]): the total
+///   `N ~ Poisson(per_bin·bins)` placed uniformly (a multinomial split of a Poisson total
+///   is independent Poissons), each count by the multiply-shift map of a 64-bit uniform
+///   (bias ≤ bins/2⁶⁴); O(N + 1);
+/// * dense: one draw per bin from an alias table over the Poisson(`per_bin`) PMF
+///   ([`sampling::PmfAlias`], built once per call, shared by every bin); O(bins).
 fn add_background<R: rand::Rng, S: CountSink + ?Sized>(
     rng: &mut R,
     per_bin: f64,
@@ -48,13 +53,24 @@ fn add_background<R: rand::Rng, S: CountSink + ?Sized>(
     if total <= 0.0 {
         return;
     }
-    let n =
-        rand_distr::Poisson::new(total).map_or(0.0, |d| rand_distr::Distribution::sample(&d, rng));
-    for _ in 0..n as u64 {
+    if (BACKGROUND_PER_BIN_DENSE..=sampling::DENSE_ALIAS_MAX).contains(&per_bin) {
+        let table = sampling::PmfAlias::new(per_bin);
+        for bin in 0..bins {
+            sink.add_any(bin, table.count_for(rng.next_u64()));
+        }
+        return;
+    }
+    let n = sampling::poisson_u64(rng, total);
+    for _ in 0..n {
         let bin = ((u128::from(rng.next_u64()) * bins as u128) >> 64) as usize;
         sink.add(bin, 1);
     }
 }
+
+/// Mean background counts per bin from which [`add_background`] draws every bin from a
+/// table rather than placing each count: a placement costs ~1.5 ns a count, a table
+/// draw ~2.4 ns a bin (`cargo run --release --example sampler_costs`).
+const BACKGROUND_PER_BIN_DENSE: f64 = 1.6;
 
 /// Run `j` of a solar scene through a dead-time detector, shot by shot: each shot's
 /// signal and dark photons (the column's sampler) and its sunlit photons
@@ -173,7 +189,13 @@ pub struct ProfileTruth {
 impl SceneModel {
     /// Builds every column of `lidar`'s scene for a run of `profiles` profiles drawn by
     /// `method` from `seed`.
-    pub fn new(lidar: &Lidar, seed: u64, profiles: u64, method: ResolvedMethod) -> Result<Self> {
+    pub fn new(
+        lidar: &Lidar,
+        seed: u64,
+        profiles: u64,
+        method: ResolvedMethod,
+        energy: RunEnergy,
+    ) -> Result<Self> {
         let first = lidar.first();
         let shots = first.shots_per_profile();
         // a curtain file is the same scene as its segments
@@ -228,8 +250,13 @@ impl SceneModel {
                             // a solar background is placed per run ([`add_background`])
                             let sky = if solar { 0.0 } else { e.background };
                             let rest = vec![sky + e.dark; e.n_bins()];
-                            StreamSampler::new(ResolvedMethod::Shot, &e.signal, &rest, 0.0)
-                                .through_detector(c.instrument.dead_time)
+                            StreamSampler::with_energy(
+                                ResolvedMethod::Shot,
+                                &e.signal,
+                                &rest,
+                                energy,
+                            )
+                            .through_detector(c.instrument.dead_time)
                         })
                         .collect(),
                 );
@@ -337,7 +364,8 @@ impl SceneModel {
     }
 
     /// Draws channel `channel` of profile `p` into `acc`; `backgrounds` are the runs'
-    /// background counts per shot per bin ([`run_backgrounds`](Self::run_backgrounds)).
+    /// background counts per shot per bin ([`run_backgrounds`](Self::run_backgrounds)),
+    /// `energies` the profile's pulse energies ([`ProfileEnergies`]).
     #[allow(clippy::too_many_arguments)]
     pub fn draw(
         &self,
@@ -345,7 +373,7 @@ impl SceneModel {
         seed: u64,
         p: u64,
         runs: &[(usize, u64)],
-        energy_sums: &[f64],
+        energies: &ProfileEnergies,
         backgrounds: &[f64],
         acc: &mut [u64],
     ) {
@@ -359,7 +387,7 @@ impl SceneModel {
                     .map(|(r, b)| r.1 as f64 / m * b)
                     .sum::<f64>();
             let mut lambda = vec![rest; acc.len()];
-            for (&(col, _), &f) in runs.iter().zip(energy_sums) {
+            for (&(col, _), f) in runs.iter().zip(energies.run_sums(runs)) {
                 let signal = &self.expected[col][channel].signal;
                 lambda
                     .iter_mut()
@@ -368,21 +396,13 @@ impl SceneModel {
             }
             sampling::aggregate_profile(&lambda, seed, p, self.shots, acc);
         } else {
+            let mut first = 0usize;
             for (j, &(col, n)) in runs.iter().enumerate() {
+                let sky = self.sunlight.as_ref().map(|_| backgrounds[j]);
+                let factors = energies.run(first, n);
+                first += n as usize;
                 let sampler = &self.samplers[col][channel];
-                match (&self.sunlight, sampler) {
-                    (Some(_), StreamSampler::DeadTimed(photons, dead)) => {
-                        let s = run_seed(seed, j);
-                        sunlit_dead_time_run(photons, dead, backgrounds[j], s, p, n, acc);
-                    }
-                    (Some(_), _) => {
-                        sampler.profile_counts(run_seed(seed, j), p, n, acc);
-                        let mut rng = sampling::stream_rng(run_seed(seed, j) ^ SKY_STREAM, p, 0);
-                        let bins = acc.len();
-                        add_background(&mut rng, n as f64 * backgrounds[j], bins, acc);
-                    }
-                    (None, _) => sampler.profile_counts(run_seed(seed, j), p, n, acc),
-                }
+                draw_run(sampler, run_seed(seed, j), p, n, factors, sky, acc);
             }
         }
     }
@@ -390,50 +410,121 @@ impl SceneModel {
     /// What profile `p`'s shots saw on average, every channel.
     pub fn truth(&self, runs: &[(usize, u64)]) -> ProfileTruth {
         let m = self.shots as f64;
-        let average = |f: fn(&ExpectedProfile) -> &Vec<f64>| -> Vec<f64> {
-            let channels = self.expected[0].len();
-            (0..channels)
-                .flat_map(|c| {
-                    let mut v = vec![0.0; self.expected[0][c].n_bins()];
-                    for &(col, n) in runs {
-                        let x = f(&self.expected[col][c]);
-                        v.iter_mut()
-                            .zip(x)
-                            .for_each(|(a, b)| *a += n as f64 / m * b);
-                    }
-                    v
-                })
-                .collect()
+        let channels = self.expected[0].len();
+        let n = self.expected[0][0].n_bins();
+        let mut t = ProfileTruth {
+            signal: vec![0.0; channels * n],
+            recorded: vec![0.0; channels * n],
+            attenuated_backscatter: vec![0.0; channels * n],
         };
-        ProfileTruth {
-            signal: average(|e| &e.signal),
-            recorded: average(|e| &e.recorded),
-            attenuated_backscatter: average(|e| &e.attenuated_backscatter),
+        for c in 0..channels {
+            let bins = c * n..(c + 1) * n;
+            for &(col, shots) in runs {
+                let (w, e) = (shots as f64 / m, &self.expected[col][c]);
+                add_scaled(&mut t.signal[bins.clone()], &e.signal, w);
+                add_scaled(&mut t.recorded[bins.clone()], &e.recorded, w);
+                add_scaled(
+                    &mut t.attenuated_backscatter[bins.clone()],
+                    &e.attenuated_backscatter,
+                    w,
+                );
+            }
         }
+        t
     }
 }
 
-/// The summed energy factors of each run of profile `p` (the shot counts at constant
-/// energy): the factors of the profile's blocks, cut at the runs' boundaries.
-pub fn run_energy_sums(energy: &RunEnergy, p: u64, shots: u64, runs: &[(usize, u64)]) -> Vec<f64> {
-    if energy.law.is_constant() {
-        return runs.iter().map(|r| r.1 as f64).collect();
+/// `dst += w·src`, element by element.
+fn add_scaled(dst: &mut [f64], src: &[f64], w: f64) {
+    dst.iter_mut().zip(src).for_each(|(d, s)| *d += w * s);
+}
+
+/// The pulse energies of one profile's shots, relative to the nominal energy: none drawn
+/// at constant energy (every factor 1), else the profile's factors in shot order, cut
+/// at the runs' boundaries by [`run`](Self::run) and [`run_sums`](Self::run_sums).
+pub struct ProfileEnergies(Option<Vec<f64>>);
+
+impl ProfileEnergies {
+    /// The energies of profile `p` of `shots` shots: the factors of its blocks.
+    pub fn new(energy: &RunEnergy, p: u64, shots: u64) -> Self {
+        if energy.law.is_constant() {
+            return ProfileEnergies(None);
+        }
+        let seed = energy.seed.unwrap_or_default();
+        let mut factors = Vec::with_capacity(shots as usize);
+        let mut block = Vec::new();
+        for b in 0..shots.div_ceil(SHOT_BLOCK) {
+            energy.law.block_factors(seed, p, shots, b, &mut block);
+            factors.extend_from_slice(&block);
+        }
+        ProfileEnergies(Some(factors))
     }
-    let seed = energy.seed.unwrap_or_default();
-    let mut factors = Vec::with_capacity(shots as usize);
-    let mut block = Vec::new();
-    for b in 0..shots.div_ceil(SHOT_BLOCK) {
-        energy.law.block_factors(seed, p, shots, b, &mut block);
-        factors.extend_from_slice(&block);
+
+    /// The factors of the `n` shots from shot `first` on (`None` at constant energy).
+    pub fn run(&self, first: usize, n: u64) -> Option<&[f64]> {
+        self.0.as_ref().map(|f| &f[first..first + n as usize])
     }
-    let mut start = 0usize;
-    runs.iter()
-        .map(|&(_, n)| {
-            let sum = factors[start..start + n as usize].iter().sum();
-            start += n as usize;
-            sum
-        })
-        .collect()
+
+    /// The summed factors of each run (the shot counts at constant energy).
+    pub fn run_sums(&self, runs: &[(usize, u64)]) -> Vec<f64> {
+        let mut first = 0usize;
+        runs.iter()
+            .map(|&(_, n)| {
+                let sum = self.run(first, n).map_or(n as f64, |f| f.iter().sum());
+                first += n as usize;
+                sum
+            })
+            .collect()
+    }
+}
+
+/// Draws one run of `n` shots of one column and channel into `acc`, from `seed` (the
+/// run's) and its streams: the column's shot sampler (its pulse energies `factors` where
+/// they vary), and, under the sun, `sky` background counts per shot per bin: placed into
+/// each shot before a dead-time detector records it, else added for the whole run.
+fn draw_run(
+    sampler: &StreamSampler,
+    seed: u64,
+    p: u64,
+    n: u64,
+    factors: Option<&[f64]>,
+    sky: Option<f64>,
+    acc: &mut [u64],
+) {
+    let bins = acc.len();
+    let mut sky_rng = sampling::stream_rng(seed ^ SKY_STREAM, p, 0);
+    let per_shot_sky = match sampler {
+        StreamSampler::DeadTimed(photons, dead) => {
+            if let Some(b) = sky {
+                return sunlit_dead_time_run(photons, dead, b, seed, p, n, acc);
+            }
+            sampler.profile_counts(seed, p, n, acc);
+            false
+        }
+        StreamSampler::Modulated(m) => {
+            let factors = factors.expect("a modulated sampler draws with the run's energies");
+            match sky.filter(|_| m.has_detector()) {
+                Some(b) => {
+                    let mut add_sky = |shot: &mut ShotCounts| {
+                        add_background(&mut sky_rng, b, bins, shot);
+                    };
+                    m.add_run(seed, p, factors, acc, &mut add_sky);
+                    true
+                }
+                None => {
+                    m.add_run(seed, p, factors, acc, &mut |_| {});
+                    false
+                }
+            }
+        }
+        _ => {
+            sampler.profile_counts(seed, p, n, acc);
+            false
+        }
+    };
+    if let (Some(b), false) = (sky, per_shot_sky) {
+        add_background(&mut sky_rng, n as f64 * b, bins, acc);
+    }
 }
 
 /// The config with its curtain file, if any, turned into segments.

@@ -30,21 +30,23 @@
 //! Eight checks at 2.5·10⁻⁴ give an overall false-alarm rate below 2·10⁻³.
 
 use std::io::Write;
-use std::path::PathBuf;
 
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, DiscreteCDF, Normal, Poisson};
 
-use crate::config::Method;
 use crate::detector::DeadTime;
-use crate::error::{Error, Result};
 use crate::laser::PulseEnergy;
 use crate::scenario::{ExpectedProfile, Lidar};
 use crate::simulate::{self, ResolvedMethod, RunEnergy, StreamSampler};
 
 pub mod calibration;
+pub mod exact;
+pub mod partial;
+mod run;
 pub mod scene;
+
+pub use run::{Sums, ValidateOptions, Validation, run};
 
 pub use calibration::{BIN_INTERVAL, CHECK_LEVEL, Check, check};
 use calibration::{Shape, check_calibrated};
@@ -121,34 +123,75 @@ pub fn snr_standard_error(m: f64, mu2: f64, mu3: f64, mu4: f64, n: f64) -> f64 {
     v.max(0.0).sqrt()
 }
 
-/// Streaming sums of one bin over the realizations.
-#[derive(Debug, Clone, Default)]
-struct BinSums {
+/// Exact sums of one bin over realizations: of the count `c`, and of `u = n_b·c − B`
+/// where `B` sums the channel's `n_b` signal-free bins of the same profile (the
+/// estimated-background count is `y = c − B/n_b = u/n_b`). Integers, so that sums over
+/// shards add up to the single run's exactly ([`exact`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct BinSums {
+    /// Σc.
+    #[serde(with = "exact::decimal")]
     total: u128,
-    x: Welford,
-    y: Welford,
+    /// Σc².
+    #[serde(with = "exact::decimal")]
+    squares: u128,
+    /// Σu.
+    #[serde(with = "exact::decimal")]
+    u: i128,
+    /// Σu².
+    #[serde(with = "exact::decimal")]
+    u_squares: u128,
 }
 
-/// Welford's running mean and variance (numerically stable for counts up to 1e15).
-#[derive(Debug, Clone, Copy, Default)]
-struct Welford {
-    n: f64,
-    mean: f64,
-    m2: f64,
-}
-
-impl Welford {
-    fn push(&mut self, v: f64) {
-        self.n += 1.0;
-        let d = v - self.mean;
-        self.mean += d / self.n;
-        self.m2 += d * (v - self.mean);
+impl BinSums {
+    /// One realization's count `c` and background sum `b` over `n_b` bins.
+    fn push(&mut self, c: u64, b: u64, n_b: usize) {
+        let u = n_b as i128 * i128::from(c) - i128::from(b);
+        self.total += u128::from(c);
+        self.squares += u128::from(c) * u128::from(c);
+        self.u += u;
+        self.u_squares += u.unsigned_abs() * u.unsigned_abs();
     }
-    fn variance(&self) -> f64 {
-        if self.n > 1.0 {
-            self.m2 / (self.n - 1.0)
-        } else {
-            0.0
+
+    /// The sums of both.
+    fn add(&mut self, o: &BinSums) {
+        self.total += o.total;
+        self.squares += o.squares;
+        self.u += o.u;
+        self.u_squares += o.u_squares;
+    }
+}
+
+/// Mean and unbiased variance of a sample, from its exact sums.
+#[derive(Debug, Clone, Copy)]
+struct MeanVar {
+    mean: f64,
+    variance: f64,
+}
+
+impl MeanVar {
+    /// Of `n` values summing to `sum` with squares summing to `squares`, all divided by
+    /// `scale`: the variance `(n·Σx² − (Σx)²)/(n(n−1))` in exact integers where they fit.
+    fn of(n: usize, sum: i128, squares: u128, scale: f64) -> MeanVar {
+        let nf = n as f64;
+        let mean = sum as f64 / nf / scale;
+        if n < 2 {
+            return MeanVar {
+                mean,
+                variance: 0.0,
+            };
+        }
+        let exact = (n as u128)
+            .checked_mul(squares)
+            .zip(sum.unsigned_abs().checked_mul(sum.unsigned_abs()))
+            .and_then(|(a, b)| a.checked_sub(b));
+        let numerator = match exact {
+            Some(x) => x as f64,
+            None => (squares as f64 - (sum as f64) * (sum as f64) / nf) * nf,
+        };
+        MeanVar {
+            mean,
+            variance: numerator / (nf * (nf - 1.0)) / (scale * scale),
         }
     }
 }
@@ -314,46 +357,33 @@ impl ChannelBins {
     }
 }
 
-/// Draws `n` realizations from `source` and accumulates the per-bin sums (in a fixed
-/// order: the result does not depend on the thread count). The background estimate of
-/// a profile is, per channel, the mean of its own counts in the channel's signal-free
-/// bins (as a retrieval would take them from the file).
+/// Draws realizations `rows` from `source` and accumulates the per-bin sums (exact: the
+/// result does not depend on the thread count, nor on how the realizations are cut into
+/// shards). The background estimate of a profile is, per channel, the mean of its own
+/// counts in the channel's signal-free bins (as a retrieval would take them from the file).
 fn accumulate(
     source: &dyn RealizationSource,
-    n: usize,
+    rows: std::ops::Range<usize>,
     bins: usize,
     channels: &[ChannelBins],
 ) -> Vec<BinSums> {
     let mut sums = vec![BinSums::default(); bins];
     let batch = ((8 << 20) / bins.max(1)).clamp(1, 4096);
-    for first in (0..n).step_by(batch) {
-        let last = (first + batch).min(n);
-        let drawn: Vec<(Vec<u64>, Vec<f64>)> = (first..last)
+    for first in rows.clone().step_by(batch) {
+        let last = (first + batch).min(rows.end);
+        let drawn: Vec<Vec<u64>> = (first..last)
             .into_par_iter()
             .map(|p| {
                 let mut c = vec![0u64; bins];
                 source.draw(p as u64, &mut c);
-                let b_hat = channels
-                    .iter()
-                    .map(|ch| {
-                        if ch.background.is_empty() {
-                            0.0
-                        } else {
-                            ch.background.iter().map(|&i| c[i]).sum::<u64>() as f64
-                                / ch.background.len() as f64
-                        }
-                    })
-                    .collect();
-                (c, b_hat)
+                c
             })
             .collect();
-        for (c, b_hat) in &drawn {
-            for (ch, b) in channels.iter().zip(b_hat) {
+        for c in &drawn {
+            for ch in channels {
+                let b: u64 = ch.background.iter().map(|&i| c[i]).sum();
                 for i in ch.bins.clone() {
-                    let (s, v) = (&mut sums[i], c[i]);
-                    s.total += u128::from(v);
-                    s.x.push(v as f64);
-                    s.y.push(v as f64 - b);
+                    sums[i].push(c[i], b, ch.background.len());
                 }
             }
         }
@@ -414,15 +444,17 @@ fn bin_reports(
                 shape: None,
             };
             let (mu2, mu3, mu4) = central_moments(k2, k3, k4);
-            let variance = variance_stat(s, m, nf, enough);
-            let snr_known = snr_stat(&s.x, m, m.rest, (mu2, mu3, mu4), nf, enough);
+            let x = MeanVar::of(n, s.total as i128, s.squares, 1.0);
+            let variance = variance_stat(&x, m, nf, enough);
+            let snr_known = snr_stat(&x, m, m.rest, (mu2, mu3, mu4), nf, enough);
             // y = c − b̂: cumulants of c plus (−1)^n those of b̂ (mean of n_b Poisson(rest))
             let n_b = ch.background.len();
             let snr_est = if n_b > 0 && !ch.background.contains(&i) {
                 let nb = n_b as f64;
                 let (b2, b3, b4) = (m.rest / nb, -m.rest / (nb * nb), m.rest / (nb * nb * nb));
                 let y = central_moments(k2 + b2, k3 + b3, k4 + b4);
-                snr_stat(&s.y, m, 0.0, y, nf, enough)
+                let sample = MeanVar::of(n, s.u, s.u_squares, nb);
+                snr_stat(&sample, m, 0.0, y, nf, enough)
             } else {
                 Stat {
                     empirical: f64::NAN,
@@ -446,7 +478,7 @@ fn bin_reports(
 
 /// The sample variance against κ2, with `Var(s²) = μ4/N − κ2²(N−3)/(N(N−1))` and its
 /// Edgeworth-calibrated interval; untested where the Edgeworth expansion is not trusted.
-fn variance_stat(s: &BinSums, m: &BinModel, nf: f64, enough: bool) -> Stat {
+fn variance_stat(x: &MeanVar, m: &BinModel, nf: f64, enough: bool) -> Stat {
     let [k1, k2, k3, k4] = m.cumulants;
     let (_, _, mu4) = central_moments(k2, k3, k4);
     let var_s2 = mu4 / nf - k2 * k2 * (nf - 3.0) / (nf * (nf - 1.0));
@@ -454,10 +486,9 @@ fn variance_stat(s: &BinSums, m: &BinModel, nf: f64, enough: bool) -> Stat {
     let (g1, g2) = calibration::sample_variance_shape(k1, nf, poisson);
     let shape = calibration::outside_probability(g1, g2);
     Stat {
-        empirical: s.x.variance(),
+        empirical: x.variance,
         model: k2,
-        z: (enough && var_s2 > 0.0 && shape.is_some())
-            .then(|| (s.x.variance() - k2) / var_s2.sqrt()),
+        z: (enough && var_s2 > 0.0 && shape.is_some()).then(|| (x.variance - k2) / var_s2.sqrt()),
         shape,
     }
 }
@@ -465,7 +496,7 @@ fn variance_stat(s: &BinSums, m: &BinModel, nf: f64, enough: bool) -> Stat {
 /// `w.mean − offset` over `w`'s sd against the model S/N `signal/√μ2`, corrected for the
 /// small-sample bias of `x̄/s` and with its delta-method variance so corrected.
 fn snr_stat(
-    w: &Welford,
+    w: &MeanVar,
     m: &BinModel,
     offset: f64,
     (mu2, mu3, mu4): (f64, f64, f64),
@@ -477,7 +508,7 @@ fn snr_stat(
     } else {
         0.0
     };
-    let sd = w.variance().sqrt();
+    let sd = w.variance.sqrt();
     let empirical = if sd > 0.0 {
         (w.mean - offset) / sd
     } else {
@@ -541,7 +572,7 @@ pub fn validate_channels(
     realizations: usize,
     channels: &[ChannelBins],
 ) -> (Vec<BinReport>, Vec<Check>) {
-    let sums = accumulate(source, realizations, models.len(), channels);
+    let sums = accumulate(source, 0..realizations, models.len(), channels);
     let bins = bin_reports(&sums, models, altitudes, realizations, channels);
     let checks = verdicts(&bins);
     (bins, checks)
@@ -564,146 +595,6 @@ fn verdicts(bins: &[BinReport]) -> Vec<Check> {
         verdict("snr_known_background", |b| &b.snr_known_background),
         verdict("snr_estimated_background", |b| &b.snr_estimated_background),
     ]
-}
-
-/// Options of `lidarsim validate`.
-#[derive(Debug, Clone)]
-pub struct ValidateOptions {
-    /// Profiles to draw.
-    pub realizations: usize,
-    /// Method (`simulation.method` when None).
-    pub method: Option<Method>,
-    /// Seed (`simulation.seed` when None).
-    pub seed: Option<u64>,
-    /// Write the full report as JSON.
-    pub json: Option<PathBuf>,
-}
-
-/// Runs the validation of every channel of a lidar.
-pub fn run(lidar: &Lidar, opts: &ValidateOptions) -> Result<Report> {
-    if opts.realizations < MIN_REALIZATIONS {
-        return Err(Error::Unsupported(format!(
-            "--realizations must be at least {MIN_REALIZATIONS}: fewer leave the verdicts' \
-             stated false-alarm rate (validation/README.md)"
-        )));
-    }
-    let first = lidar.first();
-    let cfg = &first.loaded.config;
-    if cfg.instrument.energy_drift.is_some() {
-        return Err(Error::config(
-            first.loaded.file_label(),
-            "instrument.energy_drift",
-            "makes every profile's law its own, and validate checks profiles of one law: \
-             validate the scene without the drift",
-        ));
-    }
-    let seed = opts.seed.unwrap_or(cfg.simulation.seed);
-    let mut method = simulate::resolve_method(opts.method.unwrap_or(cfg.simulation.method), lidar)?;
-    simulate::check_detector(lidar, false)?;
-    let energy = simulate::run_energy(lidar, seed, 0.0)?;
-    if let Some(sc) =
-        simulate::changing_scene(lidar, seed, opts.realizations, &mut method, false, &energy)?
-    {
-        return run_changing(lidar, opts, &sc, seed, method, &energy);
-    }
-    let expected = lidar.expected()?;
-    let shots = first.shots_per_profile();
-    let laser = PulseEnergy::from_config(&cfg.instrument);
-    let source = SimulatorSource::for_lidar(lidar, &expected, method, energy, seed);
-    let mut models = Vec::new();
-    let mut altitudes = Vec::new();
-    let mut channels = Vec::new();
-    for (c, e) in lidar.channels.iter().zip(&expected) {
-        let offset = models.len();
-        models.extend(match &c.instrument.dead_time {
-            Some(d) => recorded_bin_models(e, shots, d, &laser),
-            None => bin_models(e, shots, laser.jitter),
-        });
-        altitudes.extend_from_slice(&e.altitude_m);
-        channels.push(ChannelBins {
-            name: c.channel_name.clone(),
-            bins: offset..models.len(),
-            background: e
-                .background_bin_indices
-                .iter()
-                .map(|i| i + offset)
-                .collect(),
-        });
-    }
-    let totals: Vec<f64> = expected.iter().flat_map(|e| e.total_per_shot()).collect();
-    check_sizes(&totals, method, shots, opts.realizations)?;
-    let (bins, checks) =
-        validate_channels(&source, &models, &altitudes, opts.realizations, &channels);
-    let consistent = checks.iter().all(|c| c.pass);
-    Ok(Report {
-        scenario: cfg.name.clone(),
-        method: method.name().into(),
-        seed,
-        realizations: opts.realizations,
-        shots_per_profile: shots,
-        background_bins: expected[0].background_bins,
-        channels: lidar.channel_names(),
-        bins,
-        checks,
-        consistent,
-        warning: lidar.run_notes(&expected),
-    })
-}
-
-/// `validate` of a scene that changes along the track: each profile against its own
-/// expectation ([`scene`]); an ideal detector without jitter.
-fn run_changing(
-    lidar: &Lidar,
-    opts: &ValidateOptions,
-    sc: &simulate::scene::SceneModel,
-    seed: u64,
-    method: ResolvedMethod,
-    energy: &RunEnergy,
-) -> Result<Report> {
-    if lidar
-        .channels
-        .iter()
-        .any(|c| c.instrument.dead_time.is_some())
-        || !energy.law.is_constant()
-    {
-        return Err(Error::Unsupported(
-            "validate of a scene that changes along the track checks an ideal detector with a \
-             constant pulse energy (this version): set instrument.detector.dead_time_s = 0 and \
-             instrument.pulse_energy_jitter = 0"
-                .into(),
-        ));
-    }
-    let first = lidar.first();
-    let n_bins = first.geometry.n_bins;
-    let channels = lidar.channels.len();
-    let shots = first.shots_per_profile();
-    let names = lidar.channel_names();
-    let altitudes: Vec<f64> = (0..channels)
-        .flat_map(|_| (0..n_bins).map(|i| first.geometry.bin_centre_altitude_m(i)))
-        .collect();
-    let draw = |p: u64| {
-        let d = simulate::draw_scene_profile(sc, seed, channels, p, n_bins, energy);
-        let mu = d.values[simulate::RECORDED_ROW]
-            .iter()
-            .map(|x| x * shots as f64)
-            .collect();
-        (d.counts, mu)
-    };
-    let (bins, checks) = scene::validate_profiles(&draw, opts.realizations, &names, &altitudes);
-    let consistent = checks.iter().all(|c| c.pass);
-    Ok(Report {
-        scenario: first.loaded.config.name.clone(),
-        method: method.name().into(),
-        seed,
-        realizations: opts.realizations,
-        shots_per_profile: shots,
-        background_bins: 0,
-        channels: names,
-        bins,
-        checks,
-        consistent,
-        warning: None,
-    })
 }
 
 /// A table for a person: the verdicts, then the bins that fell outside their interval.
@@ -800,32 +691,4 @@ pub fn write_table(w: &mut dyn Write, r: &Report) -> std::io::Result<()> {
             "INCONSISTENT: at least one statistic departs from the model (false-alarm rate < 2e-3)."
         }
     )
-}
-
-/// Memory held per bin: the running sums and the report (measured order of magnitude).
-const BYTES_PER_BIN: f64 = 400.0;
-
-/// Refuses a validation whose memory cannot fit and announces a long one; `totals` are
-/// the per-shot means of every bin of every channel.
-fn check_sizes(totals: &[f64], method: ResolvedMethod, shots: u64, n: usize) -> Result<()> {
-    let bins = totals.len() as f64;
-    crate::resources::require_memory(
-        &format!("validating {} bins", crate::error::compact(bins)),
-        bins * BYTES_PER_BIN + (8 << 20) as f64 * 8.0,
-    )?;
-    let per_profile_ns = match method {
-        ResolvedMethod::Shot => {
-            crate::sampling::ShotSampler::new(totals)
-                .strategy()
-                .est_ns_per_shot
-                * shots as f64
-        }
-        _ => bins * 45.0,
-    } / rayon::current_num_threads().max(1) as f64
-        + bins * 20.0;
-    crate::resources::announce_duration(
-        &format!("validating {n} realizations of {} bins", totals.len()),
-        n as f64 * per_profile_ns * 1e-9,
-    );
-    Ok(())
 }

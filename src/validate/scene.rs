@@ -18,30 +18,55 @@
 //! count and Σz², each at level 2.5·10⁻⁴.
 
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
 use super::calibration;
+use super::exact::ExactSum;
 use super::{BinModel, BinReport, Check, MIN_TOTAL_COUNTS, Stat, mean_z, verdicts};
 
-/// Per-bin sums over the profiles.
-#[derive(Debug, Clone, Copy, Default)]
-struct Sums {
+/// Per-bin sums over the profiles: the count's exactly, the floating-point ones in
+/// [`ExactSum`]s, so that sums over shards add up to the single run's bit for bit.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Sums {
+    /// Σc.
+    #[serde(with = "super::exact::decimal")]
     total: u128,
-    mu: f64,
-    v: f64,
-    var: f64,
-    k3: f64,
-    k4: f64,
+    /// Σμ.
+    mu: ExactSum,
+    /// Σ(c − μ)².
+    v: ExactSum,
+    /// Σ Var Y.
+    var: ExactSum,
+    /// Σ κ3(Y).
+    k3: ExactSum,
+    /// Σ κ4(Y).
+    k4: ExactSum,
 }
 
 impl Sums {
     fn push(&mut self, c: u64, mu: f64) {
         let d = c as f64 - mu;
         self.total += u128::from(c);
-        self.mu += mu;
-        self.v += d * d;
-        self.var += mu + 2.0 * mu * mu;
-        self.k3 += mu + 22.0 * mu * mu + 8.0 * mu.powi(3);
-        self.k4 += mu + 112.0 * mu * mu + 384.0 * mu.powi(3) + 48.0 * mu.powi(4);
+        self.mu.add(mu);
+        self.v.add(d * d);
+        self.var.add(mu + 2.0 * mu * mu);
+        self.k3.add(mu + 22.0 * mu * mu + 8.0 * mu.powi(3));
+        self.k4
+            .add(mu + 112.0 * mu * mu + 384.0 * mu.powi(3) + 48.0 * mu.powi(4));
+    }
+
+    /// The sums of both.
+    pub fn add(&mut self, o: &Sums) {
+        self.total += o.total;
+        for (a, b) in [
+            (&mut self.mu, &o.mu),
+            (&mut self.v, &o.v),
+            (&mut self.var, &o.var),
+            (&mut self.k3, &o.k3),
+            (&mut self.k4, &o.k4),
+        ] {
+            a.merge(b);
+        }
     }
 }
 
@@ -57,11 +82,20 @@ pub fn validate_profiles(
     names: &[String],
     altitudes: &[f64],
 ) -> (Vec<BinReport>, Vec<Check>) {
-    let bins = altitudes.len();
+    let sums = accumulate(draw, 0..n, altitudes.len());
+    reports(&sums, n, names, altitudes)
+}
+
+/// The per-bin sums of profiles `rows` drawn by `draw`, over `bins` bins.
+pub fn accumulate(
+    draw: &(dyn Fn(u64) -> Realization + Sync),
+    rows: std::ops::Range<usize>,
+    bins: usize,
+) -> Vec<Sums> {
     let mut sums = vec![Sums::default(); bins];
     let batch = ((8 << 20) / bins.max(1)).clamp(1, 4096);
-    for first in (0..n).step_by(batch) {
-        let last = (first + batch).min(n);
+    for first in rows.clone().step_by(batch) {
+        let last = (first + batch).min(rows.end);
         let drawn: Vec<Realization> = (first..last)
             .into_par_iter()
             .map(|p| draw(p as u64))
@@ -72,7 +106,17 @@ pub fn validate_profiles(
             }
         }
     }
-    let per_channel = bins / names.len().max(1);
+    sums
+}
+
+/// The bins' statistics and verdicts from the sums of `n` profiles.
+pub fn reports(
+    sums: &[Sums],
+    n: usize,
+    names: &[String],
+    altitudes: &[f64],
+) -> (Vec<BinReport>, Vec<Check>) {
+    let per_channel = altitudes.len() / names.len().max(1);
     let reports: Vec<BinReport> = sums
         .iter()
         .enumerate()
@@ -82,9 +126,27 @@ pub fn validate_profiles(
     (reports, checks)
 }
 
+/// The sums' values.
+struct Values {
+    total: u128,
+    mu: f64,
+    v: f64,
+    var: f64,
+    k3: f64,
+    k4: f64,
+}
+
 /// One bin's statistics.
-fn bin_report(s: &Sums, n: usize, channel: &str, bin: usize, altitude_m: f64) -> BinReport {
+fn bin_report(sums: &Sums, n: usize, channel: &str, bin: usize, altitude_m: f64) -> BinReport {
     let nf = n as f64;
+    let s = Values {
+        total: sums.total,
+        mu: sums.mu.value(),
+        v: sums.v.value(),
+        var: sums.var.value(),
+        k3: sums.k3.value(),
+        k4: sums.k4.value(),
+    };
     let model = BinModel::new(0.0, s.mu / nf, nf, 0.0);
     let mean = Stat {
         empirical: s.total as f64 / nf,

@@ -25,6 +25,33 @@ pub struct RunInfo<'a> {
     pub command_line: &'a str,
 }
 
+/// Options of `simulate` that do not change the file's content, left out of `history`
+/// with their values: the output path, the shard and the thread count. So the whole run
+/// and the merge of its shards ([`crate::shard::merge`]) record the same history, and a
+/// run gives the same bytes whatever its output name (docs/file-format.md).
+pub const HISTORY_OMITS: [&str; 4] = ["-o", "--output", "--shard", "--threads"];
+
+/// The command line as `history` records it: the program as `lidarsim`, then every
+/// argument but those of [`HISTORY_OMITS`] (as `-o X`, `--output=X` or `-oX`).
+pub fn history_command(args: impl IntoIterator<Item = String>) -> String {
+    let mut args = args.into_iter();
+    let mut kept = vec![];
+    if args.next().is_some() {
+        kept.push("lidarsim".to_string());
+    }
+    while let Some(a) = args.next() {
+        let option = a.split('=').next().unwrap_or(&a);
+        if HISTORY_OMITS.contains(&a.as_str()) {
+            args.next(); // its value
+        } else if !(HISTORY_OMITS.contains(&option) && a.contains('=')
+            || a.starts_with("-o") && !a.starts_with("--"))
+        {
+            kept.push(a);
+        }
+    }
+    kept.join(" ")
+}
+
 /// CF units of `time`: `seconds since 2004-03-21 00:00:00` from an RFC 3339 start time
 /// (validated with the config).
 pub fn time_units(start_time: &str) -> Result<String> {
@@ -353,6 +380,22 @@ pub fn root_attributes(sc: &Scenario, run: &RunInfo) -> Result<Vec<(String, Attr
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn history_leaves_out_what_does_not_change_the_content() {
+        let args = |s: &str| s.split(' ').map(String::from).collect::<Vec<_>>();
+        assert_eq!(
+            history_command(args(
+                "/x/target/release/lidarsim simulate c.toml -o a.h5 --profiles 10 --shard 1/3 \
+                 --threads=2 --seed 7 -ob.h5 --output=c.h5 --set a.b=1"
+            )),
+            "lidarsim simulate c.toml --profiles 10 --seed 7 --set a.b=1"
+        );
+        assert_eq!(
+            history_command(args("lidarsim simulate c.toml --threads 1 --output o.h5")),
+            "lidarsim simulate c.toml"
+        );
+    }
 
     #[test]
     fn time_units_are_udunits() {

@@ -175,13 +175,13 @@ fn create_var<T: H5Type>(file: &File, name: &str, shape: &[usize]) -> hdf5::Resu
         .create(name)
 }
 
-/// Writes `0..n` into a 1-D i64 variable, in blocks.
-fn write_index(ds: &Dataset, n: usize) -> hdf5::Result<()> {
+/// Writes `first..first + n` into a 1-D i64 variable, in blocks.
+fn write_index(ds: &Dataset, first: usize, n: usize) -> hdf5::Result<()> {
     let mut block = Vec::with_capacity(n.min(COORD_BLOCK));
     for start in (0..n).step_by(COORD_BLOCK) {
         let end = (start + COORD_BLOCK).min(n);
         block.clear();
-        block.extend((start..end).map(|i| i as i64));
+        block.extend((start..end).map(|i| (first + i) as i64));
         ds.write_slice(&block[..], start..end)?;
     }
     Ok(())
@@ -225,7 +225,7 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
 
     // Dimensions: coordinate variables marked as dimension scales.
     let profile = create_var::<i64>(&file, PROFILE_DIM, &[spec.n_profiles])?;
-    write_index(&profile, spec.n_profiles)?;
+    write_index(&profile, spec.first_profile, spec.n_profiles)?;
     write_attrs(&profile, &[("long_name", "profile index"), ("units", "1")])?;
     set_scale(&profile, PROFILE_DIM)?;
 
@@ -243,7 +243,7 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
     set_scale(&channel, CHANNEL_DIM)?;
 
     let bin = create_var::<i64>(&file, BIN_DIM, &[spec.n_bins])?;
-    write_index(&bin, spec.n_bins)?;
+    write_index(&bin, 0, spec.n_bins)?;
     write_attrs(&bin, &[("long_name", "range bin index"), ("units", "1")])?;
     set_scale(&bin, BIN_DIM)?;
 

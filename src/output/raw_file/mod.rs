@@ -188,6 +188,10 @@ pub struct RawFileSpec {
     /// Profiles in the file, at least 1; every one must be written before
     /// [`RawFileWriter::finish`].
     pub n_profiles: usize,
+    /// Index in the run of the file's first profile: the `profile` coordinate holds
+    /// `first_profile .. first_profile + n_profiles` (0 but in a shard file,
+    /// [`crate::shard`]); [`ProfileRecord::index`] stays the row in the file.
+    pub first_profile: usize,
     /// Channel names (the `channel` coordinate), at least one.
     pub channels: Vec<String>,
     /// Integer width of `counts` (and of the component variables).

@@ -1,0 +1,391 @@
+//! `lidarsim merge OUT.h5 SHARD.h5 ...`: the shards of one run into the file the whole
+//! run writes, byte for byte when `SOURCE_DATE_EPOCH` is set (docs/scale.md).
+//!
+//! 1. Each shard's root attributes say which run it belongs to and which profiles it
+//!    holds ([`super::SHARD_ATTRIBUTES`]); shards of different runs, a gap, an overlap
+//!    or a file that is not a shard are refused, naming the file.
+//! 2. The whole run's [`RawFileSpec`] is built again from the stored config, seed and
+//!    method by [`simulate::plan`], the very code `simulate` uses, and its
+//!    [`run_id`] must be the shards' (else this lidarsim would write another file).
+//! 3. Each shard's rows (counts, components, `time`, `n_shots`, `pulse_energy` and every
+//!    per-profile variable) are streamed in order into [`RawFileWriter`], in blocks of
+//!    at most [`BLOCK_BYTES`]: memory does not grow with the run.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use hdf5::Dataset;
+use hdf5::types::VarLenUnicode;
+use ndarray::{Ix1, Ix3, s};
+
+use super::{RunIdentity, Shard, check_cover, check_same_run, run_id, stored_lidar};
+use crate::error::{Error, Result};
+use crate::output::raw_file::{COMPONENT_NAMES, Dims, ProfileRecord, RawFileSpec, RawFileWriter};
+use crate::output::safe_file::{OutputId, Outputs, describe_hdf5_error};
+use crate::scenario::Lidar;
+use crate::simulate::{self, ResolvedMethod, RunOptions, RunPlan};
+
+/// Bytes of rows read from a shard at once (every per-profile variable together).
+pub const BLOCK_BYTES: usize = 8 << 20;
+
+/// A shard file and what its root attributes say of it.
+struct ShardFile {
+    path: PathBuf,
+    file: hdf5::File,
+    shard: Shard,
+    run_profiles: usize,
+    run_id: String,
+    /// Its first profile in the run, and its profiles.
+    first_profile: usize,
+    rows: usize,
+    seed: u64,
+    method: String,
+    config: String,
+    config_file: String,
+    /// `history` without its date: the command line the run recorded.
+    command: String,
+    threshold: Option<f64>,
+    tolerance: Option<f64>,
+    components: bool,
+}
+
+impl ShardFile {
+    /// Opens `path` and reads its identity; one line naming the file when it is not a
+    /// shard of `simulate --shard`.
+    fn open(path: &Path) -> Result<ShardFile> {
+        let fail = |why: &str| Error::output(path, why);
+        let file = hdf5::File::open(path)
+            .map_err(|_| fail("not a lidarsim raw file (not HDF5, or unreadable)"))?;
+        if file.attr("shard_index").is_err() {
+            return Err(fail(
+                "not a shard (no `shard_index` attribute): merge takes the files of \
+                 `simulate --shard K/N`",
+            ));
+        }
+        let text = |name: &str| -> Result<String> {
+            let v: VarLenUnicode = file
+                .attr(name)
+                .and_then(|a| a.read_scalar())
+                .map_err(|_| fail(&format!("has no text attribute `{name}`")))?;
+            Ok(v.as_str().to_string())
+        };
+        let number = |name: &str| -> Result<u64> {
+            file.attr(name)
+                .and_then(|a| a.read_scalar::<u64>())
+                .map_err(|_| fail(&format!("has no whole-number attribute `{name}`")))
+        };
+        let real = |name: &str| file.attr(name).and_then(|a| a.read_scalar::<f64>()).ok();
+        let whole = |name: &str| -> Result<usize> {
+            usize::try_from(number(name)?).map_err(|_| fail(&format!("`{name}` too large")))
+        };
+        let shard = Shard::new(whole("shard_index")?, whole("shard_count")?)
+            .map_err(|why| fail(&format!("shard_index/shard_count: {why}")))?;
+        let (history, created) = (text("history")?, text("date_created")?);
+        let command = history
+            .strip_prefix(&format!("{created} "))
+            .ok_or_else(|| fail("its `history` does not start with its `date_created`"))?
+            .to_string();
+        let rows = file
+            .dataset("counts")
+            .map(|d| d.shape().first().copied().unwrap_or(0))
+            .map_err(|_| fail("has no `counts`: not a lidarsim raw file"))?;
+        Ok(ShardFile {
+            shard,
+            run_profiles: whole("run_profiles")?,
+            run_id: text("run_id")?,
+            first_profile: whole("shard_first_profile")?,
+            rows,
+            seed: number("seed")?,
+            method: text("method")?,
+            config: text("config")?,
+            config_file: text("config_file")?,
+            command,
+            threshold: real("normal_approximation_threshold"),
+            tolerance: real("tolerance_ks"),
+            components: file.dataset(COMPONENT_NAMES[0]).is_ok(),
+            path: path.to_path_buf(),
+            file,
+        })
+    }
+
+    /// What makes it a shard of its run.
+    fn identity(&self) -> RunIdentity {
+        RunIdentity {
+            config: self.config.clone(),
+            seed: self.seed,
+            method: self.method.clone(),
+            shard_count: self.shard.count,
+            total: self.run_profiles,
+            run_id: self.run_id.clone(),
+        }
+    }
+
+    /// Refuses a file whose profiles are not those of its shard.
+    fn holds_its_rows(&self) -> Result<()> {
+        let want = self.shard.rows(self.run_profiles);
+        if want.start != self.first_profile || want.len() != self.rows {
+            return Err(Error::output(
+                &self.path,
+                format!(
+                    "holds {} profiles from {}, but shard {} of {} profiles is profiles {}–{}",
+                    self.rows,
+                    self.first_profile,
+                    self.shard,
+                    self.run_profiles,
+                    want.start,
+                    want.end.saturating_sub(1)
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The options that make `simulate` plan this shard's run again.
+    fn run_options(&self, output: &Path) -> Result<(RunOptions, ResolvedMethod)> {
+        let method = ResolvedMethod::from_name(&self.method, self.threshold).ok_or_else(|| {
+            Error::output(&self.path, format!("unknown method `{}`", self.method))
+        })?;
+        let opts = RunOptions {
+            output: output.to_path_buf(),
+            seed: Some(self.seed),
+            profiles: Some(self.run_profiles),
+            components: Some(self.components),
+            tolerance: self.tolerance,
+            command_line: self.command.clone(),
+            ..Default::default()
+        };
+        Ok((opts, method))
+    }
+}
+
+/// What a merge did, for its closing line.
+#[derive(Debug, Clone)]
+pub struct MergeSummary {
+    /// The file written.
+    pub output: PathBuf,
+    /// Shards merged.
+    pub shards: usize,
+    /// Profiles of the run.
+    pub profiles: usize,
+    /// Wall time.
+    pub elapsed: Duration,
+}
+
+impl std::fmt::Display for MergeSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "Merged {} shards into {}: {} profiles, the file of the whole run; {:.3} s.",
+            self.shards,
+            self.output.display(),
+            self.profiles,
+            self.elapsed.as_secs_f64()
+        )
+    }
+}
+
+/// A merge checked and planned, ready to write: the shards in the run's order, and the
+/// whole run as `simulate` would draw it.
+pub struct Merge {
+    files: Vec<ShardFile>,
+    order: Vec<usize>,
+    /// The run's lidar, from the shards' stored config.
+    pub lidar: Lidar,
+    plan: RunPlan,
+    out: PathBuf,
+    start: Instant,
+}
+
+/// The first half of `lidarsim merge OUT SHARD...`: checks that `shards` are one run's,
+/// each once, and rebuilds that run's file layout (nothing written yet).
+pub fn prepare(out: &Path, shards: &[PathBuf]) -> Result<Merge> {
+    let start = Instant::now();
+    let files = shards
+        .iter()
+        .map(|p| ShardFile::open(p))
+        .collect::<Result<Vec<_>>>()?;
+    let Some(first) = files.first() else {
+        return Err(Error::Unsupported("merge needs at least one shard".into()));
+    };
+    let identities: Vec<RunIdentity> = files.iter().map(ShardFile::identity).collect();
+    let pieces: Vec<(&Path, &RunIdentity)> = files
+        .iter()
+        .map(|f| f.path.as_path())
+        .zip(&identities)
+        .collect();
+    check_same_run(&pieces, "shard", "profiles")?;
+    for f in &files {
+        f.holds_its_rows()?;
+    }
+    let pieces: Vec<(&Path, Shard)> = files.iter().map(|f| (f.path.as_path(), f.shard)).collect();
+    let order = check_cover(&pieces, |s| s.rows(first.run_profiles), "profiles")?;
+    let lidar = stored_lidar(&first.config, &first.config_file)?;
+    let (opts, method) = first.run_options(out)?;
+    let plan = simulate::plan(&lidar, &opts, Some(method))?;
+    let rebuilt = run_id(&plan.spec);
+    if rebuilt != first.run_id {
+        return Err(Error::output(
+            &first.path,
+            format!(
+                "this lidarsim cannot rebuild its run: the file it would write differs from \
+                 the shards' (run_id {rebuilt} vs {}): another lidarsim version, or a file \
+                 the config {} names changed or read from another directory; merge with the \
+                 lidarsim that wrote the shards, where they ran",
+                first.run_id, first.config_file
+            ),
+        ));
+    }
+    Ok(Merge {
+        files,
+        order,
+        lidar,
+        plan,
+        out: out.to_path_buf(),
+        start,
+    })
+}
+
+impl Merge {
+    /// Writes the whole run's raw file as output `id` of `outputs` (complete or absent,
+    /// through [`crate::output::safe_file`]), streaming the shards' rows in order.
+    pub fn write(self, outputs: Outputs, id: OutputId) -> Result<MergeSummary> {
+        let bytes: u64 = self
+            .files
+            .iter()
+            .filter_map(|f| std::fs::metadata(&f.path).ok())
+            .map(|m| m.len())
+            .sum();
+        crate::resources::require_disk("OUT.h5", &self.out, bytes as f64)?;
+        let spec = &self.plan.spec;
+        let mut writer = RawFileWriter::create(outputs.temp_path(id)?, &self.out, spec)?;
+        for &i in &self.order {
+            copy_rows(&self.files[i], spec, &mut writer)?;
+        }
+        writer.finish()?;
+        outputs.commit()?;
+        Ok(MergeSummary {
+            output: self.out,
+            shards: self.files.len(),
+            profiles: self.plan.profiles,
+            elapsed: self.start.elapsed(),
+        })
+    }
+}
+
+/// One shard's datasets of per-profile rows, in the order a [`ProfileRecord`] takes them.
+struct RowSources {
+    counts: Dataset,
+    components: Vec<Dataset>,
+    time: Dataset,
+    n_shots: Dataset,
+    pulse_energy: Dataset,
+    /// The spec's per-profile variables, with their dimensions.
+    values: Vec<(Dataset, Dims)>,
+}
+
+impl RowSources {
+    /// The datasets of `f` that `spec` writes per profile, checked against its shape.
+    fn of(f: &ShardFile, spec: &RawFileSpec) -> Result<RowSources> {
+        let get = |name: &str| {
+            f.file.dataset(name).map_err(|_| {
+                Error::output(&f.path, format!("has no `{name}`: not a shard of this run"))
+            })
+        };
+        let counts = get("counts")?;
+        let want = vec![f.rows, spec.channels.len(), spec.n_bins];
+        if counts.shape() != want {
+            return Err(Error::output(
+                &f.path,
+                format!(
+                    "`counts` is {:?}, the run's shard is {want:?}",
+                    counts.shape()
+                ),
+            ));
+        }
+        let components = match spec.components {
+            true => COMPONENT_NAMES
+                .iter()
+                .map(|n| get(n))
+                .collect::<Result<_>>()?,
+            false => vec![],
+        };
+        let values = spec
+            .variables
+            .iter()
+            .filter(|v| v.dims.per_profile())
+            .map(|v| get(&v.name).map(|d| (d, v.dims)))
+            .collect::<Result<_>>()?;
+        Ok(RowSources {
+            counts,
+            components,
+            time: get("time")?,
+            n_shots: get("n_shots")?,
+            pulse_energy: get("pulse_energy")?,
+            values,
+        })
+    }
+}
+
+/// Streams the rows of shard `f` into `writer`, block by block, at their rows of the run.
+fn copy_rows(f: &ShardFile, spec: &RawFileSpec, writer: &mut RawFileWriter) -> Result<()> {
+    let src = RowSources::of(f, spec)?;
+    let n = spec.counts_per_profile();
+    let wide = 1 + src.components.len() + src.values.len();
+    let block = (BLOCK_BYTES / (8 * n * wide).max(1)).max(1);
+    let fail = |e: hdf5::Error| {
+        Error::output(
+            &f.path,
+            format!("cannot read: {}", describe_hdf5_error(&e.to_string())),
+        )
+    };
+    for a in (0..f.rows).step_by(block) {
+        let b = (a + block).min(f.rows);
+        let rows3 = |d: &Dataset| d.read_slice::<u64, _, Ix3>(s![a..b, .., ..]);
+        let rows3f = |d: &Dataset| d.read_slice::<f64, _, Ix3>(s![a..b, .., ..]);
+        let rows1 = |d: &Dataset| d.read_slice::<f64, _, Ix1>(s![a..b]);
+        let counts = rows3(&src.counts).map_err(fail)?.into_raw_vec();
+        let parts: Vec<Vec<u64>> = src
+            .components
+            .iter()
+            .map(|d| rows3(d).map(|x| x.into_raw_vec()))
+            .collect::<hdf5::Result<_>>()
+            .map_err(fail)?;
+        let time = rows1(&src.time).map_err(fail)?.into_raw_vec();
+        let shots = src
+            .n_shots
+            .read_slice::<u64, _, Ix1>(s![a..b])
+            .map_err(fail)?
+            .into_raw_vec();
+        let energy = rows1(&src.pulse_energy).map_err(fail)?.into_raw_vec();
+        let values: Vec<(Vec<f64>, usize)> = src
+            .values
+            .iter()
+            .map(|(d, dims)| match dims {
+                Dims::Profile => rows1(d).map(|x| (x.into_raw_vec(), 1)),
+                _ => rows3f(d).map(|x| (x.into_raw_vec(), n)),
+            })
+            .collect::<hdf5::Result<_>>()
+            .map_err(fail)?;
+        for r in 0..b - a {
+            let row_values: Vec<&[f64]> = values.iter().map(|(v, w)| row(v, r, *w)).collect();
+            writer.write_profile(&ProfileRecord {
+                index: f.first_profile + a + r,
+                time_s: time[r],
+                n_shots: shots[r],
+                pulse_energy_j: energy[r],
+                counts: row(&counts, r, n),
+                components: match &parts[..] {
+                    [s, bg, d] => Some([row(s, r, n), row(bg, r, n), row(d, r, n)]),
+                    _ => None,
+                },
+                values: &row_values,
+            })?;
+        }
+    }
+    Ok(())
+}
+
+/// Row `r` of rows of `width` values laid end to end.
+fn row<T>(rows: &[T], r: usize, width: usize) -> &[T] {
+    &rows[r * width..(r + 1) * width]
+}
