@@ -78,36 +78,80 @@ fn spec(
     }
 }
 
-/// Writes every profile of `spec` in `order` and returns nothing; the data is a function
-/// of the profile index only.
-fn write_all(path: &Path, spec: &RawFileSpec, order: &[usize]) {
-    let mut w = RawFileWriter::create(path, path, spec).unwrap();
+/// The data of profile `p`: components, counts, two f64 rows and a latitude, a function
+/// of the index only.
+struct Profile {
+    parts: Vec<Vec<u64>>,
+    counts: Vec<u64>,
+    a: Vec<f64>,
+    lat: [f64; 1],
+    b: Vec<f64>,
+}
+
+fn profile(spec: &RawFileSpec, p: usize) -> Profile {
     let n = spec.counts_per_profile();
     let max = spec.count_width.max_value().min(1 << 40);
-    for (done, &p) in order.iter().enumerate() {
-        let parts: Vec<Vec<u64>> = (0..3)
-            .map(|s| (0..n).map(|i| count(p, i, s, max / 4)).collect())
+    let parts: Vec<Vec<u64>> = (0..3)
+        .map(|s| (0..n).map(|i| count(p, i, s, max / 4)).collect())
+        .collect();
+    let counts = (0..n)
+        .map(|i| parts[0][i] + parts[1][i] + parts[2][i])
+        .collect();
+    Profile {
+        counts,
+        parts,
+        a: (0..n).map(|i| truth(p, i, 0)).collect(),
+        lat: [p as f64 * 0.01 - 40.0],
+        b: (0..n).map(|i| truth(p, i, 1)).collect(),
+    }
+}
+
+fn record<'a>(
+    spec: &RawFileSpec,
+    p: usize,
+    d: &'a Profile,
+    values: &'a [&'a [f64]],
+) -> ProfileRecord<'a> {
+    ProfileRecord {
+        index: p,
+        time_s: p as f64 * 1.5 + 0.75,
+        n_shots: 15 + p as u64,
+        pulse_energy_j: 0.11,
+        counts: &d.counts,
+        components: spec
+            .components
+            .then(|| [&d.parts[0][..], &d.parts[1][..], &d.parts[2][..]]),
+        values,
+    }
+}
+
+/// Writes every profile of `spec` in `order`, one at a time.
+fn write_all(path: &Path, spec: &RawFileSpec, order: &[usize]) {
+    write_batches(path, spec, order, 1);
+}
+
+/// Writes every profile of `spec` in `order`, `batch` records per call (one record per
+/// call through `write_profile`).
+fn write_batches(path: &Path, spec: &RawFileSpec, order: &[usize], batch: usize) {
+    let mut w = RawFileWriter::create(path, path, spec).unwrap();
+    for (b, group) in order.chunks(batch).enumerate() {
+        let data: Vec<Profile> = group.iter().map(|&p| profile(spec, p)).collect();
+        let values: Vec<Vec<&[f64]>> = data
+            .iter()
+            .map(|d| vec![&d.a[..], &d.lat[..], &d.b[..]])
             .collect();
-        let counts: Vec<u64> = (0..n)
-            .map(|i| parts[0][i] + parts[1][i] + parts[2][i])
+        let recs: Vec<ProfileRecord> = group
+            .iter()
+            .zip(&data)
+            .zip(&values)
+            .map(|((&p, d), v)| record(spec, p, d, v))
             .collect();
-        let a: Vec<f64> = (0..n).map(|i| truth(p, i, 0)).collect();
-        let b: Vec<f64> = (0..n).map(|i| truth(p, i, 1)).collect();
-        let lat = [p as f64 * 0.01 - 40.0];
-        let values: Vec<&[f64]> = vec![&a, &lat, &b];
-        w.write_profile(&ProfileRecord {
-            index: p,
-            time_s: p as f64 * 1.5 + 0.75,
-            n_shots: 15 + p as u64,
-            pulse_energy_j: 0.11,
-            counts: &counts,
-            components: spec
-                .components
-                .then(|| [&parts[0][..], &parts[1][..], &parts[2][..]]),
-            values: &values,
-        })
-        .unwrap();
-        assert_eq!(w.profiles_written(), done + 1);
+        if batch == 1 {
+            w.write_profile(&recs[0]).unwrap();
+        } else {
+            w.write_profiles(&recs).unwrap();
+        }
+        assert_eq!(w.profiles_written(), b * batch + group.len());
     }
     w.finish().unwrap();
 }
@@ -213,6 +257,81 @@ fn profiles_in_any_order_read_back_exactly_with_edge_chunks_and_components() {
         }
         assert_eq!(common::chunk_info(&a).len(), 300usize.div_ceil(32));
     }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A batch is the same as its records one at a time, byte for byte, whatever the batch
+/// size and order (`simulate` sends batches, `merge` single profiles).
+#[test]
+fn batches_write_the_same_bytes_as_single_profiles() {
+    let dir = scratch("batches");
+    let s = spec(500, 2, 700, CountWidth::U32, true);
+    let in_order: Vec<usize> = (0..500).collect();
+    let shuffled: Vec<usize> = (0..500).map(|i| (i * 37) % 500).collect();
+    for (name, order) in [("in-order", &in_order), ("shuffled", &shuffled)] {
+        let single = dir.join(format!("{name}-1.h5"));
+        write_batches(&single, &s, order, 1);
+        let want = std::fs::read(&single).unwrap();
+        for batch in [2, 7, 64, 500] {
+            let path = dir.join(format!("{name}-{batch}.h5"));
+            write_batches(&path, &s, order, batch);
+            assert!(
+                std::fs::read(&path).unwrap() == want,
+                "{name}, batches of {batch}: bytes differ"
+            );
+        }
+        check_all(&single, &s);
+    }
+    // 9,000 profiles of 200 bins: queue flushes (16 MiB) between the writes of the
+    // (profile) blocks (4,096 profiles), in the same order either way
+    let s = spec(9000, 1, 200, CountWidth::U16, false);
+    let order: Vec<usize> = (0..9000).collect();
+    let (one, many) = (dir.join("long-1.h5"), dir.join("long-64.h5"));
+    write_batches(&one, &s, &order, 1);
+    write_batches(&many, &s, &order, 64);
+    assert!(std::fs::read(&one).unwrap() == std::fs::read(&many).unwrap());
+    check_all(&many, &s);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_refused_batch_buffers_nothing() {
+    let dir = scratch("refused-batch");
+    let s = spec(6, 1, 5, CountWidth::U16, false);
+    let path = dir.join("r.h5");
+    let mut w = RawFileWriter::create(&path, Path::new("shown.h5"), &s).unwrap();
+    let data: Vec<Profile> = (0..6).map(|p| profile(&s, p)).collect();
+    let values: Vec<Vec<&[f64]>> = data
+        .iter()
+        .map(|d| vec![&d.a[..], &d.lat[..], &d.b[..]])
+        .collect();
+    let rec = |p: usize| record(&s, p, &data[p], &values[p]);
+    // profile 3 twice in one batch
+    let e = w
+        .write_profiles(&[rec(0), rec(3), rec(1), rec(3)])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("shown.h5") && e.contains("profile 3 written twice"),
+        "{e}"
+    );
+    assert_eq!(w.profiles_written(), 0);
+    // a bad record in the middle: the whole batch is refused, the first bad one named
+    let mut bad = rec(2);
+    bad.time_s = f64::INFINITY;
+    let e = w
+        .write_profiles(&[rec(0), rec(1), bad, rec(4)])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("profile 2: time"), "{e}");
+    assert_eq!(w.profiles_written(), 0);
+    w.write_profiles(&[rec(0), rec(1), rec(2)]).unwrap();
+    let e = w.write_profiles(&[rec(5), rec(1)]).unwrap_err().to_string();
+    assert!(e.contains("profile 1 written twice"), "{e}");
+    w.write_profiles(&[rec(5), rec(3), rec(4)]).unwrap();
+    assert_eq!(w.profiles_written(), 6);
+    w.finish().unwrap();
+    check_all(&path, &s);
     std::fs::remove_dir_all(&dir).ok();
 }
 

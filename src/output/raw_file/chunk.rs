@@ -20,8 +20,12 @@
 //!   `Cargo.lock`) only, whatever the machine or thread that compressed it.
 
 use std::cell::RefCell;
+use std::collections::BTreeMap;
+use std::collections::btree_map::Entry;
 
 use miniz_oxide::deflate::core::CompressionStrategy;
+
+use super::check::Row;
 use miniz_oxide::deflate::core::{
     CompressorOxide, TDEFLFlush, TDEFLStatus, compress, create_comp_flags_from_zip_params,
 };
@@ -75,6 +79,98 @@ fn put_planes<T: Copy, const S: usize>(
         for (d, &v) in dst.iter_mut().zip(row) {
             *d = (bits(v) >> shift) as u8;
         }
+    }
+}
+
+/// A chunk being filled.
+struct OpenChunk {
+    /// Shuffled bytes, `chunk_rows × row_elems` elements.
+    data: Vec<u8>,
+    /// Rows written into it so far.
+    present: usize,
+}
+
+/// The chunks being filled of one (profile, channel, bin) variable, by chunk index. For
+/// profiles sent in order, one at a time.
+pub struct Filling {
+    elem_bytes: usize,
+    chunk_rows: usize,
+    row_elems: usize,
+    n_profiles: usize,
+    open: BTreeMap<usize, OpenChunk>,
+}
+
+impl Filling {
+    /// A variable of `n_profiles` rows of `row_elems` elements of `elem_bytes` bytes,
+    /// `chunk_rows` rows per chunk.
+    pub fn new(elem_bytes: usize, chunk_rows: usize, row_elems: usize, n_profiles: usize) -> Self {
+        Filling {
+            elem_bytes,
+            chunk_rows,
+            row_elems,
+            n_profiles,
+            open: BTreeMap::new(),
+        }
+    }
+
+    /// Profiles per chunk.
+    pub fn chunk_rows(&self) -> usize {
+        self.chunk_rows
+    }
+
+    /// Whether no chunk is being filled.
+    pub fn is_empty(&self) -> bool {
+        self.open.is_empty()
+    }
+
+    /// Whether the chunk of profile `row` is being filled already.
+    pub fn is_open(&self, row: usize) -> bool {
+        self.open.contains_key(&(row / self.chunk_rows))
+    }
+
+    /// Puts profile `row` (checked: in range, not put before, `row_elems` values) into
+    /// its chunk, taking a buffer from `spare` (or a new one) for a new chunk; returns the
+    /// chunk's index and bytes when this row completes it. Errors only if a new chunk's
+    /// memory cannot be had.
+    pub fn put(
+        &mut self,
+        row: usize,
+        values: Row,
+        spare: &mut Vec<Vec<u8>>,
+    ) -> Result<Option<(usize, Vec<u8>)>, String> {
+        let (c, r) = (row / self.chunk_rows, row % self.chunk_rows);
+        let elems = self.chunk_rows * self.row_elems;
+        let rows_in_chunk = self.chunk_rows.min(self.n_profiles - c * self.chunk_rows);
+        let open = match self.open.entry(c) {
+            Entry::Occupied(e) => e.into_mut(),
+            Entry::Vacant(e) => {
+                let size = elems * self.elem_bytes;
+                let data = match spare.pop() {
+                    // every byte of a full chunk is overwritten by its rows; an edge
+                    // chunk's rows past the end hold the fill value, 0
+                    Some(mut b) => {
+                        b.resize(size, 0);
+                        if rows_in_chunk < self.chunk_rows {
+                            b.fill(0);
+                        }
+                        b
+                    }
+                    None => crate::resources::try_vec("a chunk of the raw file", size, 0u8)
+                        .map_err(|e| e.to_string())?,
+                };
+                e.insert(OpenChunk { data, present: 0 })
+            }
+        };
+        let at = r * self.row_elems;
+        match values {
+            Row::Counts(v) => put_row(&mut open.data, elems, at, self.elem_bytes, v, |c| c),
+            Row::Floats(v) => put_row(&mut open.data, elems, at, self.elem_bytes, v, f64::to_bits),
+        }
+        open.present += 1;
+        if open.present < rows_in_chunk {
+            return Ok(None);
+        }
+        Ok(self.open.remove(&c).map(|done| (c, done.data)))
     }
 }
 

@@ -21,6 +21,7 @@
 //! temporary name, the final rename, locks and signals are decided by
 //! [`super::safe_file`].
 
+pub mod check;
 pub mod chunk;
 pub mod content;
 pub(crate) mod hdf5_ds;

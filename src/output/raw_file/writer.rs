@@ -26,15 +26,15 @@
 //! order; a chunk then stays in memory until all its rows have come.
 
 use std::collections::BTreeMap;
-use std::collections::btree_map::Entry;
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
-use super::chunk;
+use super::check::{RecordShape, Row};
+use super::chunk::{self, Filling};
 use super::hdf5_ds::write_chunk;
 use super::layout::{self, OpenFile};
-use super::{COMPONENT_NAMES, CountWidth, Dims, ProfileRecord, RawFileSpec};
+use super::{ProfileRecord, RawFileSpec};
 use crate::error::{Error, Result};
 use crate::output::safe_file::describe_hdf5_error;
 
@@ -63,14 +63,6 @@ pub fn buffer_bytes(row_bytes: usize, variables: usize, threads: usize) -> f64 {
         + threads as f64 * (300e3 + 1.125 * chunk + 131_072.0)
 }
 
-/// A chunk being filled.
-struct OpenChunk {
-    /// Shuffled bytes, `chunk_rows × channels × bins` elements.
-    data: Vec<u8>,
-    /// Rows written into it so far.
-    present: usize,
-}
-
 /// A complete chunk waiting to be deflated and written.
 struct ReadyChunk {
     /// Index in [`OpenFile::rows`].
@@ -82,6 +74,9 @@ struct ReadyChunk {
 
 /// A chunk's stored bytes, or why it could not be compressed.
 type Stored = std::result::Result<Vec<u8>, String>;
+
+/// A chunk a batch completed: (position in the batch, variable, chunk index, bytes).
+type Completed = (usize, usize, usize, Vec<u8>);
 
 /// [`COLUMN_BLOCK`] profiles of the (profile) variables being filled.
 struct ColumnBlock {
@@ -99,16 +94,10 @@ pub struct RawFileWriter {
     display: PathBuf,
     /// `None` once closed (by `finish`, or by `Drop`).
     open: Option<OpenFile>,
-    n_per_profile: usize,
-    n_profiles: usize,
-    count_width: CountWidth,
-    components: bool,
-    /// Dimensions and values per profile of each per-profile variable, in the spec's order.
-    per_profile_sizes: Vec<(Dims, usize)>,
-    /// (bytes per element, profiles per chunk) of each of [`OpenFile::rows`].
-    row_layout: Vec<(usize, usize)>,
-    /// Chunks being filled, by chunk index, for each of [`OpenFile::rows`].
-    filling: Vec<BTreeMap<usize, OpenChunk>>,
+    /// What records are checked against.
+    shape: RecordShape,
+    /// The chunks being filled of each of [`OpenFile::rows`].
+    vars: Vec<Filling>,
     /// Complete chunks, in the order they were completed.
     ready: Vec<ReadyChunk>,
     ready_bytes: usize,
@@ -116,7 +105,6 @@ pub struct RawFileWriter {
     blocks: BTreeMap<usize, ColumnBlock>,
     /// Chunk buffers already written, for reuse (at most [`SPARE_BYTES`] in all).
     spare: Vec<Vec<u8>>,
-    spare_bytes: usize,
     /// Why an earlier write failed: the file is then unusable.
     failed: Option<String>,
     /// One bit per profile: written yet?
@@ -145,34 +133,27 @@ impl RawFileWriter {
                 describe_hdf5_error(&e.to_string())
             ))
         })?;
-        let row_layout: Vec<(usize, usize)> = open
+        let vars = open
             .rows
             .iter()
-            .map(|v| (v.elem_bytes, v.chunk_rows))
+            .map(|v| {
+                Filling::new(
+                    v.elem_bytes,
+                    v.chunk_rows,
+                    spec.counts_per_profile(),
+                    spec.n_profiles,
+                )
+            })
             .collect();
         Ok(RawFileWriter {
             display: display.to_path_buf(),
-            n_per_profile: spec.counts_per_profile(),
-            n_profiles: spec.n_profiles,
-            count_width: spec.count_width,
-            components: spec.components,
-            per_profile_sizes: spec
-                .variables
-                .iter()
-                .filter(|v| v.dims.per_profile())
-                .map(|v| match v.dims {
-                    Dims::Profile => (v.dims, 1),
-                    _ => (v.dims, spec.counts_per_profile()),
-                })
-                .collect(),
-            filling: row_layout.iter().map(|_| BTreeMap::new()).collect(),
-            row_layout,
             open: Some(open),
+            shape: RecordShape::of(spec),
+            vars,
             ready: Vec::new(),
             ready_bytes: 0,
             blocks: BTreeMap::new(),
             spare: Vec::new(),
-            spare_bytes: 0,
             failed: None,
             written,
             n_written: 0,
@@ -192,19 +173,30 @@ impl RawFileWriter {
     /// writer as it was: errors if `rec.index` is out of range or already written, if a
     /// slice's length is not channels × bins, if components are missing or unexpected or
     /// do not sum to `counts`, if `time_s` is not finite, or if a count exceeds the
-    /// file's [`CountWidth`] (never wrapped or clamped). A failure to write (a full disk)
-    /// leaves the writer unusable: every later call errors, and the caller drops the file.
+    /// file's [`super::CountWidth`] (never wrapped or clamped). A failure to write (a
+    /// full disk) leaves the writer unusable: every later call errors, and the caller
+    /// drops the file.
     pub fn write_profile(&mut self, rec: &ProfileRecord) -> Result<()> {
+        self.write_profiles(std::slice::from_ref(rec))
+    }
+
+    /// Writes several profiles: the same file, byte for byte, as
+    /// [`RawFileWriter::write_profile`] on each in turn, with the checks made and the
+    /// chunks filled in parallel (one variable per worker). Every record is checked
+    /// before any is buffered: a refused batch (the first refused record named, or a
+    /// profile given twice) leaves the writer as it was.
+    pub fn write_profiles(&mut self, recs: &[ProfileRecord]) -> Result<()> {
         self.usable()?;
-        self.validate_record(rec)
+        self.check_batch(recs)
             .map_err(|r| Error::output(&self.display, r))?;
-        if let Err(reason) = self.accept(rec) {
+        if let Err(reason) = self.accept(recs) {
             self.failed = Some(reason.clone());
             return Err(Error::output(&self.display, reason));
         }
-        let row = rec.index;
-        self.written[row / 64] |= 1 << (row % 64);
-        self.n_written += 1;
+        for rec in recs {
+            self.written[rec.index / 64] |= 1 << (rec.index % 64);
+        }
+        self.n_written += recs.len();
         Ok(())
     }
 
@@ -213,22 +205,22 @@ impl RawFileWriter {
     /// [`crate::output::safe_file`]).
     pub fn finish(mut self) -> Result<()> {
         self.usable()?;
-        if self.n_written != self.n_profiles {
-            let missing =
-                (0..self.n_profiles).find(|&i| self.written[i / 64] & (1 << (i % 64)) == 0);
+        let n_profiles = self.shape.n_profiles;
+        if self.n_written != n_profiles {
+            let missing = (0..n_profiles).find(|&i| self.written[i / 64] & (1 << (i % 64)) == 0);
             return Err(Error::output(
                 &self.display,
                 format!(
                     "incomplete: {} of {} profiles written (first missing: {})",
                     self.n_written,
-                    self.n_profiles,
+                    n_profiles,
                     missing.map_or_else(|| "?".into(), |i| i.to_string())
                 ),
             ));
         }
         self.flush()
             .map_err(|reason| Error::output(&self.display, reason))?;
-        if self.filling.iter().any(|f| !f.is_empty()) || !self.blocks.is_empty() {
+        if self.vars.iter().any(|f| !f.is_empty()) || !self.blocks.is_empty() {
             return Err(Error::output(
                 &self.display,
                 "internal: every profile was written but a chunk is incomplete",
@@ -260,87 +252,96 @@ impl RawFileWriter {
         Ok(())
     }
 
-    /// Buffers a checked record; writes the blocks and chunks it completes.
-    fn accept(&mut self, rec: &ProfileRecord) -> std::result::Result<(), String> {
-        let row = rec.index;
-        self.put_row(0, row, rec.counts, |c| c)?;
-        let mut k = 1;
-        if let Some(parts) = &rec.components {
-            for part in parts {
-                self.put_row(k, row, part, |c| c)?;
-                k += 1;
-            }
+    /// Every check of a batch, before anything is buffered: each record's own checks
+    /// (in parallel; the first refusal in the batch's order is reported), and no profile
+    /// written before or twice in the batch.
+    fn check_batch(&self, recs: &[ProfileRecord]) -> std::result::Result<(), String> {
+        let shape = &self.shape;
+        let checks: Vec<std::result::Result<(), String>> = if recs.len() > 1 {
+            recs.par_iter().map(|r| shape.check(r)).collect()
+        } else {
+            recs.iter().map(|r| shape.check(r)).collect()
+        };
+        checks
+            .into_iter()
+            .collect::<std::result::Result<(), String>>()?;
+        let mut indices: Vec<usize> = recs.iter().map(|r| r.index).collect();
+        indices.sort_unstable();
+        let twice = indices
+            .windows(2)
+            .find(|w| w[0] == w[1])
+            .map(|w| w[0])
+            .or_else(|| {
+                indices
+                    .iter()
+                    .copied()
+                    .find(|&i| self.written[i / 64] & (1 << (i % 64)) != 0)
+            });
+        match twice {
+            Some(i) => Err(format!("profile {i} written twice")),
+            None => Ok(()),
         }
-        let mut column_values = Vec::new();
-        for (i, v) in rec.values.iter().enumerate() {
-            match self.per_profile_sizes[i].0 {
-                Dims::Profile => column_values.push(v[0]),
-                _ => {
-                    self.put_row(k, row, v, f64::to_bits)?;
-                    k += 1;
-                }
-            }
-        }
-        self.put_columns(rec, &column_values)?;
-        if self.ready_bytes >= FLUSH_BYTES {
-            self.flush()?;
-        }
-        Ok(())
     }
 
-    /// Puts profile `row` of (profile, channel, bin) variable `var` into its chunk, and
-    /// queues the chunk when it is complete.
-    fn put_row<T: Copy>(
-        &mut self,
-        var: usize,
-        row: usize,
-        values: &[T],
-        bits: impl Fn(T) -> u64,
-    ) -> std::result::Result<(), String> {
-        let (elem_bytes, chunk_rows) = self.row_layout[var];
-        let (c, r) = (row / chunk_rows, row % chunk_rows);
-        let elems = chunk_rows * self.n_per_profile;
-        let rows_in_chunk = chunk_rows.min(self.n_profiles - c * chunk_rows);
-        let open = match self.filling[var].entry(c) {
-            Entry::Occupied(e) => e.into_mut(),
-            Entry::Vacant(e) => {
-                let size = elems * elem_bytes;
-                let spare = self.spare.pop();
-                self.spare_bytes -= spare.as_ref().map_or(0, Vec::len);
-                let data = match spare {
-                    // every byte of a full chunk is overwritten by its rows; an edge
-                    // chunk's rows past the end hold the fill value, 0
-                    Some(mut b) => {
-                        b.resize(size, 0);
-                        if rows_in_chunk < chunk_rows {
-                            b.fill(0);
-                        }
-                        b
-                    }
-                    None => crate::resources::try_vec("a chunk of the raw file", size, 0u8)
-                        .map_err(|e| e.to_string())?,
-                };
-                e.insert(OpenChunk { data, present: 0 })
+    /// Buffers a checked batch and writes what it completes, in the order
+    /// [`RawFileWriter::write_profile`] one record at a time would: for each record, the
+    /// chunks it completes (by variable), its (profile) block if it completes one, then a
+    /// flush of the queue if it is full.
+    fn accept(&mut self, recs: &[ProfileRecord]) -> std::result::Result<(), String> {
+        let shape = &self.shape;
+        let split: Vec<(Vec<Row>, Vec<f64>)> = recs.iter().map(|r| shape.split(r)).collect();
+        // buffers for the chunks each variable opens in this batch
+        let mut pools: Vec<Vec<Vec<u8>>> = Vec::with_capacity(self.vars.len());
+        for var in &self.vars {
+            let mut new_chunks: Vec<usize> = recs
+                .iter()
+                .filter(|r| !var.is_open(r.index))
+                .map(|r| r.index / var.chunk_rows())
+                .collect();
+            new_chunks.dedup();
+            let take = new_chunks.len().min(self.spare.len());
+            pools.push(self.spare.split_off(self.spare.len() - take));
+        }
+        let fill = |(k, (var, pool)): (usize, (&mut Filling, &mut Vec<Vec<u8>>))| {
+            let mut done = Vec::new();
+            for (i, (rows, _)) in split.iter().enumerate() {
+                if let Some((c, data)) = var.put(recs[i].index, rows[k], pool)? {
+                    done.push((i, k, c, data));
+                }
             }
+            Ok(done)
         };
-        chunk::put_row(
-            &mut open.data,
-            elems,
-            r * self.n_per_profile,
-            elem_bytes,
-            values,
-            bits,
-        );
-        open.present += 1;
-        if open.present == rows_in_chunk
-            && let Some(done) = self.filling[var].remove(&c)
-        {
-            self.ready_bytes += done.data.len();
-            self.ready.push(ReadyChunk {
-                var,
-                chunk: c,
-                data: done.data,
-            });
+        let filled: Vec<std::result::Result<Vec<Completed>, String>> = if recs.len() > 1 {
+            self.vars
+                .par_iter_mut()
+                .zip(pools.par_iter_mut())
+                .enumerate()
+                .map(fill)
+                .collect()
+        } else {
+            self.vars
+                .iter_mut()
+                .zip(pools.iter_mut())
+                .enumerate()
+                .map(fill)
+                .collect()
+        };
+        self.spare.extend(pools.into_iter().flatten());
+        let mut completed: Vec<Completed> = Vec::new();
+        for f in filled {
+            completed.extend(f?);
+        }
+        completed.sort_by_key(|&(i, k, _, _)| (i, k));
+        let mut completed = completed.into_iter().peekable();
+        for (i, rec) in recs.iter().enumerate() {
+            while let Some((_, var, chunk, data)) = completed.next_if(|c| c.0 == i) {
+                self.ready_bytes += data.len();
+                self.ready.push(ReadyChunk { var, chunk, data });
+            }
+            self.put_columns(rec, &split[i].1)?;
+            if self.ready_bytes >= FLUSH_BYTES {
+                self.flush()?;
+            }
         }
         Ok(())
     }
@@ -354,7 +355,7 @@ impl RawFileWriter {
     ) -> std::result::Result<(), String> {
         let (b, r) = (rec.index / COLUMN_BLOCK, rec.index % COLUMN_BLOCK);
         let start = b * COLUMN_BLOCK;
-        let len = COLUMN_BLOCK.min(self.n_profiles - start);
+        let len = COLUMN_BLOCK.min(self.shape.n_profiles - start);
         let block = self.blocks.entry(b).or_insert_with(|| ColumnBlock {
             time: vec![0.0; len],
             n_shots: vec![0; len],
@@ -416,14 +417,13 @@ impl RawFileWriter {
         let open = self.open.as_ref().ok_or("the writer is already closed")?;
         for (c, stored) in encoded {
             let bytes = stored?;
-            if self.spare_bytes + c.data.len() <= SPARE_BYTES {
-                self.spare_bytes += c.data.len();
+            if self.spare.iter().map(Vec::len).sum::<usize>() + c.data.len() <= SPARE_BYTES {
                 self.spare.push(c.data);
             }
             let v = &open.rows[c.var];
             let first = c.chunk * v.chunk_rows;
             write_chunk(&v.ds, &[first as u64, 0, 0], &bytes).map_err(|e| {
-                let last = (first + v.chunk_rows).min(self.n_profiles) - 1;
+                let last = (first + v.chunk_rows).min(self.shape.n_profiles) - 1;
                 format!(
                     "cannot write profiles {first}–{last} of `{}`: {}",
                     v.name,
@@ -432,92 +432,6 @@ impl RawFileWriter {
             })?;
         }
         Ok(())
-    }
-
-    /// All checks of `write_profile`, before anything is written.
-    fn validate_record(&self, rec: &ProfileRecord) -> std::result::Result<(), String> {
-        let i = rec.index;
-        if i >= self.n_profiles {
-            return Err(format!(
-                "profile index {i} out of range (the file holds {} profiles)",
-                self.n_profiles
-            ));
-        }
-        if self.written[i / 64] & (1 << (i % 64)) != 0 {
-            return Err(format!("profile {i} written twice"));
-        }
-        if !rec.pulse_energy_j.is_finite() || rec.pulse_energy_j < 0.0 {
-            return Err(format!(
-                "profile {i}: pulse energy {} J is not a finite non-negative number",
-                rec.pulse_energy_j
-            ));
-        }
-        if rec.values.len() != self.per_profile_sizes.len() {
-            return Err(format!(
-                "profile {i}: {} per-profile variables given, the file has {}",
-                rec.values.len(),
-                self.per_profile_sizes.len()
-            ));
-        }
-        for (k, (v, &(_, want))) in rec.values.iter().zip(&self.per_profile_sizes).enumerate() {
-            if v.len() != want || !v.iter().fold(true, |ok, x| ok & x.is_finite()) {
-                return Err(format!(
-                    "profile {i}: per-profile variable {k} has {} values (want {want}) or a non-finite one",
-                    v.len()
-                ));
-            }
-        }
-        if !rec.time_s.is_finite() {
-            return Err(format!("profile {i}: time {} s is not finite", rec.time_s));
-        }
-        let n = self.n_per_profile;
-        let max = self.count_width.max_value();
-        let check = |what: &str, data: &[u64]| {
-            if data.len() != n {
-                return Err(format!(
-                    "profile {i}: {what} has {} values, the file has {n} per profile",
-                    data.len()
-                ));
-            }
-            // `max` is 2^k − 1, so every count fits when their bitwise OR does: one
-            // vectorized pass; the position is searched only on failure
-            if data.iter().fold(0, |acc, &c| acc | c) <= max {
-                return Ok(());
-            }
-            match data.iter().position(|&c| c > max) {
-                None => Ok(()),
-                Some(b) => Err(format!(
-                    "profile {i}, value {b}: {what} {} exceeds the file's {} range (max {max})",
-                    data[b],
-                    self.count_width.name()
-                )),
-            }
-        };
-        check("counts", rec.counts)?;
-        match (self.components, &rec.components) {
-            (false, None) => Ok(()),
-            (true, None) => Err(format!(
-                "profile {i}: signal/background/dark counts missing"
-            )),
-            (false, Some(_)) => Err(format!(
-                "profile {i}: component counts given but the file was created without them"
-            )),
-            (true, Some(parts)) => {
-                for (name, part) in COMPONENT_NAMES.iter().zip(parts) {
-                    check(name, part)?;
-                }
-                let [s, bg, d] = parts;
-                match (0..n).find(|&b| {
-                    s[b].checked_add(bg[b]).and_then(|x| x.checked_add(d[b])) != Some(rec.counts[b])
-                }) {
-                    None => Ok(()),
-                    Some(b) => Err(format!(
-                        "profile {i}, value {b}: signal + background + dark = {} + {} + {} does not equal counts {}",
-                        s[b], bg[b], d[b], rec.counts[b]
-                    )),
-                }
-            }
-        }
     }
 }
 
