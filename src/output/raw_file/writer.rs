@@ -11,10 +11,15 @@
 //! write. The (profile) variables (`time`, `n_shots`, `pulse_energy`, geolocation) are
 //! written [`COLUMN_BLOCK`] profiles per HDF5 call.
 //!
+//! [`RawFileWriter::write_profiles`] takes a batch: its records are checked in parallel
+//! and each variable's chunks filled by a worker of its own, then what the batch
+//! completes is queued and written in the order single records would have done it.
+//!
 //! Same bytes whatever the thread count: a chunk's bytes depend on its data only, the
-//! queue's order and the moments it is written depend only on the order of the calls.
-//! So the same spec and the same records in the same order give the same file: a writer
-//! fed profiles 0, 1, 2, … (as `simulate` does) writes the same bytes whoever feeds it.
+//! queue's order and the moments it is written depend only on the order of the records,
+//! not on how they are grouped in calls. So the same spec and the same records in the
+//! same order give the same file: a writer fed profiles 0, 1, 2, … (as `simulate` does,
+//! in batches, and `merge`, one at a time) writes the same bytes whoever feeds it.
 //!
 //! Memory: one bit per profile (written yet?), plus, for a writer that sends profiles in
 //! order, at most one chunk being filled per (profile, channel, bin) variable (about
