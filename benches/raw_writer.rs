@@ -1,7 +1,8 @@
 //! The raw-file writer alone: the (profile, channel, bin) variables of a file written by
 //! `lidarsim simulate` (its counts and, in a changing scene, its f64 truth) written again
-//! through `RawFileWriter`, profile by profile in order as `simulate` does; the median
-//! wall time and CPU time of `--repeat` runs (default 5). Threads: `RAYON_NUM_THREADS`.
+//! through `RawFileWriter`, in order, `--batch` profiles per call (default 64, as
+//! `simulate` hands them; 1 is `write_profile` one at a time); the median wall time and
+//! CPU time of `--repeat` runs (default 5). Threads: `RAYON_NUM_THREADS`.
 //!
 //!     lidarsim simulate configs/instruments/caliop_532.toml -o /tmp/agg.h5 \
 //!         --method aggregate --profiles 20000
@@ -20,7 +21,7 @@ fn main() {
         .filter(|a| !a.starts_with("--bench"))
         .collect();
     let Some(path) = args.first() else {
-        eprintln!("usage: cargo bench --bench raw_writer -- FILE.h5 [--repeat N]");
+        eprintln!("usage: cargo bench --bench raw_writer -- FILE.h5 [--repeat N] [--batch N]");
         return;
     };
     let repeat: usize = args
@@ -29,6 +30,13 @@ fn main() {
         .and_then(|i| args.get(i + 1))
         .and_then(|s| s.parse().ok())
         .unwrap_or(5);
+    let batch: usize = args
+        .iter()
+        .position(|a| a == "--batch")
+        .and_then(|i| args.get(i + 1))
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(64)
+        .max(1);
     let f = hdf5::File::open(path).expect("open the file");
     let counts_ds = f.dataset("counts").expect("counts");
     let shape = counts_ds.shape();
@@ -84,21 +92,29 @@ fn main() {
         let c = cpu_seconds();
         let t = Instant::now();
         let mut w = RawFileWriter::create(&out, &out, &spec).unwrap();
-        for p in 0..profiles {
-            let values: Vec<&[f64]> = truth
-                .iter()
-                .map(|(_, v)| &v[p * row..(p + 1) * row])
+        for first in (0..profiles).step_by(batch) {
+            let last = (first + batch).min(profiles);
+            let values: Vec<Vec<&[f64]>> = (first..last)
+                .map(|p| {
+                    truth
+                        .iter()
+                        .map(|(_, v)| &v[p * row..(p + 1) * row])
+                        .collect()
+                })
                 .collect();
-            w.write_profile(&ProfileRecord {
-                index: p,
-                time_s: time[p],
-                n_shots: n_shots[p],
-                pulse_energy_j: 0.1,
-                counts: &counts[p * row..(p + 1) * row],
-                components: None,
-                values: &values,
-            })
-            .unwrap();
+            let recs: Vec<ProfileRecord> = (first..last)
+                .zip(&values)
+                .map(|(p, values)| ProfileRecord {
+                    index: p,
+                    time_s: time[p],
+                    n_shots: n_shots[p],
+                    pulse_energy_j: 0.1,
+                    counts: &counts[p * row..(p + 1) * row],
+                    components: None,
+                    values,
+                })
+                .collect();
+            w.write_profiles(&recs).unwrap();
         }
         w.finish().unwrap();
         times.push(t.elapsed().as_secs_f64());
@@ -109,7 +125,7 @@ fn main() {
     let med = times[times.len() / 2];
     println!(
         "{path}: {profiles} profiles × {channels} channels × {bins} bins, counts {} + {} f64 variables \
-         ({:.0} MB raw); {} threads: median {med:.3} s of {repeat} (best {:.3} s), {:.0} MB/s; CPU time (all threads) median {:.3} s; file {} bytes",
+         ({:.0} MB raw), {batch} per call; {} threads: median {med:.3} s of {repeat} (best {:.3} s), {:.0} MB/s; CPU time (all threads) median {:.3} s; file {} bytes",
         width.name(),
         truth.len(),
         raw_bytes as f64 / 1e6,

@@ -658,37 +658,22 @@ pub fn run(
     };
     let mut write_batch = |(first_profile, drawn, took): (usize, Vec<DrawnProfile>, Duration)| {
         drawing += took;
-        total_counts += drawn
-            .iter()
-            .map(|d| d.counts.iter().sum::<u64>())
-            .sum::<u64>();
-        let index = |k: usize| first_profile + k;
-        let places: Vec<Option<[[f64; 1]; 3]>> = (0..drawn.len())
-            .map(|k| {
-                orbit.as_ref().map(|o| {
-                    let g = o.position((index(k) as f64 + 0.5) * profile_time_s);
-                    [[g.latitude_deg], [g.longitude_deg], [g.along_track_m]]
-                })
-            })
-            .collect();
-        let values: Vec<Vec<&[f64]>> = drawn
-            .iter()
-            .zip(&places)
-            .map(|(d, place)| {
-                d.values
-                    .iter()
-                    .map(Vec::as_slice)
-                    .chain(place.iter().flat_map(|p| p.iter().map(|v| &v[..])))
-                    .collect()
-            })
-            .collect();
-        let records: Vec<ProfileRecord> = drawn
-            .iter()
-            .zip(&values)
-            .enumerate()
-            .map(|(k, (d, values))| ProfileRecord {
-                index: index(k) - rows.start,
-                time_s: index(k) as f64 * profile_time_s + 0.5 * profile_time_s,
+        for (k, d) in drawn.iter().enumerate() {
+            total_counts += d.counts.iter().sum::<u64>();
+            let index = first_profile + k;
+            let place = orbit.as_ref().map(|o| {
+                let g = o.position((index as f64 + 0.5) * profile_time_s);
+                [[g.latitude_deg], [g.longitude_deg], [g.along_track_m]]
+            });
+            let values: Vec<&[f64]> = d
+                .values
+                .iter()
+                .map(Vec::as_slice)
+                .chain(place.iter().flat_map(|p| p.iter().map(|v| &v[..])))
+                .collect();
+            writer.write_profile(&ProfileRecord {
+                index: index - rows.start,
+                time_s: index as f64 * profile_time_s + 0.5 * profile_time_s,
                 n_shots: shots,
                 pulse_energy_j: nominal_energy_j * d.energy_sum / shots as f64,
                 counts: &d.counts,
@@ -696,12 +681,9 @@ pub fn run(
                     .components
                     .as_ref()
                     .map(|[s, b, k]| [&s[..], &b[..], &k[..]]),
-                values,
-            })
-            .collect();
-        // the batch's checks and chunk filling run in parallel (the same file as one
-        // profile at a time)
-        writer.write_profiles(&records)?;
+                values: &values,
+            })?;
+        }
         progress.inc(drawn.len() as u64);
         Ok::<(), Error>(())
     };

@@ -18,8 +18,8 @@
 //! Same bytes whatever the thread count: a chunk's bytes depend on its data only, the
 //! queue's order and the moments it is written depend only on the order of the records,
 //! not on how they are grouped in calls. So the same spec and the same records in the
-//! same order give the same file: a writer fed profiles 0, 1, 2, … (as `simulate` does,
-//! in batches, and `merge`, one at a time) writes the same bytes whoever feeds it.
+//! same order give the same file: a writer fed profiles 0, 1, 2, … (as `simulate` and
+//! `merge` do) writes the same bytes whoever feeds it, one at a time or in batches.
 //!
 //! Memory: one bit per profile (written yet?), plus, for a writer that sends profiles in
 //! order, at most one chunk being filled per (profile, channel, bin) variable (about
@@ -187,9 +187,14 @@ impl RawFileWriter {
 
     /// Writes several profiles: the same file, byte for byte, as
     /// [`RawFileWriter::write_profile`] on each in turn, with the checks made and the
-    /// chunks filled in parallel (one variable per worker). Every record is checked
-    /// before any is buffered: a refused batch (the first refused record named, or a
-    /// profile given twice) leaves the writer as it was.
+    /// chunks filled in parallel (one variable per worker). For a caller with nothing else
+    /// for the threads to do: the writer alone, 64 profiles per call, rewrites the orbit's
+    /// file in 0.57 s on two threads against 0.79 s one at a time, but 10–15 % slower on
+    /// one thread (the records are read twice, checked then filled), and `simulate`,
+    /// which overlaps the writer with its drawing, gained nothing from it: it hands
+    /// profiles one at a time. Every record is checked before any is buffered: a refused
+    /// batch (the first refused record named, or a profile given twice) leaves the writer
+    /// as it was.
     pub fn write_profiles(&mut self, recs: &[ProfileRecord]) -> Result<()> {
         self.usable()?;
         self.check_batch(recs)
