@@ -182,7 +182,22 @@ impl RawFileWriter {
     /// full disk) leaves the writer unusable: every later call errors, and the caller
     /// drops the file.
     pub fn write_profile(&mut self, rec: &ProfileRecord) -> Result<()> {
-        self.write_profiles(std::slice::from_ref(rec))
+        self.usable()?;
+        let i = rec.index;
+        let checked = self.shape.check(rec).and_then(|()| {
+            match self.written.get(i / 64).map(|w| w & (1 << (i % 64))) {
+                Some(0) => Ok(()),
+                _ => Err(format!("profile {i} written twice")),
+            }
+        });
+        checked.map_err(|r| Error::output(&self.display, r))?;
+        if let Err(reason) = self.accept_one(rec) {
+            self.failed = Some(reason.clone());
+            return Err(Error::output(&self.display, reason));
+        }
+        self.written[i / 64] |= 1 << (i % 64);
+        self.n_written += 1;
+        Ok(())
     }
 
     /// Writes several profiles: the same file, byte for byte, as
@@ -291,6 +306,28 @@ impl RawFileWriter {
             Some(i) => Err(format!("profile {i} written twice")),
             None => Ok(()),
         }
+    }
+
+    /// Buffers a checked record: its rows into their chunks (by variable, each chunk it
+    /// completes queued), its (profile) values into their block (written if complete),
+    /// then a flush of the queue if it is full.
+    fn accept_one(&mut self, rec: &ProfileRecord) -> std::result::Result<(), String> {
+        let (rows, columns) = self.shape.split(rec);
+        for (k, row) in rows.into_iter().enumerate() {
+            if let Some((chunk, data)) = self.vars[k].put(rec.index, row, &mut self.spare)? {
+                self.ready_bytes += data.len();
+                self.ready.push(ReadyChunk {
+                    var: k,
+                    chunk,
+                    data,
+                });
+            }
+        }
+        self.put_columns(rec, &columns)?;
+        if self.ready_bytes >= FLUSH_BYTES {
+            self.flush()?;
+        }
+        Ok(())
     }
 
     /// Buffers a checked batch and writes what it completes, in the order
