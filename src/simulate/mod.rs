@@ -653,13 +653,18 @@ pub fn run(
                 d.values = scene_profile_values(sc, (first_profile + k) as u64, n_bins, bkg);
             });
         }
+        // summed here, in parallel, not on the writer's thread
+        let counted: u64 = drawn
+            .par_iter()
+            .map(|(d, _)| d.counts.iter().sum::<u64>())
+            .sum();
         let drawn: Vec<DrawnProfile> = drawn.into_iter().map(|(d, _)| d).collect();
-        (first_profile, drawn, took)
+        (first_profile, drawn, took, counted)
     };
-    let mut write_batch = |(first_profile, drawn, took): (usize, Vec<DrawnProfile>, Duration)| {
+    let mut write_batch = |(first_profile, drawn, took, counted): Batch| {
         drawing += took;
+        total_counts += counted;
         for (k, d) in drawn.iter().enumerate() {
-            total_counts += d.counts.iter().sum::<u64>();
             let index = first_profile + k;
             let place = orbit.as_ref().map(|o| {
                 let g = o.position((index as f64 + 0.5) * profile_time_s);
@@ -716,6 +721,10 @@ pub fn run(
         warning: lidar.run_notes(&expected),
     })
 }
+
+/// A drawn batch: its first profile, its profiles, the time their counts took to draw,
+/// and the sum of their counts.
+type Batch = (usize, Vec<DrawnProfile>, Duration, u64);
 
 /// The orbit of a space-borne run with `[orbit]`.
 pub fn orbit_of(lidar: &Lidar) -> Result<Option<crate::scene::orbit::Orbit>> {
