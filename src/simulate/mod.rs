@@ -629,7 +629,10 @@ pub fn run(
     let batch = ((4 << 20) / (n_bins * streams).max(1)).clamp(1, 64);
     let mut total_counts = 0u64;
     let mut drawing = Duration::ZERO;
-    for first_profile in rows.clone().step_by(batch) {
+    // Batch k is drawn while batch k − 1 is handed to the writer (whose chunk compression
+    // runs on the same pool): the writer gets the profiles in order whatever the thread
+    // count, so the file's bytes do not depend on it.
+    let draw_batch = |first_profile: usize| {
         let last = (first_profile + batch).min(rows.end);
         let draw_start = Instant::now();
         let n_channels = lidar.channels.len();
@@ -643,16 +646,25 @@ pub fn run(
                 ),
             })
             .collect();
-        drawing += draw_start.elapsed();
+        let took = draw_start.elapsed();
         // the truth of a changing scene's profiles (the model, not the draw)
         if let Some(sc) = &scene {
             drawn.par_iter_mut().enumerate().for_each(|(k, (d, bkg))| {
                 d.values = scene_profile_values(sc, (first_profile + k) as u64, n_bins, bkg);
             });
         }
-        let drawn = drawn.into_iter().map(|(d, _)| d);
-        for (k, d) in drawn.enumerate() {
-            total_counts += d.counts.iter().sum::<u64>();
+        // summed here, in parallel, not on the writer's thread
+        let counted: u64 = drawn
+            .par_iter()
+            .map(|(d, _)| d.counts.iter().sum::<u64>())
+            .sum();
+        let drawn: Vec<DrawnProfile> = drawn.into_iter().map(|(d, _)| d).collect();
+        (first_profile, drawn, took, counted)
+    };
+    let mut write_batch = |(first_profile, drawn, took, counted): Batch| {
+        drawing += took;
+        total_counts += counted;
+        for (k, d) in drawn.iter().enumerate() {
             let index = first_profile + k;
             let place = orbit.as_ref().map(|o| {
                 let g = o.position((index as f64 + 0.5) * profile_time_s);
@@ -677,7 +689,20 @@ pub fn run(
                 values: &values,
             })?;
         }
-        progress.inc((last - first_profile) as u64);
+        progress.inc(drawn.len() as u64);
+        Ok::<(), Error>(())
+    };
+    let mut pending = None;
+    for first_profile in rows.clone().step_by(batch) {
+        let (drawn, written) = rayon::join(
+            || draw_batch(first_profile),
+            || pending.take().map_or(Ok(()), &mut write_batch),
+        );
+        written?;
+        pending = Some(drawn);
+    }
+    if let Some(last) = pending {
+        write_batch(last)?;
     }
     writer.finish()?;
     outputs.commit()?;
@@ -696,6 +721,10 @@ pub fn run(
         warning: lidar.run_notes(&expected),
     })
 }
+
+/// A drawn batch: its first profile, its profiles, the time their counts took to draw,
+/// and the sum of their counts.
+type Batch = (usize, Vec<DrawnProfile>, Duration, u64);
 
 /// The orbit of a space-borne run with `[orbit]`.
 pub fn orbit_of(lidar: &Lidar) -> Result<Option<crate::scene::orbit::Orbit>> {
@@ -968,8 +997,10 @@ const FILE_FIXED_BYTES: f64 = 64e3;
 /// Bytes per bin of the per-bin variables (about 25 f64 per bin).
 const FILE_BYTES_PER_BIN: f64 = 200.0;
 /// Single-threaded cost of the model, the file and its writes per stored count, ns
-/// (measured: 0.06–0.14 µs on scenario 1 and the CALIOP-like config).
-const FILE_NS_PER_COUNT: f64 = 150.0;
+/// (measured, `validation/reports/writer.md`: ~7 ns with u16 counts alone, the
+/// CALIOP-like config; ~20 ns on scenario 1's small file; ~110 ns with the orbit's five
+/// f64 truth values per count), rounded up for counts alone.
+const FILE_NS_PER_COUNT: f64 = 40.0;
 
 /// Estimated size of the raw file, bytes: per stored count the smaller of its width and
 /// the compressed Poisson entropy of its mean.
@@ -1001,8 +1032,13 @@ fn check_sizes(
 ) -> Result<()> {
     let streams = if components { 4 } else { 1 };
     let bins = totals.len() as f64;
-    // one bit per profile (written yet?), the batch of drawn rows, the samplers' tables
-    let memory = profiles as f64 / 8.0 + 64.0 * bins * 8.0 * 2.0 * streams as f64 + 64.0 * bins;
+    // one bit per profile (written yet?), the batch of drawn rows, the samplers' tables,
+    // the file writer's chunks (the count variables and, in a changing scene, five f64)
+    let threads = rayon::current_num_threads().max(1);
+    let writer =
+        crate::output::raw_file::writer::buffer_bytes(bins as usize * 8, streams + 5, threads);
+    let memory =
+        profiles as f64 / 8.0 + 64.0 * bins * 8.0 * 2.0 * streams as f64 + 64.0 * bins + writer;
     crate::resources::require_memory(&format!("simulating {profiles} profiles"), memory)?;
     let file = estimated_file_bytes(totals, shots, profiles, streams);
     crate::resources::require_disk("-o", &opts.output, file)?;
@@ -1010,9 +1046,8 @@ fn check_sizes(
         ResolvedMethod::Shot => ShotSampler::new(totals).strategy().est_ns_per_shot * shots as f64,
         _ => bins * cost::AGGREGATE_LARGE_NS,
     };
-    let threads = rayon::current_num_threads().max(1) as f64;
     let ns = profiles as f64
-        * (draw_ns_per_profile * streams.min(3) as f64 / threads
+        * (draw_ns_per_profile * streams.min(3) as f64 / threads as f64
             + bins * streams as f64 * FILE_NS_PER_COUNT);
     crate::resources::announce_duration(
         &format!("{profiles} profiles × {} bins", totals.len()),

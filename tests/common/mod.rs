@@ -75,3 +75,32 @@ pub fn brute_force_signal(sc: &Scenario, step_m: f64) -> Vec<f64> {
         })
         .collect()
 }
+
+/// Chunk index, filter mask and stored size of every chunk of a dataset
+/// (`H5Dget_chunk_info`), in the order HDF5 lists them.
+pub fn chunk_info(ds: &hdf5::Dataset) -> Vec<(Vec<u64>, u32, u64)> {
+    use hdf5_sys::h5d::{H5Dget_chunk_info, H5Dget_num_chunks};
+    use hdf5_sys::h5s::H5S_ALL;
+    hdf5::sync::sync(|| unsafe {
+        let mut n = 0;
+        assert!(H5Dget_num_chunks(ds.id(), H5S_ALL, &mut n) >= 0);
+        (0..n)
+            .map(|k| {
+                let mut offset = vec![0u64; ds.ndim()];
+                let (mut mask, mut addr, mut size) = (0u32, 0u64, 0u64);
+                assert!(
+                    H5Dget_chunk_info(
+                        ds.id(),
+                        H5S_ALL,
+                        k,
+                        offset.as_mut_ptr(),
+                        &mut mask,
+                        &mut addr,
+                        &mut size,
+                    ) >= 0
+                );
+                (offset, mask, size)
+            })
+            .collect()
+    })
+}

@@ -1,9 +1,10 @@
 //! The HDF5 calls the `hdf5` crate does not make for us: dimension scales (`H5DS*`, from
-//! libhdf5_hl, built by the `hl` feature of `hdf5-metno-sys`), and the attribute
-//! helpers of the raw file (variable-length UTF-8 text, scalar numbers).
+//! libhdf5_hl, built by the `hl` feature of `hdf5-metno-sys`), the direct chunk write
+//! (`H5Dwrite_chunk`), and the attribute helpers of the raw file (variable-length UTF-8
+//! text, scalar numbers).
 //!
 //! HDF5 calls go through the `hdf5` crate, whose global lock serializes them; the
-//! dimension-scale calls are made under the same lock.
+//! dimension-scale and chunk calls are made under the same lock.
 
 use std::ffi::CString;
 
@@ -62,5 +63,26 @@ pub fn attach_scales(ds: &Dataset, scales: &[&Dataset]) -> hdf5::Result<()> {
             hdf5::h5check(unsafe { ffi::H5DSattach_scale(ds.id(), scale.id(), idx as u32) })?;
         }
         Ok(())
+    })
+}
+
+/// Writes one chunk of a chunked dataset as it is stored in the file (HDF5's direct chunk
+/// write, `H5Dwrite_chunk`): `bytes` have been through every filter of the dataset's
+/// pipeline (filter mask 0), `offset` is the chunk's first element.
+pub fn write_chunk(ds: &Dataset, offset: &[u64], bytes: &[u8]) -> hdf5::Result<()> {
+    use hdf5_sys::h5d::H5Dwrite_chunk;
+    use hdf5_sys::h5p::H5P_DEFAULT;
+    locked(|| {
+        hdf5::h5check(unsafe {
+            H5Dwrite_chunk(
+                ds.id(),
+                H5P_DEFAULT,
+                0,
+                offset.as_ptr(),
+                bytes.len(),
+                bytes.as_ptr().cast(),
+            )
+        })
+        .map(|_| ())
     })
 }

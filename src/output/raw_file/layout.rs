@@ -19,34 +19,49 @@ use hdf5::plist::file_create::LinkCreationOrder;
 use hdf5::types::VarLenUnicode;
 use hdf5::{Dataset, File, H5Type};
 
+use super::chunk;
 use super::hdf5_ds::{attach_scales, set_scale, write_num_attr, write_str_attr};
 use super::{
     AttrValue, BIN_DIM, CHANNEL_DIM, COMPONENT_NAMES, CountWidth, Dims, PROFILE_DIM,
     RESERVED_NAMES, RawFileSpec,
 };
 
-/// Target size of one chunk of a count variable, in bytes. Well below HDF5's default
-/// 1 MiB per-dataset chunk cache, so the chunk being filled stays cached.
-const TARGET_CHUNK_BYTES: usize = 256 * 1024;
-/// Deflate level of the count variables (shuffle is applied first). Level 1 is about
-/// twice as fast as 4 on simulated counts for ~4 % larger files.
-const DEFLATE_LEVEL: u8 = 1;
+/// Target size of one chunk of a (profile, channel, bin) variable, in bytes, for that
+/// variable's own element size (u16 counts get four times the rows of f64 truth). Within
+/// HDF5's default 1 MiB per-dataset chunk cache, so a reader reading profile by profile
+/// decompresses each chunk once; large enough that the byte planes of slowly varying f64
+/// truth compress well (12× at 512 KiB against 10× at 256 KiB on the orbit's S/N).
+pub const TARGET_CHUNK_BYTES: usize = 512 * 1024;
 /// Rows of the `profile` coordinate written per call at creation (bounds memory).
 const COORD_BLOCK: usize = 64 * 1024;
 /// The auxiliary coordinates of (profile, channel, bin) and (bin) data variables.
 const COORDS_PROFILE_BIN: &str = "time altitude range";
 const COORDS_BIN: &str = "altitude range";
 
+/// A (profile, channel, bin) variable, chunked along profiles, shuffled and deflated;
+/// the writer fills and writes it a whole chunk at a time.
+pub struct RowVar {
+    /// Name in the file, for messages.
+    pub name: String,
+    pub ds: Dataset,
+    /// Bytes per element (2, 4 or 8).
+    pub elem_bytes: usize,
+    /// Profiles per chunk (the chunk holds every channel and bin of them).
+    pub chunk_rows: usize,
+}
+
 /// Open HDF5 handles of a file being written.
 pub struct OpenFile {
     pub file: File,
-    pub counts: Dataset,
-    pub components: Option<[Dataset; 3]>,
+    /// Every (profile, channel, bin) variable: `counts`, then `signal_counts`,
+    /// `background_counts` and `dark_counts` if the spec has components, then the spec's
+    /// (profile, channel, bin) variables in its order.
+    pub rows: Vec<RowVar>,
     pub time: Dataset,
     pub n_shots: Dataset,
     pub pulse_energy: Dataset,
-    /// The per-profile variables, in the spec's order.
-    pub per_profile: Vec<Dataset>,
+    /// The spec's (profile) variables, in its order.
+    pub columns: Vec<Dataset>,
 }
 
 impl OpenFile {
@@ -54,14 +69,13 @@ impl OpenFile {
     pub fn close(self) -> hdf5::Result<()> {
         let OpenFile {
             file,
-            counts,
-            components,
+            rows,
             time,
             n_shots,
             pulse_energy,
-            per_profile,
+            columns,
         } = self;
-        drop((counts, components, time, n_shots, pulse_energy, per_profile));
+        drop((rows, time, n_shots, pulse_energy, columns));
         file.close()
     }
 }
@@ -112,14 +126,15 @@ pub fn validate_spec(spec: &RawFileSpec) -> Result<(), String> {
     Ok(())
 }
 
-/// Rows per chunk of a count variable: about [`TARGET_CHUNK_BYTES`].
-fn chunk_rows(spec: &RawFileSpec) -> usize {
-    let row_bytes = spec.counts_per_profile() * spec.count_width.bytes();
+/// Profiles per chunk of a (profile, channel, bin) variable of `elem_bytes`-byte
+/// elements: about [`TARGET_CHUNK_BYTES`], at least one profile, at most all of them.
+pub fn chunk_rows(spec: &RawFileSpec, elem_bytes: usize) -> usize {
+    let row_bytes = spec.counts_per_profile() * elem_bytes;
     (TARGET_CHUNK_BYTES / row_bytes.max(1)).clamp(1, spec.n_profiles)
 }
 
 /// Creates an empty (profile, channel, bin) count variable at the file's width.
-fn create_count_var(file: &File, name: &str, spec: &RawFileSpec) -> hdf5::Result<Dataset> {
+fn create_count_var(file: &File, name: &str, spec: &RawFileSpec) -> hdf5::Result<RowVar> {
     match spec.count_width {
         CountWidth::U16 => create_rows::<u16>(file, name, spec),
         CountWidth::U32 => create_rows::<u32>(file, name, spec),
@@ -127,18 +142,28 @@ fn create_count_var(file: &File, name: &str, spec: &RawFileSpec) -> hdf5::Result
     }
 }
 
-/// Creates a (profile, channel, bin) variable of `T`, written a row at a time: chunked
-/// along profiles, shuffled and deflated.
-fn create_rows<T: H5Type>(file: &File, name: &str, spec: &RawFileSpec) -> hdf5::Result<Dataset> {
+/// Creates a (profile, channel, bin) variable of `T`, chunked along profiles with the
+/// filters shuffle then deflate declared (the writer stores chunks it encoded itself
+/// exactly as these filters would, `chunk.rs`, and readers decode them through them).
+fn create_rows<T: H5Type>(file: &File, name: &str, spec: &RawFileSpec) -> hdf5::Result<RowVar> {
     let (c, b) = (spec.channels.len(), spec.n_bins);
-    file.new_dataset::<T>()
+    let elem_bytes = std::mem::size_of::<T>();
+    let chunk_rows = chunk_rows(spec, elem_bytes);
+    let ds = file
+        .new_dataset::<T>()
         .shape((spec.n_profiles, c, b))
-        .chunk((chunk_rows(spec), c, b))
+        .chunk((chunk_rows, c, b))
         .shuffle()
-        .deflate(DEFLATE_LEVEL)
+        .deflate(chunk::DEFLATE_LEVEL)
         .obj_track_times(false)
         .attr_creation_order(AttrCreationOrder::Indexed)
-        .create(name)
+        .create(name)?;
+    Ok(RowVar {
+        name: name.to_string(),
+        ds,
+        elem_bytes,
+        chunk_rows,
+    })
 }
 
 /// Creates an empty contiguous variable of the given shape.
@@ -225,7 +250,7 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
     let dims3 = [&profile, &channel, &bin];
     let counts = create_count_var(&file, "counts", spec)?;
     write_attrs(
-        &counts,
+        &counts.ds,
         &[
             (
                 "long_name",
@@ -235,35 +260,29 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
             ("coordinates", coords_profile_bin),
         ],
     )?;
-    attach_scales(&counts, &dims3)?;
+    attach_scales(&counts.ds, &dims3)?;
+    let mut rows = vec![counts];
 
-    let components = if spec.components {
+    if spec.components {
         let long_names = [
             "accumulated photon counts from the backscattered laser signal",
             "accumulated photon counts from the sky background",
             "accumulated detector dark counts",
         ];
-        let mut made = Vec::with_capacity(3);
         for (name, long_name) in COMPONENT_NAMES.iter().zip(long_names) {
-            let ds = create_count_var(&file, name, spec)?;
+            let var = create_count_var(&file, name, spec)?;
             write_attrs(
-                &ds,
+                &var.ds,
                 &[
                     ("long_name", long_name),
                     ("units", "count"),
                     ("coordinates", coords_profile_bin),
                 ],
             )?;
-            attach_scales(&ds, &dims3)?;
-            made.push(ds);
+            attach_scales(&var.ds, &dims3)?;
+            rows.push(var);
         }
-        let [s, b, d]: [Dataset; 3] = made
-            .try_into()
-            .map_err(|_| hdf5::Error::from("internal: 3 components"))?;
-        Some([s, b, d])
-    } else {
-        None
-    };
+    }
 
     let time = create_var::<f64>(&file, "time", &[spec.n_profiles])?;
     write_attrs(
@@ -303,7 +322,7 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
     )?;
     attach_scales(&pulse_energy, &[&profile])?;
 
-    let mut per_profile = Vec::new();
+    let mut columns = Vec::new();
     for var in &spec.variables {
         let (shape, scales, coords): (Vec<usize>, Vec<&Dataset>, Option<&str>) = match var.dims {
             Dims::Bin => (vec![spec.n_bins], vec![&bin], Some(COORDS_BIN)),
@@ -320,9 +339,12 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
                 Some(coords_profile_bin),
             ),
         };
-        let ds = match var.dims {
-            Dims::ProfileChannelBin => create_rows::<f64>(&file, &var.name, spec)?,
-            _ => create_var::<f64>(&file, &var.name, &shape)?,
+        let (ds, row_var) = match var.dims {
+            Dims::ProfileChannelBin => {
+                let v = create_rows::<f64>(&file, &var.name, spec)?;
+                (v.ds.clone(), Some(v))
+            }
+            _ => (create_var::<f64>(&file, &var.name, &shape)?, None),
         };
         if !var.dims.per_profile() {
             ds.write_raw(&var.data[..])?;
@@ -338,18 +360,19 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
             write_str_attr(&ds, "coordinates", c)?;
         }
         attach_scales(&ds, &scales)?;
-        if var.dims.per_profile() {
-            per_profile.push(ds);
+        match (row_var, var.dims) {
+            (Some(v), _) => rows.push(v),
+            (None, Dims::Profile) => columns.push(ds),
+            _ => {}
         }
     }
 
     Ok(OpenFile {
         file,
-        counts,
-        components,
+        rows,
         time,
         n_shots,
         pulse_energy,
-        per_profile,
+        columns,
     })
 }

@@ -13,13 +13,17 @@
 //! | one per [`Variable`] | (bin), (channel) or (channel, bin) | f64 |
 //!
 //! The modules: [`layout`] creates the file and everything known up front,
-//! [`writer`] streams the profiles, [`content`] decides what a simulation puts in the
+//! [`writer`] streams the profiles, [`check`] checks a profile record before it is
+//! buffered, [`chunk`] fills and encodes whole chunks as HDF5's shuffle and deflate
+//! filters would, [`content`] decides what a simulation puts in the
 //! file, `hdf5_ds` makes the HDF5 calls the `hdf5` crate does not.
 //!
 //! The writer creates the file at exactly the path it is given: where the file goes, its
 //! temporary name, the final rename, locks and signals are decided by
 //! [`super::safe_file`].
 
+pub mod check;
+pub mod chunk;
 pub mod content;
 pub(crate) mod hdf5_ds;
 pub mod layout;

@@ -1,0 +1,152 @@
+//! The checks a profile record passes before the writer buffers any of it (one place,
+//! for one record at a time and for a batch checked in parallel).
+
+use super::{COMPONENT_NAMES, CountWidth, Dims, ProfileRecord, RawFileSpec};
+
+/// The shape of the records a file takes: what a record is checked against.
+#[derive(Clone, Debug)]
+pub struct RecordShape {
+    /// Profiles in the file.
+    pub n_profiles: usize,
+    /// Counts per profile: channels × bins.
+    pub n_per_profile: usize,
+    /// The counts' integer width.
+    pub count_width: CountWidth,
+    /// Whether records carry signal, background and dark counts.
+    pub components: bool,
+    /// Dimensions and values per profile of each per-profile variable, in the spec's order.
+    pub per_profile: Vec<(Dims, usize)>,
+}
+
+/// One profile's row of one (profile, channel, bin) variable.
+#[derive(Clone, Copy, Debug)]
+pub enum Row<'a> {
+    /// Counts (the file's width was checked).
+    Counts(&'a [u64]),
+    /// A f64 variable (finite, checked).
+    Floats(&'a [f64]),
+}
+
+impl RecordShape {
+    /// The shape of `spec`'s records.
+    pub fn of(spec: &RawFileSpec) -> RecordShape {
+        RecordShape {
+            n_profiles: spec.n_profiles,
+            n_per_profile: spec.counts_per_profile(),
+            count_width: spec.count_width,
+            components: spec.components,
+            per_profile: spec
+                .variables
+                .iter()
+                .filter(|v| v.dims.per_profile())
+                .map(|v| match v.dims {
+                    Dims::Profile => (v.dims, 1),
+                    _ => (v.dims, spec.counts_per_profile()),
+                })
+                .collect(),
+        }
+    }
+
+    /// A checked record's rows of the (profile, channel, bin) variables in the file's
+    /// order (`counts`, the components, the spec's variables), and its values of the
+    /// (profile) variables in the spec's order.
+    pub fn split<'a>(&self, rec: &ProfileRecord<'a>) -> (Vec<Row<'a>>, Vec<f64>) {
+        let mut rows = vec![Row::Counts(rec.counts)];
+        if let Some(parts) = rec.components {
+            rows.extend(parts.map(Row::Counts));
+        }
+        let mut columns = Vec::new();
+        for (v, (dims, _)) in rec.values.iter().zip(&self.per_profile) {
+            match dims {
+                Dims::Profile => columns.push(v[0]),
+                _ => rows.push(Row::Floats(v)),
+            }
+        }
+        (rows, columns)
+    }
+
+    /// Every check of a record but whether its profile was written before: its index is
+    /// in range, its slices have the file's lengths, its numbers are finite, its counts
+    /// fit the file's width and its components sum to its counts.
+    pub fn check(&self, rec: &ProfileRecord) -> Result<(), String> {
+        let i = rec.index;
+        if i >= self.n_profiles {
+            return Err(format!(
+                "profile index {i} out of range (the file holds {} profiles)",
+                self.n_profiles
+            ));
+        }
+        if !rec.pulse_energy_j.is_finite() || rec.pulse_energy_j < 0.0 {
+            return Err(format!(
+                "profile {i}: pulse energy {} J is not a finite non-negative number",
+                rec.pulse_energy_j
+            ));
+        }
+        if rec.values.len() != self.per_profile.len() {
+            return Err(format!(
+                "profile {i}: {} per-profile variables given, the file has {}",
+                rec.values.len(),
+                self.per_profile.len()
+            ));
+        }
+        for (k, (v, &(_, want))) in rec.values.iter().zip(&self.per_profile).enumerate() {
+            if v.len() != want || !v.iter().fold(true, |ok, x| ok & x.is_finite()) {
+                return Err(format!(
+                    "profile {i}: per-profile variable {k} has {} values (want {want}) or a non-finite one",
+                    v.len()
+                ));
+            }
+        }
+        if !rec.time_s.is_finite() {
+            return Err(format!("profile {i}: time {} s is not finite", rec.time_s));
+        }
+        let n = self.n_per_profile;
+        let max = self.count_width.max_value();
+        let check = |what: &str, data: &[u64]| {
+            if data.len() != n {
+                return Err(format!(
+                    "profile {i}: {what} has {} values, the file has {n} per profile",
+                    data.len()
+                ));
+            }
+            // `max` is 2^k − 1, so every count fits when their bitwise OR does: one
+            // vectorized pass; the position is searched only on failure
+            if data.iter().fold(0, |acc, &c| acc | c) <= max {
+                return Ok(());
+            }
+            match data.iter().position(|&c| c > max) {
+                None => Ok(()),
+                Some(b) => Err(format!(
+                    "profile {i}, value {b}: {what} {} exceeds the file's {} range (max {max})",
+                    data[b],
+                    self.count_width.name()
+                )),
+            }
+        };
+        check("counts", rec.counts)?;
+        match (self.components, &rec.components) {
+            (false, None) => Ok(()),
+            (true, None) => Err(format!(
+                "profile {i}: signal/background/dark counts missing"
+            )),
+            (false, Some(_)) => Err(format!(
+                "profile {i}: component counts given but the file was created without them"
+            )),
+            (true, Some(parts)) => {
+                for (name, part) in COMPONENT_NAMES.iter().zip(parts) {
+                    check(name, part)?;
+                }
+                let [s, bg, d] = parts;
+                match (0..n).find(|&b| {
+                    s[b].checked_add(bg[b]).and_then(|x| x.checked_add(d[b])) != Some(rec.counts[b])
+                }) {
+                    None => Ok(()),
+                    Some(b) => Err(format!(
+                        "profile {i}, value {b}: signal + background + dark = {} + {} + {} does not equal counts {}",
+                        s[b], bg[b], d[b], rec.counts[b]
+                    )),
+                }
+            }
+        }
+    }
+}
