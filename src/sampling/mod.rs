@@ -69,8 +69,8 @@ pub use aggregate::{
 };
 pub use pmf_alias::{PMF_ALIAS_MAX_COLUMNS, PmfAlias, pmf_alias_columns};
 pub use shot::{
-    DENSE_ALIAS_MAX, DENSE_TABLE_MAX, DenseMethod, PathChoice, ShotSampler, ShotStrategy,
-    StrategyKind, TOTAL_TABLE_MAX, cost,
+    ALIAS_BUDGET_BYTES, DENSE_ALIAS_MAX, DENSE_TABLE_MAX, DenseMethod, PathChoice, ShotSampler,
+    ShotStrategy, StrategyKind, TOTAL_TABLE_MAX, cost, table_bytes_bound,
 };
 
 use rand_pcg::Pcg64Mcg;

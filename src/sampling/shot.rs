@@ -23,6 +23,23 @@ pub const DENSE_TABLE_MAX: f64 = 0.07;
 /// [`rand_distr::Poisson`] (Ahrens–Dieter 1982) per bin.
 pub const DENSE_ALIAS_MAX: f64 = 4.0e4;
 
+/// Most bytes of alias tables over PMFs that one sampler keeps. A dense bin whose table
+/// would pass 1 KiB (λ ≳ 10) once this is spent is drawn by Ahrens–Dieter instead (out of
+/// the caches a large table is no faster); tables of at most 1 KiB are always built. So
+/// a sampler's tables take at most [`table_bytes_bound`] whatever its bins.
+pub const ALIAS_BUDGET_BYTES: usize = 4 << 20;
+
+/// Alias-table bytes a bin may always take, whatever the budget.
+const SMALL_TABLE_BYTES: usize = 1024;
+
+/// An upper bound of the memory of a [`ShotSampler`]'s tables over `bins` bins, bytes:
+/// per bin a small alias table or inversion thresholds (≤ 1 KiB), plus the budget of the
+/// larger alias tables, plus the sparse set's alias table (16 bytes per bin, rounded up
+/// to a power of two).
+pub fn table_bytes_bound(bins: usize) -> f64 {
+    (SMALL_TABLE_BYTES + 32) as f64 * bins as f64 + ALIAS_BUDGET_BYTES as f64
+}
+
 /// Largest sparse-set total `Σλ` whose shot total `N` is drawn from an alias
 /// table over the (truncated at `2^-72`) Poisson PMF; above it a prebuilt
 /// [`rand_distr::Poisson`] is used.
@@ -350,11 +367,23 @@ impl ShotSampler {
         let mut d_pd = Vec::new();
         let mut idle = bins - order.len();
         let mut est = 0.0;
+        let mut alias_bytes = 0usize;
         for &i in &dense_ids {
             let l = lam(i);
             let method = match choice {
                 PathChoice::Dense(m) => m,
-                _ => DenseMethod::for_mean(l),
+                _ => match DenseMethod::for_mean(l) {
+                    DenseMethod::Alias => {
+                        let bytes = 16 * pmf_alias_columns(l);
+                        if bytes > SMALL_TABLE_BYTES && alias_bytes + bytes > ALIAS_BUDGET_BYTES {
+                            DenseMethod::Rejection
+                        } else {
+                            alias_bytes += bytes;
+                            DenseMethod::Alias
+                        }
+                    }
+                    m => m,
+                },
             };
             match method {
                 DenseMethod::Inversion => {

@@ -637,3 +637,19 @@ fn aggregate_profile_law() {
     aggregate_profile(&lambda, 2, 2, 10_000, &mut c);
     assert_ne!(a, c);
 }
+
+/// The alias tables of one sampler stay within `ALIAS_BUDGET_BYTES`: 2000 bins at
+/// λ = 10^4 (32 KiB tables) keep 128 tables (4 MiB) and draw the rest by Ahrens–Dieter;
+/// small tables (λ = 5, 1 KiB) are built for every bin whatever their number.
+/// Deterministic.
+#[test]
+fn alias_tables_stay_within_their_budget() {
+    let st = ShotSampler::with_choice(&[1e4; 2000], PathChoice::AllDense).strategy();
+    let per_table = 16 * pmf_alias_columns(1e4);
+    assert_eq!(per_table, 32 * 1024);
+    assert_eq!(st.dense_alias_bins, ALIAS_BUDGET_BYTES / per_table, "{st}");
+    assert_eq!(st.dense_alias_bins + st.dense_pd_bins, 2000, "{st}");
+    let st = ShotSampler::with_choice(&[5.0; 20_000], PathChoice::AllDense).strategy();
+    assert_eq!(st.dense_alias_bins, 20_000, "{st}");
+    assert!(table_bytes_bound(20_000) >= (20_000 * 16 * pmf_alias_columns(5.0)) as f64);
+}

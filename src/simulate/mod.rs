@@ -1037,8 +1037,8 @@ fn check_sizes(
     let threads = rayon::current_num_threads().max(1);
     let writer =
         crate::output::raw_file::writer::buffer_bytes(bins as usize * 8, streams + 5, threads);
-    let memory =
-        profiles as f64 / 8.0 + 64.0 * bins * 8.0 * 2.0 * streams as f64 + 64.0 * bins + writer;
+    let tables = streams as f64 * sampling::table_bytes_bound(bins as usize);
+    let memory = profiles as f64 / 8.0 + 64.0 * bins * 8.0 * 2.0 * streams as f64 + tables + writer;
     crate::resources::require_memory(&format!("simulating {profiles} profiles"), memory)?;
     let file = estimated_file_bytes(totals, shots, profiles, streams);
     crate::resources::require_disk("-o", &opts.output, file)?;

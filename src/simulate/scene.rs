@@ -27,8 +27,8 @@ use crate::scene::orbit::Orbit;
 use crate::scene::sun;
 use crate::scene::track::{Column, MAX_COLUMNS, Track};
 
-/// Memory kept per bin of each column and channel: its expectations (13 f64) and, for
-/// `shot`, its sampler's tables.
+/// Memory kept per bin of each column and channel for its expectations (13 f64 and
+/// more); `shot` adds its sampler's tables ([`sampling::table_bytes_bound`]).
 const COLUMN_BYTES_PER_BIN: f64 = 200.0;
 
 /// Seed offset of a solar background's stream.
@@ -213,8 +213,13 @@ impl SceneModel {
                 all.len()
             )));
         }
-        let kept_bytes = (all.len() * lidar.channels.len() * first.geometry.n_bins) as f64
-            * COLUMN_BYTES_PER_BIN;
+        let samplers = all.len() * lidar.channels.len();
+        let kept_bytes = (samplers * first.geometry.n_bins) as f64 * COLUMN_BYTES_PER_BIN
+            + if method == ResolvedMethod::Shot {
+                samplers as f64 * sampling::table_bytes_bound(first.geometry.n_bins)
+            } else {
+                0.0
+            };
         crate::resources::require_memory(
             &format!(
                 "the scene's {} columns of {} bins",
