@@ -138,11 +138,6 @@ impl AggregateSampler {
         }
     }
 
-    /// The per-shot means.
-    pub fn lambda(&self) -> &[f64] {
-        &self.lambda
-    }
-
     /// The samplers of the profile means `shots·λ_i`, built on first use.
     fn for_shots(&self, shots: u64) -> Arc<Option<ShotSampler>> {
         let mut built = self.built.lock().unwrap_or_else(|e| e.into_inner());

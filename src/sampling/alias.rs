@@ -130,11 +130,6 @@ impl AliasTable {
         c.bins[usize::from((x & self.mask) >= c.thr)] as usize
     }
 
-    /// Number of columns (a power of two; 16 bytes each).
-    pub(crate) fn columns(&self) -> usize {
-        self.cols.len()
-    }
-
     /// Realised probability of each column entry, for tests: `(bin, P)` pairs summed by bin.
     #[cfg(test)]
     pub(crate) fn probabilities(&self, bins: usize) -> Vec<f64> {

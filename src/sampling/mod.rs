@@ -67,7 +67,7 @@ pub use aggregate::{
     AGGREGATE_CHUNK, AGGREGATE_INVERSION_MAX, AGGREGATE_PREBUILT_MAX, AggregateSampler,
     add_aggregate, poisson_u64,
 };
-pub use pmf_alias::{PMF_ALIAS_MAX_COLUMNS, PmfAlias, pmf_alias_columns};
+pub use pmf_alias::{PmfAlias, pmf_alias_columns};
 pub use shot::{
     ALIAS_BUDGET_BYTES, DENSE_ALIAS_MAX, DENSE_TABLE_MAX, DenseMethod, PathChoice, ShotSampler,
     ShotStrategy, StrategyKind, TOTAL_TABLE_MAX, cost, table_bytes_bound,

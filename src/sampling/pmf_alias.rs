@@ -22,16 +22,13 @@
 //!
 //! One `u64`, one column load and a compare per draw (measured in
 //! [`super::shot::cost`]); the table takes 16 bytes per column, `≈ 2^⌈log2(19.2·√μ)⌉`
-//! columns for large means (`μ = 100`: 256 columns, 4 KiB), which is what limits it:
-//! [`PMF_ALIAS_MAX_COLUMNS`].
+//! columns for large means (`μ = 100`: 256 columns, 4 KiB), which is what limits it
+//! (the shot sampler's `DENSE_ALIAS_MAX` and alias budget).
 
 use super::alias::AliasTable;
 
 /// Weights below this, relative to the mode, end the PMF on each side (`2^-72`).
 const PMF_CUTOFF: f64 = 1.0 / (1u128 << 72) as f64;
-
-/// Largest alias table over a PMF, in columns (64 KiB): means up to ≈ 4·10^4.
-pub const PMF_ALIAS_MAX_COLUMNS: usize = 4096;
 
 /// The PMF of Poisson(`mean`) up to a common factor, from `k0` on: `(k0, weights)`,
 /// truncated at `2^-72` of the mode's weight on both sides; empty for `mean ≤ 0`.
@@ -84,8 +81,8 @@ pub struct PmfAlias {
 }
 
 impl PmfAlias {
-    /// The sampler of Poisson(`mean`), `0 < mean < 4e9` (finite; a mean whose table
-    /// would pass [`PMF_ALIAS_MAX_COLUMNS`] builds all the same, only larger).
+    /// The sampler of Poisson(`mean`), `0 < mean < 4e9` (finite; its table has
+    /// [`pmf_alias_columns`]`(mean)` columns).
     pub fn new(mean: f64) -> PmfAlias {
         let (k0, w) = pmf_window(mean);
         assert!(!w.is_empty(), "PmfAlias needs a positive mean, got {mean}");
@@ -99,11 +96,6 @@ impl PmfAlias {
     #[inline(always)]
     pub fn count_for(&self, x: u64) -> u32 {
         self.table.bin_for(x) as u32
-    }
-
-    /// Columns of the table (16 bytes each).
-    pub fn columns(&self) -> usize {
-        self.table.columns()
     }
 
     /// Realised probability of each count `0..len` (tests).

@@ -19,7 +19,7 @@ use super::table::{count_above, tail_thresholds};
 pub const DENSE_TABLE_MAX: f64 = 0.07;
 
 /// Largest per-bin mean drawn densely by an alias table over the PMF (tables of at
-/// most [`super::PMF_ALIAS_MAX_COLUMNS`] columns, 64 KiB); above it a prebuilt
+/// most 4096 columns, 64 KiB); above it a prebuilt
 /// [`rand_distr::Poisson`] (Ahrens–Dieter 1982) per bin.
 pub const DENSE_ALIAS_MAX: f64 = 4.0e4;
 
@@ -57,7 +57,7 @@ pub const TOTAL_TABLE_MAX: f64 = 512.0;
 ///   measured 1.4 ns (λ ≤ 0.01), 2.1 (0.05), 3.0 (0.1), 8.6 (0.5), 9.9 (1), 16 (10);
 /// * dense alias bin over the PMF ([`PmfAlias`]): [`cost::alias`] of its
 ///   columns, measured 2.4 ns up to 64 columns (λ ≲ 10, whatever the count),
-///   3.9 (λ = 30), 5.3 (100), 7.0 (10^3), 8.2 (10^4), 19 (10^5: 8192 columns,
+///   3.9 (λ = 30), 4.8–5.3 (100), 7.0 (10^3), 8–14 (10^4), 19–20 (10^5: 8192 columns,
 ///   128 MiB for the 1000 bins, out of the caches), hence [`DENSE_ALIAS_MAX`];
 /// * dense Ahrens–Dieter bin: `DENSE_PD` (measured 21 ns for λ ≥ 30);
 /// * sparse set of `n` bins and total mean `Λ`: the alias draw of its total

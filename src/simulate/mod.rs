@@ -636,21 +636,27 @@ pub fn run(
         let last = (first_profile + batch).min(rows.end);
         let draw_start = Instant::now();
         let n_channels = lidar.channels.len();
-        let mut drawn: Vec<(DrawnProfile, Vec<f64>)> = (first_profile..last)
+        let mut drawn: Vec<(DrawnProfile, Option<SceneDraw>)> = (first_profile..last)
             .into_par_iter()
             .map(|p| match &scene {
-                Some(sc) => draw_scene_counts(sc, seed, n_channels, p as u64, n_bins, &energy),
+                Some(sc) => {
+                    let (d, draw) =
+                        draw_scene_counts(sc, seed, n_channels, p as u64, n_bins, &energy);
+                    (d, Some(draw))
+                }
                 None => (
                     draw_profile(&channels, p as u64, shots, n_bins, components, &energy),
-                    Vec::new(),
+                    None,
                 ),
             })
             .collect();
         let took = draw_start.elapsed();
         // the truth of a changing scene's profiles (the model, not the draw)
         if let Some(sc) = &scene {
-            drawn.par_iter_mut().enumerate().for_each(|(k, (d, bkg))| {
-                d.values = scene_profile_values(sc, (first_profile + k) as u64, n_bins, bkg);
+            drawn.par_iter_mut().for_each(|(d, draw)| {
+                if let Some(draw) = draw {
+                    d.values = scene_profile_values(sc, n_bins, draw);
+                }
             });
         }
         // summed here, in parallel, not on the writer's thread
@@ -788,13 +794,20 @@ pub fn draw_scene_profile(
     n_bins: usize,
     energy: &RunEnergy,
 ) -> DrawnProfile {
-    let (mut drawn, mean_backgrounds) = draw_scene_counts(sc, seed, channels, p, n_bins, energy);
-    drawn.values = scene_profile_values(sc, p, n_bins, &mean_backgrounds);
+    let (mut drawn, draw) = draw_scene_counts(sc, seed, channels, p, n_bins, energy);
+    drawn.values = scene_profile_values(sc, n_bins, &draw);
     drawn
 }
 
+/// What the truth of a changing scene's profile needs of its draw: its runs (column,
+/// shots) and each channel's mean background counts per shot.
+pub struct SceneDraw {
+    runs: Vec<(usize, u64)>,
+    mean_backgrounds: Vec<f64>,
+}
+
 /// Draws the counts of profile `p` of a changing scene, every channel (no truth yet:
-/// [`scene_profile_values`]); also returns each channel's mean background per shot.
+/// [`scene_profile_values`]); also returns what the truth needs of the draw.
 pub fn draw_scene_counts(
     sc: &scene::SceneModel,
     seed: u64,
@@ -802,7 +815,7 @@ pub fn draw_scene_counts(
     p: u64,
     n_bins: usize,
     energy: &RunEnergy,
-) -> (DrawnProfile, Vec<f64>) {
+) -> (DrawnProfile, SceneDraw) {
     let runs = sc.runs(p);
     let shots = runs.iter().map(|r| r.1).sum::<u64>();
     let energies = scene::ProfileEnergies::new(energy, p, shots);
@@ -820,22 +833,29 @@ pub fn draw_scene_counts(
         energy_sum: energies.run_sums(&runs).iter().sum(),
         values: Vec::new(),
     };
-    (drawn, mean_backgrounds)
+    (
+        drawn,
+        SceneDraw {
+            runs,
+            mean_backgrounds,
+        },
+    )
 }
 
 /// The rows of profile `p`'s per-profile variables in a changing scene, channel-major:
 /// expected signal, background, recorded counts, Eq. 4 S/N and attenuated backscatter
-/// (what the profile's shots saw on average); `mean_backgrounds` per channel as
-/// [`draw_scene_counts`] returns them.
+/// (what the profile's shots saw on average), from its [`SceneDraw`].
 pub fn scene_profile_values(
     sc: &scene::SceneModel,
-    p: u64,
     n_bins: usize,
-    mean_backgrounds: &[f64],
+    draw: &SceneDraw,
 ) -> Vec<Vec<f64>> {
-    let runs = sc.runs(p);
+    let SceneDraw {
+        runs,
+        mean_backgrounds,
+    } = draw;
     let shots = runs.iter().map(|r| r.1).sum::<u64>() as f64;
-    let mut truth = sc.truth(&runs);
+    let mut truth = sc.truth(runs);
     let dark = |k: usize| sc.expected[runs[0].0][k].dark;
     if sc.is_solar() {
         // an ideal detector records what arrives; a dead-time one its stationary rate per

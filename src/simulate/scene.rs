@@ -498,36 +498,21 @@ fn draw_run(
 ) {
     let bins = acc.len();
     let mut sky_rng = sampling::stream_rng(seed ^ SKY_STREAM, p, 0);
-    let per_shot_sky = match sampler {
-        StreamSampler::DeadTimed(photons, dead) => {
-            if let Some(b) = sky {
-                return sunlit_dead_time_run(photons, dead, b, seed, p, n, acc);
-            }
-            sampler.profile_counts(seed, p, n, acc);
-            false
+    let energies = || factors.expect("a modulated sampler draws with the run's energies");
+    match (sampler, sky) {
+        // through a dead-time detector the sunlight joins each shot
+        (StreamSampler::DeadTimed(photons, dead), Some(b)) => {
+            return sunlit_dead_time_run(photons, dead, b, seed, p, n, acc);
         }
-        StreamSampler::Modulated(m) => {
-            let factors = factors.expect("a modulated sampler draws with the run's energies");
-            match sky.filter(|_| m.has_detector()) {
-                Some(b) => {
-                    let mut add_sky = |shot: &mut ShotCounts| {
-                        add_background(&mut sky_rng, b, bins, shot);
-                    };
-                    m.add_run(seed, p, factors, acc, &mut add_sky);
-                    true
-                }
-                None => {
-                    m.add_run(seed, p, factors, acc, &mut |_| {});
-                    false
-                }
-            }
+        (StreamSampler::Modulated(m), Some(b)) if m.has_detector() => {
+            let mut add_sky = |shot: &mut ShotCounts| add_background(&mut sky_rng, b, bins, shot);
+            return m.add_run(seed, p, energies(), acc, &mut add_sky);
         }
-        _ => {
-            sampler.profile_counts(seed, p, n, acc);
-            false
-        }
-    };
-    if let (Some(b), false) = (sky, per_shot_sky) {
+        (StreamSampler::Modulated(m), _) => m.add_run(seed, p, energies(), acc, &mut |_| {}),
+        _ => sampler.profile_counts(seed, p, n, acc),
+    }
+    // an ideal detector: the run's sunlight all at once (the same law)
+    if let Some(b) = sky {
         add_background(&mut sky_rng, n as f64 * b, bins, acc);
     }
 }
