@@ -17,8 +17,8 @@ use std::time::Instant;
 use lidarsim::sampling::{DenseMethod, PathChoice, ShotSampler, stream_rng};
 
 /// Means measured, per shot-bin.
-const MEANS: [f64; 15] = [
-    1e-3, 0.01, 0.05, 0.1, 0.25, 0.5, 1.0, 3.0, 10.0, 30.0, 100.0, 1e3, 1e4, 1e5, 1e6,
+const MEANS: [f64; 17] = [
+    1e-3, 0.01, 0.05, 0.1, 0.25, 0.5, 1.0, 3.0, 10.0, 30.0, 100.0, 1e3, 1e4, 4e4, 1e5, 1e6, 1e7,
 ];
 
 fn main() {
@@ -39,8 +39,8 @@ fn main() {
     }
     println!("ns per shot-bin, {bins} bins at λ, best of {repeat} (one thread)");
     println!(
-        "{:>8} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10}",
-        "λ", "inversion", "alias", "rejection", "sparse", "auto", "auto M/s"
+        "{:>8} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10}",
+        "λ", "inversion", "alias", "cells", "rejection", "sparse", "auto", "auto M/s"
     );
     for &l in &MEANS {
         let lambda = vec![l; bins];
@@ -67,10 +67,11 @@ fn main() {
         };
         let auto = time(PathChoice::Auto);
         println!(
-            "{:>8.0e} {} {} {} {} {:10.2} {:10.0}",
+            "{:>8.0e} {} {} {} {} {} {:10.2} {:10.0}",
             l,
             cell(l <= 600.0, PathChoice::Dense(DenseMethod::Inversion)),
             cell(l <= 1e5, PathChoice::Dense(DenseMethod::Alias)),
+            cell(l >= 30.0, PathChoice::Dense(DenseMethod::Cells)),
             cell(true, PathChoice::Dense(DenseMethod::Rejection)),
             cell(l <= 10.0, PathChoice::AllSparse),
             auto,

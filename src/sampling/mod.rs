@@ -7,6 +7,7 @@
 //! * [`ShotSampler`]: exact draw of one shot, built once per set of means
 //!   and reused for every shot. It mixes four exact paths per bin (dense
 //!   table inversion, dense alias table over the PMF ([`PmfAlias`]), dense
+//!   rejection from a step envelope over the PMF ([`PmfCells`]), dense
 //!   Ahrens–Dieter, and the sparse "Poisson total + alias placement" path) by
 //!   a measured cost model: see its docs and [`cost`].
 //! * [`AggregateSampler`]: one Poisson(`M·λ_i`) draw per bin for fixed means,
@@ -58,6 +59,7 @@ mod alias;
 pub mod approx;
 pub mod jitter;
 mod pmf_alias;
+mod pmf_cells;
 mod shot;
 mod table;
 #[cfg(test)]
@@ -68,6 +70,7 @@ pub use aggregate::{
     add_aggregate, poisson_u64,
 };
 pub use pmf_alias::{PmfAlias, pmf_alias_columns};
+pub use pmf_cells::{CELLS_PER_SIGMA, PmfCells, pmf_cells_bytes};
 pub use shot::{
     ALIAS_BUDGET_BYTES, DENSE_ALIAS_MAX, DENSE_TABLE_MAX, DenseMethod, PathChoice, ShotSampler,
     ShotStrategy, StrategyKind, TOTAL_TABLE_MAX, cost, table_bytes_bound,

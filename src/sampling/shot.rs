@@ -1,4 +1,5 @@
-//! The exact per-shot sampler: dense table inversion, dense Ahrens–Dieter,
+//! The exact per-shot sampler: dense table inversion, dense alias tables and
+//! step-envelope rejection over the PMF, dense Ahrens–Dieter,
 //! and the sparse "Poisson total + alias placement" path, mixed per bin by a
 //! cost model.
 
@@ -10,6 +11,7 @@ use rand_distr::{Distribution, Poisson};
 use super::CountSink;
 use super::alias::AliasTable;
 use super::pmf_alias::{PmfAlias, pmf_alias_columns};
+use super::pmf_cells::{PmfCells, pmf_cells_bytes};
 use super::table::{count_above, tail_thresholds};
 
 /// Largest per-bin mean drawn densely by table inversion (one compare when the
@@ -19,14 +21,19 @@ use super::table::{count_above, tail_thresholds};
 pub const DENSE_TABLE_MAX: f64 = 0.07;
 
 /// Largest per-bin mean drawn densely by an alias table over the PMF (tables of at
-/// most 4096 columns, 64 KiB); above it a prebuilt
-/// [`rand_distr::Poisson`] (Ahrens–Dieter 1982) per bin.
-pub const DENSE_ALIAS_MAX: f64 = 4.0e4;
+/// most 1024 columns, 16 KiB); above it rejection from a step envelope over the PMF
+/// ([`PmfCells`]: 7–27 KiB up to λ = 10^6) within the sampler's table budget, and a
+/// prebuilt [`rand_distr::Poisson`] (Ahrens–Dieter 1982) per bin past it. Where the
+/// cost model's alias cost (growing with the table, [`cost::alias`]) passes
+/// [`cost::CELLS`]; a whole scenario-1 aggregate run measured 10–15 % less drawing time
+/// with this switch at 10^3 than at 4·10^4 (`validation/reports/throughput.md`).
+pub const DENSE_ALIAS_MAX: f64 = 1.0e3;
 
-/// Most bytes of alias tables over PMFs that one sampler keeps. A dense bin whose table
-/// would pass 1 KiB (λ ≳ 10) once this is spent is drawn by Ahrens–Dieter instead (out of
-/// the caches a large table is no faster); tables of at most 1 KiB are always built. So
-/// a sampler's tables take at most [`table_bytes_bound`] whatever its bins.
+/// Most bytes of tables over PMFs (alias, [`PmfAlias`], and step envelope, [`PmfCells`])
+/// that one sampler keeps. A dense bin whose table would pass 1 KiB (λ ≳ 10) once this
+/// is spent is drawn by Ahrens–Dieter instead (out of the caches a large table is no
+/// faster); tables of at most 1 KiB are always built. So a sampler's tables take at most
+/// [`table_bytes_bound`] whatever its bins.
 pub const ALIAS_BUDGET_BYTES: usize = 4 << 20;
 
 /// Alias-table bytes a bin may always take, whatever the budget.
@@ -58,7 +65,11 @@ pub const TOTAL_TABLE_MAX: f64 = 512.0;
 /// * dense alias bin over the PMF ([`PmfAlias`]): [`cost::alias`] of its
 ///   columns, measured 2.4 ns up to 64 columns (λ ≲ 10, whatever the count),
 ///   3.9 (λ = 30), 4.8–5.3 (100), 7.0 (10^3), 8–14 (10^4), 19–20 (10^5: 8192 columns,
-///   128 MiB for the 1000 bins, out of the caches), hence [`DENSE_ALIAS_MAX`];
+///   128 MiB for the 1000 bins, out of the caches);
+/// * dense step-envelope rejection bin ([`PmfCells`]): `CELLS`, measured 6.3–9 ns for
+///   100 bins from λ = 30 to 10^6 (two `u64` per draw, tables in the caches), 11 ns at
+///   10^7, 13–27 ns for 1000 bins of 10^3–10^6 (7–26 MiB, out of the caches, which
+///   the table budget prevents), hence [`DENSE_ALIAS_MAX`];
 /// * dense Ahrens–Dieter bin: `DENSE_PD` (measured 21 ns for λ ≥ 30);
 /// * sparse set of `n` bins and total mean `Λ`: the alias draw of its total
 ///   (`DENSE_PD` above [`TOTAL_TABLE_MAX`]) per shot plus `Λ·sparse_place(n)`,
@@ -80,6 +91,8 @@ pub mod cost {
     pub const DENSE_PER_THRESHOLD: f64 = 0.35;
     /// Per dense Ahrens–Dieter bin (`rand_distr::Poisson`).
     pub const DENSE_PD: f64 = 21.0;
+    /// Per draw by rejection from a step envelope ([`super::PmfCells`]).
+    pub const CELLS: f64 = 7.5;
     /// Per draw from an alias table over a PMF of at most 64 columns (1 KiB).
     pub const ALIAS_BASE: f64 = 2.4;
     /// Extra per draw for each doubling of the table past 64 columns (cache).
@@ -149,6 +162,8 @@ pub struct ShotStrategy {
     pub dense_table_bins: usize,
     /// Dense bins drawn by an alias table over their PMF.
     pub dense_alias_bins: usize,
+    /// Dense bins drawn by rejection from a step envelope over their PMF.
+    pub dense_cells_bins: usize,
     /// Dense bins drawn by a prebuilt `rand_distr::Poisson`.
     pub dense_pd_bins: usize,
     /// Bins on the sparse path.
@@ -165,11 +180,12 @@ impl fmt::Display for ShotStrategy {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "{:?}: {} bins = {} dense-table + {} dense-alias + {} dense-PD + {} sparse (Σλ = {:.4}) + {} idle; ~{:.1} ns/shot",
+            "{:?}: {} bins = {} dense-table + {} dense-alias + {} dense-cells + {} dense-PD + {} sparse (Σλ = {:.4}) + {} idle; ~{:.1} ns/shot",
             self.kind,
             self.bins,
             self.dense_table_bins,
             self.dense_alias_bins,
+            self.dense_cells_bins,
             self.dense_pd_bins,
             self.sparse_bins,
             self.sparse_mean,
@@ -196,15 +212,19 @@ struct SparseSet {
 /// built once per profile (O(n log n)), reused for every shot, allocation-free
 /// per shot.
 ///
-/// Each bin's count is Poisson(λ_i), independent across bins and shots. Three
-/// exact paths, chosen per bin by a cost model ([`cost`], [`PathChoice`]):
+/// Each bin's count is Poisson(λ_i), independent across bins and shots. Exact
+/// paths, chosen per bin by a cost model ([`cost`], [`PathChoice`]):
 ///
 /// * **Dense inversion** (`λ ≤` [`DENSE_TABLE_MAX`]): per bin a table of
 ///   64-bit tail thresholds `⌊P(K ≥ j)·2^64⌋`; one `u64` per draw and, when
 ///   the count is 0, one compare (else a branch-free count of the thresholds
 ///   above the draw). Inversion by sequential search, Devroye (1986),
 ///   *Non-Uniform Random Variate Generation*, §X.3.3.
-/// * **Dense rejection** (`λ >` [`DENSE_TABLE_MAX`]): a prebuilt
+/// * **Dense alias** (`λ ≤` [`DENSE_ALIAS_MAX`]): an alias table over the PMF
+///   ([`PmfAlias`]), one `u64` per draw.
+/// * **Dense step-envelope rejection** (above): [`PmfCells`], about two `u64`
+///   per draw from tables of `O(√λ)` bytes.
+/// * **Dense rejection** (past the table budget, [`ALIAS_BUDGET_BYTES`]): a prebuilt
 ///   [`rand_distr::Poisson`] per bin, Ahrens & Dieter (1982), "Computer
 ///   generation of Poisson deviates from modified normal distributions",
 ///   ACM TOMS 8(2), 163–179.
@@ -230,6 +250,8 @@ pub struct ShotSampler {
     d_rest: Box<[u64]>,
     /// Dense bins drawn by an alias table over their PMF.
     d_alias: Box<[(u32, PmfAlias)]>,
+    /// Dense bins drawn by rejection from a step envelope over their PMF.
+    d_cells: Box<[(u32, PmfCells)]>,
     /// Dense Ahrens–Dieter bins.
     d_pd: Box<[(u32, Poisson<f64>)]>,
     sparse: Option<SparseSet>,
@@ -243,7 +265,10 @@ pub enum DenseMethod {
     Inversion,
     /// Alias table over the PMF ([`PmfAlias`]), `λ ≤` [`DENSE_ALIAS_MAX`].
     Alias,
-    /// A prebuilt `rand_distr::Poisson` (Ahrens–Dieter), above.
+    /// Rejection from a step envelope over the PMF ([`PmfCells`]), `λ >`
+    /// [`DENSE_ALIAS_MAX`].
+    Cells,
+    /// A prebuilt `rand_distr::Poisson` (Ahrens–Dieter), past the table budget.
     Rejection,
 }
 
@@ -255,8 +280,25 @@ impl DenseMethod {
         } else if lambda <= DENSE_ALIAS_MAX {
             DenseMethod::Alias
         } else {
-            DenseMethod::Rejection
+            DenseMethod::Cells
         }
+    }
+}
+
+/// `method` for a dense bin of mean `lambda`, or Ahrens–Dieter when its table (past
+/// [`SMALL_TABLE_BYTES`]) would take the sampler's tables past [`ALIAS_BUDGET_BYTES`];
+/// `spent` counts the bytes of those larger tables.
+fn within_budget(method: DenseMethod, lambda: f64, spent: &mut usize) -> DenseMethod {
+    let bytes = match method {
+        DenseMethod::Alias => 16 * pmf_alias_columns(lambda),
+        DenseMethod::Cells => pmf_cells_bytes(lambda),
+        _ => return method,
+    };
+    if bytes > SMALL_TABLE_BYTES && *spent + bytes > ALIAS_BUDGET_BYTES {
+        DenseMethod::Rejection
+    } else {
+        *spent += bytes;
+        method
     }
 }
 
@@ -283,6 +325,7 @@ fn dense_cost_by(lambda: f64, method: DenseMethod) -> f64 {
                 + q * cost::DENSE_PER_THRESHOLD * rest
         }
         DenseMethod::Alias => cost::alias(pmf_alias_columns(lambda)),
+        DenseMethod::Cells => cost::CELLS,
         DenseMethod::Rejection => cost::DENSE_PD,
     }
 }
@@ -364,6 +407,7 @@ impl ShotSampler {
         let mut d_off = vec![0u32];
         let mut d_rest = Vec::new();
         let mut d_alias = Vec::new();
+        let mut d_cells = Vec::new();
         let mut d_pd = Vec::new();
         let mut idle = bins - order.len();
         let mut est = 0.0;
@@ -372,18 +416,7 @@ impl ShotSampler {
             let l = lam(i);
             let method = match choice {
                 PathChoice::Dense(m) => m,
-                _ => match DenseMethod::for_mean(l) {
-                    DenseMethod::Alias => {
-                        let bytes = 16 * pmf_alias_columns(l);
-                        if bytes > SMALL_TABLE_BYTES && alias_bytes + bytes > ALIAS_BUDGET_BYTES {
-                            DenseMethod::Rejection
-                        } else {
-                            alias_bytes += bytes;
-                            DenseMethod::Alias
-                        }
-                    }
-                    m => m,
-                },
+                _ => within_budget(DenseMethod::for_mean(l), l, &mut alias_bytes),
             };
             match method {
                 DenseMethod::Inversion => {
@@ -398,6 +431,7 @@ impl ShotSampler {
                     d_off.push(u32::try_from(d_rest.len()).expect("dense table too large"));
                 }
                 DenseMethod::Alias => d_alias.push((i, PmfAlias::new(l))),
+                DenseMethod::Cells => d_cells.push((i, PmfCells::new(l))),
                 DenseMethod::Rejection => d_pd.push((
                     i,
                     Poisson::new(l).expect("lambda out of range for rand_distr::Poisson"),
@@ -430,7 +464,7 @@ impl ShotSampler {
             })
         };
 
-        let n_dense = d_first.len() + d_alias.len() + d_pd.len();
+        let n_dense = d_first.len() + d_alias.len() + d_cells.len() + d_pd.len();
         let kind = match (n_dense > 0, sparse.is_some()) {
             (false, false) => StrategyKind::Empty,
             (true, false) => StrategyKind::Dense,
@@ -442,6 +476,7 @@ impl ShotSampler {
             bins,
             dense_table_bins: d_first.len(),
             dense_alias_bins: d_alias.len(),
+            dense_cells_bins: d_cells.len(),
             dense_pd_bins: d_pd.len(),
             sparse_bins: sparse_ids.len(),
             sparse_mean,
@@ -455,6 +490,7 @@ impl ShotSampler {
             d_off: d_off.into_boxed_slice(),
             d_rest: d_rest.into_boxed_slice(),
             d_alias: d_alias.into_boxed_slice(),
+            d_cells: d_cells.into_boxed_slice(),
             d_pd: d_pd.into_boxed_slice(),
             sparse,
             strategy,
@@ -497,6 +533,10 @@ impl ShotSampler {
         // Dense alias tables over the PMF: one u64 each.
         for (bin, table) in self.d_alias.iter() {
             sink.add_any(*bin as usize, table.count_for(rng.next_u64()));
+        }
+        // Dense rejection from a step envelope: about two u64 each.
+        for (bin, cells) in self.d_cells.iter() {
+            sink.add_any(*bin as usize, cells.sample(rng));
         }
         // Dense Ahrens–Dieter.
         for (bin, pd) in self.d_pd.iter() {

@@ -207,6 +207,62 @@ fn pmf_alias_realises_poisson() {
     }
 }
 
+/// Deterministic: [`PmfCells`] (rejection from a step envelope) realises the PMF window
+/// of [`PmfAlias`] (the same recurrence, normalised) to within 1e-12 relative plus
+/// 2^-60 absolute, from a mean whose cells are single counts (λ = 30) to cells of 2^11
+/// counts (λ = 10^8); a sampler built for 1.001·λ is told apart by its mean.
+#[test]
+fn pmf_cells_realise_the_pmf_window() {
+    for l in [30.0, 1e3, 4e4, 1e6, 1e8] {
+        let (k0, w) = super::pmf_alias::pmf_window(l);
+        let len = k0 as usize + w.len();
+        let total: f64 = w.iter().sum();
+        let p = PmfCells::new(l).probabilities(len);
+        let mut mean = 0.0;
+        for (k, &pk) in p.iter().enumerate() {
+            let want = if k < k0 as usize { 0.0 } else { w[k - k0 as usize] / total };
+            let tol = 1e-12 * want + (2.0f64).powi(-60);
+            assert!((pk - want).abs() < tol, "λ={l}, k={k}: {pk} vs {want}");
+            mean += k as f64 * pk;
+        }
+        assert!((mean - l).abs() < 1e-11 * l, "λ={l}: mean {mean}");
+        let q = PmfCells::new(l * 1.001).probabilities(len + len / 50);
+        let wrong: f64 = q.iter().enumerate().map(|(k, &x)| k as f64 * x).sum();
+        assert!(wrong - l > 0.5e-3 * l, "λ={l}: {wrong}");
+    }
+}
+
+/// The draws of [`PmfCells`] fit Poisson(λ) (chi-square and moments, 2·10^5 draws at
+/// λ = 30, 10^3, 10^5), and a sampler of 1.001·λ fails the same checks at 10^3 and 10^5
+/// (its mean is off by 14 and 141 standard errors). False alarm: 9 checks at ≤ 1e-6 →
+/// 5e-6.
+#[test]
+fn pmf_cells_draws_fit_poisson() {
+    let draws = |l: f64, seed: u64| {
+        let s = PmfCells::new(l);
+        let mut rng = stream_rng(6000, seed, 0);
+        let mut hist = vec![0u64; (l + 12.0 * l.sqrt() + 12.0) as usize];
+        for _ in 0..200_000 {
+            let k = s.sample(&mut rng) as usize;
+            if k >= hist.len() {
+                hist.resize(k + 1, 0);
+            }
+            hist[k] += 1;
+        }
+        hist
+    };
+    for (j, l) in [30.0, 1e3, 1e5].into_iter().enumerate() {
+        let hist = draws(l, j as u64);
+        assert_poisson_moments(&hist, l, "PmfCells");
+        assert_poisson_fit(&hist, l, "PmfCells");
+        if l >= 1e3 {
+            let wrong = draws(l * 1.001, j as u64);
+            let (zm, _) = moment_z(&wrong, l);
+            assert!(zm > Z_MAX, "λ={l}: a 0.1 % mean error gave z = {zm:.1}");
+        }
+    }
+}
+
 #[test]
 fn alias_table_realises_weights() {
     // Deterministic: integer construction, probabilities within (n+1)·2^-64.
@@ -362,7 +418,7 @@ fn wrong_sampler_is_rejected() {
 /// threshold gives the Poisson law (chi-square against Poisson at the
 /// threshold; the laws differ by 2e-9 relative, far below resolution).
 /// Switch points: dense table ↔ alias over the PMF (DENSE_TABLE_MAX), alias ↔
-/// Ahrens–Dieter (DENSE_ALIAS_MAX), sparse total table ↔ Ahrens–Dieter
+/// step-envelope rejection (DENSE_ALIAS_MAX), sparse total table ↔ Ahrens–Dieter
 /// (TOTAL_TABLE_MAX), and the Auto dense ↔ sparse split (found from the sampler
 /// itself).
 /// False alarm: 8 tests at 1e-6 → 8e-6.
@@ -371,7 +427,12 @@ fn continuity_at_switch_points() {
     let eps = 1e-9;
     let dense = |s: &ShotSampler| {
         let st = s.strategy();
-        [st.dense_table_bins, st.dense_alias_bins, st.dense_pd_bins]
+        [
+            st.dense_table_bins,
+            st.dense_alias_bins,
+            st.dense_cells_bins,
+            st.dense_pd_bins,
+        ]
     };
     for (switch, lo_side) in [(DENSE_TABLE_MAX, 0), (DENSE_ALIAS_MAX, 1)] {
         for (j, l) in [switch * (1.0 - eps), switch * (1.0 + eps)]
@@ -379,7 +440,7 @@ fn continuity_at_switch_points() {
             .enumerate()
         {
             let s = ShotSampler::with_choice(&[l; 50], PathChoice::AllDense);
-            let mut want = [0; 3];
+            let mut want = [0; 4];
             want[lo_side + j] = 50;
             assert_eq!(dense(&s), want, "{}", s.strategy());
             let hist = shot_histogram(&s, &mut stream_rng(5000, j as u64, lo_side as u64), 4000);
@@ -638,17 +699,21 @@ fn aggregate_profile_law() {
     assert_ne!(a, c);
 }
 
-/// The alias tables of one sampler stay within `ALIAS_BUDGET_BYTES`: 2000 bins at
-/// λ = 10^4 (32 KiB tables) keep 128 tables (4 MiB) and draw the rest by Ahrens–Dieter;
-/// small tables (λ = 5, 1 KiB) are built for every bin whatever their number.
-/// Deterministic.
+/// The tables of one sampler stay within `ALIAS_BUDGET_BYTES`: 2000 bins at λ = 10^3
+/// (16 KiB alias tables) keep 256 tables (4 MiB), 2000 bins at λ = 10^6 as many
+/// step-envelope tables as fit, and both draw the rest by Ahrens–Dieter; small tables
+/// (λ = 5, 1 KiB) are built for every bin whatever their number. Deterministic.
 #[test]
 fn alias_tables_stay_within_their_budget() {
-    let st = ShotSampler::with_choice(&[1e4; 2000], PathChoice::AllDense).strategy();
-    let per_table = 16 * pmf_alias_columns(1e4);
-    assert_eq!(per_table, 32 * 1024);
+    let st = ShotSampler::with_choice(&[1e3; 2000], PathChoice::AllDense).strategy();
+    let per_table = 16 * pmf_alias_columns(1e3);
+    assert_eq!(per_table, 16 * 1024);
     assert_eq!(st.dense_alias_bins, ALIAS_BUDGET_BYTES / per_table, "{st}");
     assert_eq!(st.dense_alias_bins + st.dense_pd_bins, 2000, "{st}");
+    let st = ShotSampler::with_choice(&[1e6; 2000], PathChoice::AllDense).strategy();
+    let per_table = pmf_cells_bytes(1e6);
+    assert_eq!(st.dense_cells_bins, ALIAS_BUDGET_BYTES / per_table, "{st}");
+    assert_eq!(st.dense_cells_bins + st.dense_pd_bins, 2000, "{st}");
     let st = ShotSampler::with_choice(&[5.0; 20_000], PathChoice::AllDense).strategy();
     assert_eq!(st.dense_alias_bins, 20_000, "{st}");
     assert!(table_bytes_bound(20_000) >= (20_000 * 16 * pmf_alias_columns(5.0)) as f64);
