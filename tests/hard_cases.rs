@@ -1012,13 +1012,13 @@ fn sixty_degrees_off_nadir() {
 
 /// Shot sampler, the dense methods' switch points: table inversion ↔ alias over the PMF
 /// at DENSE_TABLE_MAX (every bin dense, `PathChoice::AllDense`: the cost model would put
-/// such faint bins on the sparse path) and alias ↔ Ahrens–Dieter at DENSE_ALIAS_MAX
+/// such faint bins on the sparse path) and alias ↔ step-envelope rejection at DENSE_ALIAS_MAX
 /// (through `ShotSampler::new`). Each: 100 (resp. 50) bins at the switch·(1 − 1e-9) and
 /// as many at switch·(1 + 1e-9), 200,000 and 40,000 shots: each side against Poisson(switch) and the sides
 /// against each other, chi-square p > 1e-6. False alarm: 6e-6. Power: Poisson(1.01·switch)
 /// is rejected on each side.
 #[test]
-fn switch_dense_table_alias_ahrens_dieter() {
+fn switch_dense_table_alias_step_envelope() {
     for (switch, choice, shots, sides) in [
         (
             DENSE_TABLE_MAX,
@@ -1030,10 +1030,11 @@ fn switch_dense_table_alias_ahrens_dieter() {
             DENSE_ALIAS_MAX,
             PathChoice::Auto,
             40_000,
-            ["alias", "Ahrens–Dieter"],
+            ["alias", "step envelope"],
         ),
     ] {
-        // 50 tables of 64 KiB at 4·10⁴ stay within the sampler's alias budget (4 MiB)
+        // 50 tables of 16 KiB and 50 of 7 KiB at 10³ stay within the sampler's table
+        // budget (4 MiB)
         let side = if switch == DENSE_TABLE_MAX { 100 } else { 50 };
         let (lo, hi) = (switch * (1.0 - 1e-9), switch * (1.0 + 1e-9));
         let lambda: Vec<f64> = (0..2 * side)
@@ -1041,11 +1042,16 @@ fn switch_dense_table_alias_ahrens_dieter() {
             .collect();
         let s = ShotSampler::with_choice(&lambda, choice);
         let st = s.strategy();
-        let counts = [st.dense_table_bins, st.dense_alias_bins, st.dense_pd_bins];
+        let counts = [
+            st.dense_table_bins,
+            st.dense_alias_bins,
+            st.dense_cells_bins,
+            st.dense_pd_bins,
+        ];
         let want = if switch == DENSE_TABLE_MAX {
-            [side, side, 0]
+            [side, side, 0, 0]
         } else {
-            [0, side, side]
+            [0, side, side, 0]
         };
         assert_eq!(counts, want, "{st}");
         let below: Vec<usize> = (0..2 * side).step_by(2).collect();

@@ -220,7 +220,11 @@ fn pmf_cells_realise_the_pmf_window() {
         let p = PmfCells::new(l).probabilities(len);
         let mut mean = 0.0;
         for (k, &pk) in p.iter().enumerate() {
-            let want = if k < k0 as usize { 0.0 } else { w[k - k0 as usize] / total };
+            let want = if k < k0 as usize {
+                0.0
+            } else {
+                w[k - k0 as usize] / total
+            };
             let tol = 1e-12 * want + (2.0f64).powi(-60);
             assert!((pk - want).abs() < tol, "λ={l}, k={k}: {pk} vs {want}");
             mean += k as f64 * pk;
