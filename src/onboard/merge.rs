@@ -32,8 +32,6 @@ pub const BLOCK_BYTES: usize = 8 << 20;
 
 /// One region of a product shard.
 struct ShardRegion {
-    counts: Dataset,
-    time: Dataset,
     /// Its profiles, and the shots summed in each.
     rows: usize,
     shots: u32,
@@ -41,10 +39,11 @@ struct ShardRegion {
     row_elems: usize,
 }
 
-/// A product shard and what its root attributes say of it.
+/// A product shard and what its root attributes say of it (the file is closed: it is
+/// opened again while its rows are read, so that the shards done and to come hold no
+/// memory).
 struct ProductShard {
     path: PathBuf,
-    file: hdf5::File,
     shard: Shard,
     /// Shots of the run, its first, and of a frame.
     run_shots: u64,
@@ -91,8 +90,18 @@ impl ProductShard {
             scheme: a.text("scheme")?,
             regions,
             path: path.to_path_buf(),
-            file,
         })
+    }
+
+    /// Dataset `name` of its region `k`.
+    fn dataset(&self, k: usize, name: &str) -> Result<Dataset> {
+        let mut mdc = hdf5::plist::file_access::MetadataCacheConfig::default();
+        (mdc.max_size, mdc.initial_size) = (4 << 20, 1 << 20);
+        hdf5::File::with_options()
+            .with_fapl(|fapl| fapl.mdc_config(&mdc).chunk_cache(0, 0, 1.0))
+            .open(&self.path)
+            .and_then(|f| f.dataset(&format!("region_{k}/{name}")))
+            .map_err(unreadable(&self.path))
     }
 
     /// The shots of its shard.
@@ -133,26 +142,34 @@ impl ShardRegion {
                 Error::output(path, format!("{} has no `{name}`: not a product", g.name()))
             })
         };
-        let counts = get("counts")?;
-        let shape = counts.shape();
+        let shape = get("counts")?.shape();
         let shots = g
             .attr("shots_averaged")
             .and_then(|a| a.read_scalar::<u32>())
             .map_err(unreadable(path))?;
+        if get("time")?.shape().first() != shape.first() {
+            return Err(Error::output(
+                path,
+                format!("{}: `time` and `counts` differ in profiles", g.name()),
+            ));
+        }
         Ok(ShardRegion {
             rows: shape.first().copied().unwrap_or(0),
             row_elems: shape.iter().skip(1).product(),
-            time: get("time")?,
-            counts,
             shots,
         })
     }
 }
 
-/// Region `k` of the whole product, as the first shard describes it, with `profiles`.
-fn region_spec(f: &ProductShard, k: usize, profiles: usize) -> Result<RegionSpec> {
-    let g = f
-        .file
+/// Region `k` of the whole product, as the first shard (open as `file`) describes it,
+/// with `profiles`.
+fn region_spec(
+    f: &ProductShard,
+    file: &hdf5::File,
+    k: usize,
+    profiles: usize,
+) -> Result<RegionSpec> {
+    let g = file
         .group(&format!("region_{k}"))
         .map_err(unreadable(&f.path))?;
     let num = |name: &str| {
@@ -174,9 +191,9 @@ fn region_spec(f: &ProductShard, k: usize, profiles: usize) -> Result<RegionSpec
     })
 }
 
-/// The whole product's root, as the first shard describes it.
-fn header(f: &ProductShard) -> Result<ProductHeader> {
-    let g = f.file.group("region_0").map_err(unreadable(&f.path))?;
+/// The whole product's root, as the first shard (open as `file`) describes it.
+fn header(f: &ProductShard, file: &hdf5::File) -> Result<ProductHeader> {
+    let g = file.group("region_0").map_err(unreadable(&f.path))?;
     let read = || -> hdf5::Result<(Vec<String>, String)> {
         let channels = g
             .dataset("channel")?
@@ -258,18 +275,19 @@ pub fn prepare(out: &Path, shards: &[PathBuf]) -> Result<ProductMerge> {
     }
     let mut files: Vec<Option<ProductShard>> = files.into_iter().map(Some).collect();
     let files: Vec<ProductShard> = order.iter().filter_map(|&i| files[i].take()).collect();
-    let whole = 0..files[0].run_shots;
-    let specs = (0..files[0].regions.len())
+    let f = &files[0];
+    let file = hdf5::File::open(&f.path).map_err(unreadable(&f.path))?;
+    let whole = 0..f.run_shots;
+    let specs = (0..f.regions.len())
         .map(|k| {
-            region_spec(
-                &files[0],
-                k,
-                profiles_within(files[0].regions[k].shots, &whole).len(),
-            )
+            let profiles = profiles_within(f.regions[k].shots, &whole).len();
+            region_spec(f, &file, k, profiles)
         })
         .collect::<Result<_>>()?;
+    let header = header(f, &file)?;
+    drop(file);
     Ok(ProductMerge {
-        header: header(&files[0])?,
+        header,
         files,
         specs,
         out: out.to_path_buf(),
@@ -282,8 +300,9 @@ pub fn prepare(out: &Path, shards: &[PathBuf]) -> Result<ProductMerge> {
 struct RegionRows<'a> {
     files: &'a [ProductShard],
     k: usize,
-    /// The shard read, and its next row.
+    /// The shard read, its `counts` of the region, and its next row.
     shard: usize,
+    counts: Option<Dataset>,
     row: usize,
     /// Rows of the shard read, `block_start .. block_start + block_len`.
     block: Vec<u64>,
@@ -300,6 +319,7 @@ impl<'a> RegionRows<'a> {
             files,
             k,
             shard: 0,
+            counts: None,
             row: 0,
             block: Vec::new(),
             block_start: 0,
@@ -317,13 +337,19 @@ impl<'a> RegionRows<'a> {
                 ));
             }
             (self.shard, self.row, self.block_start, self.block_len) = (self.shard + 1, 0, 0, 0);
+            self.counts = None;
         }
         let f = &self.files[self.shard];
         let r = &f.regions[self.k];
         if self.row >= self.block_start + self.block_len {
             let end = (self.row + self.block_rows).min(r.rows);
-            self.block = r
+            if self.counts.is_none() {
+                self.counts = Some(f.dataset(self.k, "counts")?);
+            }
+            self.block = self
                 .counts
+                .as_ref()
+                .ok_or_else(|| Error::Unsupported("no counts".into()))?
                 .read_slice::<u64, _, Ix3>(s![self.row..end, .., ..])
                 .map_err(unreadable(&f.path))?
                 .into_raw_vec();
@@ -343,8 +369,8 @@ fn read_times(files: &[ProductShard], k: usize, rows: Range<usize>) -> Result<Ve
         let r = &f.regions[k];
         let (a, b) = (rows.start.max(offset), rows.end.min(offset + r.rows));
         if a < b {
-            let part = r
-                .time
+            let part = f
+                .dataset(k, "time")?
                 .read_slice::<f64, _, Ix1>(s![a - offset..b - offset])
                 .map_err(unreadable(&f.path))?;
             out.extend(part.iter());
