@@ -16,7 +16,7 @@ use crate::config::Method;
 use crate::error::{Error, Result};
 use crate::output::product::{ProductHeader, ProductWriter, RegionSpec};
 use crate::output::raw_file::AttrValue;
-use crate::output::safe_file::Stream;
+use crate::output::safe_file::{OutputId, Outputs, Stream};
 use crate::scenario::{ExpectedProfile, Lidar};
 use crate::shard::{SHARD_ATTRIBUTES, Shard, fingerprint_with};
 use crate::simulate;
@@ -448,27 +448,18 @@ fn check_options(opts: &OnboardOptions) -> Result<()> {
     }
 }
 
-/// Runs the onboard simulation of `config` (with `opts.shard`, one shard of it).
-pub fn run(config: &Path, overrides: &[String], opts: &OnboardOptions) -> Result<()> {
-    check_options(opts)?;
-    let native = NativeRun::load(config, overrides, opts.seed, &opts.schemes)?;
-    let shots = native.shots_of(opts.shard)?;
-    let draw = Draw::new(&native)?;
-    let mut outputs = crate::commands::outputs_for(native.lidar.first());
-    let product = outputs.add("-o", &opts.output, Stream::Binary)?;
-    let add = |outputs: &mut crate::output::safe_file::Outputs,
-               option,
-               path: &Option<PathBuf>,
-               stream| {
-        path.as_deref()
-            .map(|p| outputs.add(option, p, stream))
-            .transpose()
-    };
-    let raw = add(&mut outputs, "--raw", &opts.raw, Stream::Binary)?;
-    let report = add(&mut outputs, "--report", &opts.report, Stream::Text)?;
-    let partial = add(&mut outputs, "--partial", &opts.partial, Stream::Text)?;
-    let header = native.header(opts.shard.map(|s| (s, &shots)), opts.word_bits)?;
-    let specs = native.region_specs(&shots);
+/// Draws `shots` of `native` into the first scheme's product, written as output
+/// `product` of `outputs`, and returns every scheme's report sums.
+fn write_product(
+    native: &NativeRun,
+    shots: &Range<u64>,
+    opts: &OnboardOptions,
+    outputs: &Outputs,
+    product: OutputId,
+) -> Result<Vec<SchemeSums>> {
+    let draw = Draw::new(native)?;
+    let header = native.header(opts.shard.map(|s| (s, shots)), opts.word_bits)?;
+    let specs = native.region_specs(shots);
     let fl = native.rep_rate_hz;
     let mut times = |k: usize, rows: Range<usize>| {
         let r = &specs[k];
@@ -476,22 +467,55 @@ pub fn run(config: &Path, overrides: &[String], opts: &OnboardOptions) -> Result
             .map(|i| profile_time(r.first_profile + i, r.shots, fl))
             .collect())
     };
-    let mut writer = ProductWriter::create(
-        outputs.temp_path(product)?,
-        &opts.output,
-        &header,
-        &specs,
-        &mut times,
-    )?;
-    let (channels, n_bins) = (draw.channels, draw.n_bins);
+    let path = outputs.temp_path(product)?;
+    let mut writer = ProductWriter::create(path, &opts.output, &header, &specs, &mut times)?;
     let mut runs: Vec<SchemeRun> = native
         .layouts
         .iter()
-        .map(|l| SchemeRun::new(l, channels, n_bins))
+        .map(|l| SchemeRun::new(l, draw.channels, draw.n_bins))
         .collect();
     draw_shots(&draw, shots.clone(), &mut runs, &mut writer)?;
     writer.finish()?;
-    let sums: Vec<SchemeSums> = runs.into_iter().map(|r| r.sums).collect();
+    Ok(runs.into_iter().map(|r| r.sums).collect())
+}
+
+/// Commits `outputs`, with `--raw` (output `raw`) the native raw file of the same draw
+/// first (counts depend on the seed and shot only), written as `simulate` writes it:
+/// that run commits every output together.
+fn commit_with_raw(
+    native: &NativeRun,
+    outputs: Outputs,
+    raw: Option<(OutputId, &Path)>,
+) -> Result<()> {
+    let Some((id, path)) = raw else {
+        return outputs.commit();
+    };
+    let raw_opts = simulate::RunOptions {
+        output: path.to_path_buf(),
+        seed: Some(native.seed),
+        profiles: Some(native.shots as usize),
+        method: Some(Method::Shot),
+        command_line: crate::output::raw_file::content::history_command(std::env::args()),
+        ..Default::default()
+    };
+    simulate::run(&native.lidar, &raw_opts, outputs, id).map(|_| ())
+}
+
+/// Runs the onboard simulation of `config` (with `opts.shard`, one shard of it).
+pub fn run(config: &Path, overrides: &[String], opts: &OnboardOptions) -> Result<()> {
+    check_options(opts)?;
+    let native = NativeRun::load(config, overrides, opts.seed, &opts.schemes)?;
+    let shots = native.shots_of(opts.shard)?;
+    let mut outputs = crate::commands::outputs_for(native.lidar.first());
+    let product = outputs.add("-o", &opts.output, Stream::Binary)?;
+    let mut add = |option, path: &Option<PathBuf>, stream| {
+        let id = path.as_deref().map(|p| outputs.add(option, p, stream));
+        id.transpose()
+    };
+    let raw = add("--raw", &opts.raw, Stream::Binary)?;
+    let report = add("--report", &opts.report, Stream::Text)?;
+    let partial = add("--partial", &opts.partial, Stream::Text)?;
+    let sums = write_product(&native, &shots, opts, &outputs, product)?;
     if let Some(id) = report {
         let input = native.report_input(&sums, opts.word_bits);
         outputs.write(id, |w| report::write_report(w, &input))?;
@@ -500,22 +524,7 @@ pub fn run(config: &Path, overrides: &[String], opts: &OnboardOptions) -> Result
         let p = super::partial::OnboardPartial::new(&native, opts.word_bits, shard, shots, sums);
         outputs.write(id, |w| p.write(w))?;
     }
-    match (raw, &opts.raw) {
-        // the same draw again (counts depend on the seed and shot only), written as
-        // `simulate` writes it; that run commits every output together
-        (Some(id), Some(path)) => {
-            let raw_opts = simulate::RunOptions {
-                output: path.clone(),
-                seed: Some(native.seed),
-                profiles: Some(native.shots as usize),
-                method: Some(Method::Shot),
-                command_line: crate::output::raw_file::content::history_command(std::env::args()),
-                ..Default::default()
-            };
-            simulate::run(&native.lidar, &raw_opts, outputs, id).map(|_| ())
-        }
-        _ => outputs.commit(),
-    }
+    commit_with_raw(&native, outputs, raw.zip(opts.raw.as_deref()))
 }
 
 /// A refusal of the onboard command.

@@ -164,6 +164,24 @@ impl ProductWriter {
     }
 }
 
+/// A region's dimension scales `profile` (the run's indices), `channel` and `bin`.
+fn dimension_scales(g: &Group, r: &RegionSpec, channels: &[String]) -> hdf5::Result<[Dataset; 3]> {
+    let profile = create_var::<i64>(g, "profile", &[r.profiles])?;
+    write_index(&profile, r.first_profile, r.profiles)?;
+    hdf5_ds::set_scale(&profile, "profile")?;
+    let channel = create_var::<VarLenUnicode>(g, "channel", &[channels.len()])?;
+    let names: Vec<VarLenUnicode> = channels
+        .iter()
+        .map(|c| c.parse().unwrap_or_default())
+        .collect();
+    channel.write_raw(&names)?;
+    hdf5_ds::set_scale(&channel, "channel")?;
+    let bin = create_var::<i64>(g, "bin", &[r.altitude_m.len()])?;
+    write_index(&bin, 0, r.altitude_m.len())?;
+    hdf5_ds::set_scale(&bin, "bin")?;
+    Ok([profile, channel, bin])
+}
+
 /// One region's group: its dimension scales, coordinates but `time`'s values,
 /// attributes, and its empty `counts`; returns `counts` and `time`.
 fn region_layout(
@@ -172,21 +190,8 @@ fn region_layout(
     header: &ProductHeader,
 ) -> hdf5::Result<(Dataset, Dataset)> {
     let text = |ds: &Dataset, k: &str, v: &str| hdf5_ds::write_str_attr(ds, k, v);
-    let profile = create_var::<i64>(g, "profile", &[r.profiles])?;
-    write_index(&profile, r.first_profile, r.profiles)?;
-    hdf5_ds::set_scale(&profile, "profile")?;
-    let channel = create_var::<VarLenUnicode>(g, "channel", &[header.channels.len()])?;
-    let names: Vec<VarLenUnicode> = header
-        .channels
-        .iter()
-        .map(|c| c.parse().unwrap_or_default())
-        .collect();
-    channel.write_raw(&names)?;
-    hdf5_ds::set_scale(&channel, "channel")?;
+    let [profile, channel, bin] = dimension_scales(g, r, &header.channels)?;
     let bins = r.altitude_m.len();
-    let bin = create_var::<i64>(g, "bin", &[bins])?;
-    write_index(&bin, 0, bins)?;
-    hdf5_ds::set_scale(&bin, "bin")?;
     let altitude = create_var::<f64>(g, "altitude", &[bins])?;
     altitude.write_raw(&r.altitude_m)?;
     text(&altitude, "units", "m")?;
