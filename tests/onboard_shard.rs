@@ -47,8 +47,8 @@ fn read(dir: &Path, name: &str) -> Vec<u8> {
 
 /// The whole run (`whole.h5`, `whole.csv`), its `n` shards (`sK.h5`, `pK.json`), their
 /// merge (`merged.h5`) and combined report (`combined.csv`), shards given in reverse
-/// order; asserts both equal the whole run's byte for byte.
-fn whole_and_shards(dir: &Path, cfg: &str, extra: &[&str], n: usize) {
+/// order; asserts both equal the whole run's byte for byte; returns the report.
+fn whole_and_shards(dir: &Path, cfg: &str, extra: &[&str], n: usize) -> String {
     let args = onboard_args(cfg, extra);
     ok(run(
         dir,
@@ -88,6 +88,7 @@ fn whole_and_shards(dir: &Path, cfg: &str, extra: &[&str], n: usize) {
         report,
         String::from_utf8(read(dir, "combined.csv")).unwrap()
     );
+    report
 }
 
 fn group_values<T: hdf5::H5Type>(dir: &Path, file: &str, group: &str, name: &str) -> Vec<T> {
@@ -121,8 +122,7 @@ fn caliop_product_shards_merge_into_the_whole_product() {
         "--seed",
         "4",
     ];
-    whole_and_shards(&dir, "instruments/caliop_532.toml", &extra, 3);
-    let report = String::from_utf8(read(&dir, "whole.csv")).unwrap();
+    let report = whole_and_shards(&dir, "instruments/caliop_532.toml", &extra, 3);
     assert_eq!(report.lines().count(), 1 + 5 + 1, "{report}");
     let attrs = [
         "shard_index",
@@ -165,12 +165,11 @@ fn an_uneven_split_with_leftover_shots_merges_into_the_whole_product() {
         "--scheme",
         "uniform:7",
     ];
-    whole_and_shards(&dir, "instruments/caliop_532.toml", &extra, 4);
+    let report = whole_and_shards(&dir, "instruments/caliop_532.toml", &extra, 4);
     let profiles = |f: &str| group_values::<i64>(&dir, f, "region_0", "profile");
     assert_eq!(profiles("s3.h5"), (21..30).collect::<Vec<i64>>());
     assert_eq!(profiles("whole.h5").len(), 30);
     assert_eq!(root_u64(&dir, "s3.h5", "shard_first_profile"), 63);
-    let report = String::from_utf8(read(&dir, "whole.csv")).unwrap();
     assert!(report.contains("\nuniform:7,0,"), "{report}");
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -194,8 +193,7 @@ fn a_changing_scene_merges_and_combines_into_the_whole_run() {
         "--scheme",
         "uniform:7",
     ];
-    whole_and_shards(&dir, "instruments/caliop_532.toml", &extra, 4);
-    let report = String::from_utf8(read(&dir, "whole.csv")).unwrap();
+    let report = whole_and_shards(&dir, "instruments/caliop_532.toml", &extra, 4);
     let bias: f64 = report
         .lines()
         .last()

@@ -19,13 +19,16 @@ use std::time::Instant;
 use hdf5::{Dataset, Group};
 use ndarray::{Ix1, Ix3, s};
 
-use super::run::{METHOD, PRODUCT_ATTRIBUTE, product_attributes, source};
+use super::run::{METHOD, product_attributes, source};
 use super::shard::{FRAME_ATTRIBUTE, profiles_within, shard_shots};
 use crate::error::{Error, Result};
 use crate::output::product::{ProductHeader, ProductWriter, RegionSpec};
 use crate::output::safe_file::{OutputId, Outputs, describe_hdf5_error};
 use crate::shard::merge::MergeSummary;
-use crate::shard::{FileAttributes, Piece, RunIdentity, Shard, check_pieces};
+use crate::shard::{
+    FileAttributes, Piece, RunIdentity, Shard, ShardKind, check_pieces, open_shard,
+    require_disk_for_merge,
+};
 
 /// Bytes of rows read from a shard at once, over every region.
 pub const BLOCK_BYTES: usize = 8 << 20;
@@ -71,9 +74,14 @@ impl ProductShard {
     /// Opens `path` (a product shard, [`crate::shard::kind_of_shards`]) and reads its
     /// identity and regions.
     fn open(path: &Path) -> Result<ProductShard> {
-        let file = hdf5::File::open(path).map_err(unreadable(path))?;
+        let (file, kind) = open_shard(path)?;
+        if kind != ShardKind::Product {
+            return Err(Error::output(
+                path,
+                "a raw shard (of `simulate --shard`), not a product shard",
+            ));
+        }
         let a = FileAttributes { file: &file, path };
-        a.text(PRODUCT_ATTRIBUTE)?;
         let mut regions = Vec::new();
         while let Ok(g) = file.group(&format!("region_{}", regions.len())) {
             regions.push(ShardRegion::of(&g, path)?);
@@ -384,13 +392,7 @@ impl ProductMerge {
     /// Writes the whole run's product as output `id` of `outputs` (complete or absent),
     /// streaming the shards' rows in the whole run's order.
     pub fn write(self, outputs: Outputs, id: OutputId) -> Result<MergeSummary> {
-        let bytes: u64 = self
-            .files
-            .iter()
-            .filter_map(|f| std::fs::metadata(&f.path).ok())
-            .map(|m| m.len())
-            .sum();
-        crate::resources::require_disk("OUT.h5", &self.out, bytes as f64)?;
+        require_disk_for_merge(&self.out, self.files.iter().map(|f| f.path.as_path()))?;
         let files = &self.files;
         let mut times = |k: usize, rows: Range<usize>| read_times(files, k, rows);
         let mut writer = ProductWriter::create(

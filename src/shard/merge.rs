@@ -17,7 +17,10 @@ use std::time::{Duration, Instant};
 use hdf5::Dataset;
 use ndarray::{Ix1, Ix3, s};
 
-use super::{FileAttributes, Piece, RunIdentity, Shard, check_pieces, run_id, stored_lidar};
+use super::{
+    FileAttributes, Piece, RunIdentity, Shard, ShardKind, check_pieces, open_shard,
+    require_disk_for_merge, run_id, stored_lidar,
+};
 use crate::error::{Error, Result};
 use crate::output::raw_file::{COMPONENT_NAMES, Dims, ProfileRecord, RawFileSpec, RawFileWriter};
 use crate::output::safe_file::{OutputId, Outputs, describe_hdf5_error};
@@ -53,12 +56,10 @@ impl ShardFile {
     /// shard of `simulate --shard`.
     fn open(path: &Path) -> Result<ShardFile> {
         let fail = |why: &str| Error::output(path, why);
-        let file = hdf5::File::open(path)
-            .map_err(|_| fail("not a lidarsim raw file (not HDF5, or unreadable)"))?;
-        if file.attr("shard_index").is_err() {
+        let (file, kind) = open_shard(path)?;
+        if kind != ShardKind::Raw {
             return Err(fail(
-                "not a shard (no `shard_index` attribute): merge takes the files of \
-                 `simulate --shard K/N`",
+                "a product shard (of `onboard --shard`), not a raw shard",
             ));
         }
         let a = FileAttributes { file: &file, path };
@@ -212,13 +213,7 @@ impl Merge {
     /// Writes the whole run's raw file as output `id` of `outputs` (complete or absent,
     /// through [`crate::output::safe_file`]), streaming the shards' rows in order.
     pub fn write(self, outputs: Outputs, id: OutputId) -> Result<MergeSummary> {
-        let bytes: u64 = self
-            .files
-            .iter()
-            .filter_map(|f| std::fs::metadata(&f.path).ok())
-            .map(|m| m.len())
-            .sum();
-        crate::resources::require_disk("OUT.h5", &self.out, bytes as f64)?;
+        require_disk_for_merge(&self.out, self.files.iter().map(|f| f.path.as_path()))?;
         let spec = &self.plan.spec;
         let mut writer = RawFileWriter::create(outputs.temp_path(id)?, &self.out, spec)?;
         for &i in &self.order {

@@ -482,40 +482,63 @@ impl ShardKind {
     }
 }
 
+/// Opens the shard file at `path` and says what it is; one line naming the file when it
+/// is not HDF5 or not a shard.
+pub fn open_shard(path: &Path) -> Result<(hdf5::File, ShardKind)> {
+    let fail = |why: &str| Error::output(path, why);
+    let file = hdf5::File::open(path)
+        .map_err(|_| fail("not a lidarsim raw file or product (not HDF5, or unreadable)"))?;
+    if file.attr("shard_index").is_err() {
+        return Err(fail(
+            "not a shard (no `shard_index` attribute): merge takes the files of \
+             `simulate --shard K/N` or of `onboard --shard K/N`",
+        ));
+    }
+    let kind = match file.attr(crate::onboard::run::PRODUCT_ATTRIBUTE) {
+        Ok(_) => ShardKind::Product,
+        Err(_) => ShardKind::Raw,
+    };
+    Ok((file, kind))
+}
+
 /// What the shards given to `merge` are: all raw or all product shards; refuses a file
 /// that is no shard, and a mix, naming the file.
 pub fn kind_of_shards(paths: &[std::path::PathBuf]) -> Result<ShardKind> {
     let mut first: Option<(&Path, ShardKind)> = None;
     for path in paths {
-        let fail = |why: &str| Error::output(path, why);
-        let file = hdf5::File::open(path)
-            .map_err(|_| fail("not a lidarsim raw file or product (not HDF5, or unreadable)"))?;
-        if file.attr("shard_index").is_err() {
-            return Err(fail(
-                "not a shard (no `shard_index` attribute): merge takes the files of \
-                 `simulate --shard K/N` or of `onboard --shard K/N`",
-            ));
-        }
-        let kind = match file.attr(crate::onboard::run::PRODUCT_ATTRIBUTE) {
-            Ok(_) => ShardKind::Product,
-            Err(_) => ShardKind::Raw,
-        };
+        let kind = open_shard(path)?.1;
         match first {
-            None => first = Some((path, kind)),
             Some((p, k)) if k != kind => {
-                return Err(fail(&format!(
-                    "{}, but {} is {}: merge raw shards and product shards apart",
-                    kind.describe(),
-                    p.display(),
-                    k.describe()
-                )));
+                return Err(Error::output(
+                    path,
+                    format!(
+                        "{}, but {} is {}: merge raw shards and product shards apart",
+                        kind.describe(),
+                        p.display(),
+                        k.describe()
+                    ),
+                ));
             }
+            None => first = Some((path, kind)),
             _ => {}
         }
     }
     first
         .map(|(_, k)| k)
         .ok_or_else(|| Error::Unsupported("merge needs at least one shard".into()))
+}
+
+/// Refuses a merge into `out` where the free space is below the shards' size.
+pub fn require_disk_for_merge<'a>(
+    out: &Path,
+    shards: impl IntoIterator<Item = &'a Path>,
+) -> Result<()> {
+    let bytes: u64 = shards
+        .into_iter()
+        .filter_map(|p| std::fs::metadata(p).ok())
+        .map(|m| m.len())
+        .sum();
+    crate::resources::require_disk("OUT.h5", out, bytes as f64)
 }
 
 #[cfg(test)]
