@@ -117,15 +117,9 @@ impl ProductShard {
         shard_shots(self.shard, self.run_shots, self.frame)
     }
 
-    /// It as a piece of its run: it holds the shots from its first to where its regions'
-    /// profiles say (its shard's end when they are those of its shard).
+    /// It as a piece of its run: the shots from its first to its shard's end (its
+    /// regions' profiles are checked against them by [`check_regions`]).
     fn piece(&self) -> Piece<'_> {
-        let want = self.shots();
-        let fits = self.regions.iter().all(|r| {
-            let p = profiles_within(r.shots, &(self.first_shot..want.end));
-            p.len() == r.rows
-        });
-        let end = if fits { want.end } else { self.first_shot };
         Piece {
             path: &self.path,
             identity: RunIdentity {
@@ -137,7 +131,7 @@ impl ProductShard {
                 run_id: self.run_id.clone(),
             },
             shard_index: self.shard.index,
-            rows: self.first_shot as usize..end as usize,
+            rows: self.first_shot as usize..self.shots().end as usize,
         }
     }
 }
@@ -232,7 +226,8 @@ pub struct ProductMerge {
     start: Instant,
 }
 
-/// Refuses a shard whose regions are not the first one's, or that another lidarsim wrote.
+/// Refuses a shard whose regions are not the first one's or do not hold its shots'
+/// profiles, or that another lidarsim wrote.
 fn check_regions(first: &ProductShard, f: &ProductShard) -> Result<()> {
     let shape = |f: &ProductShard| -> Vec<(u32, usize)> {
         f.regions.iter().map(|r| (r.shots, r.row_elems)).collect()
@@ -247,6 +242,22 @@ fn check_regions(first: &ProductShard, f: &ProductShard) -> Result<()> {
                 shape(first)
             ),
         ));
+    }
+    let shots = f.shots();
+    for (k, r) in f.regions.iter().enumerate() {
+        let want = profiles_within(r.shots, &shots);
+        if want.len() != r.rows {
+            return Err(Error::output(
+                &f.path,
+                format!(
+                    "region_{k} holds {} profiles, but its shots {}–{} make {}",
+                    r.rows,
+                    shots.start,
+                    shots.end.saturating_sub(1),
+                    want.len()
+                ),
+            ));
+        }
     }
     if f.source != source() {
         return Err(Error::output(
