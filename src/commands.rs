@@ -478,11 +478,32 @@ fn publish_report(
 /// `lidarsim merge OUT.h5 SHARD.h5 ...`: the shards of one run into the file of the
 /// whole run ([`crate::shard::merge`]), then one line on stderr.
 pub fn merge(out: &Path, shards: &[PathBuf]) -> Result<()> {
-    let m = crate::shard::merge::prepare(out, shards)?;
-    let inputs = input_files(m.lidar.first());
-    let mut outputs = Outputs::new(shards.iter().chain(&inputs).map(PathBuf::as_path));
-    let id = outputs.add("OUT.h5", out, Stream::Binary)?;
-    let summary = m.write(outputs, id)?;
+    let summary = match crate::shard::kind_of_shards(shards)? {
+        crate::shard::ShardKind::Raw => {
+            let m = crate::shard::merge::prepare(out, shards)?;
+            let inputs = input_files(m.lidar.first());
+            let mut outputs = Outputs::new(shards.iter().chain(&inputs).map(PathBuf::as_path));
+            let id = outputs.add("OUT.h5", out, Stream::Binary)?;
+            m.write(outputs, id)?
+        }
+        crate::shard::ShardKind::Product => {
+            let m = crate::onboard::merge::prepare(out, shards)?;
+            let mut outputs = Outputs::new(shards.iter().map(PathBuf::as_path));
+            let id = outputs.add("OUT.h5", out, Stream::Binary)?;
+            m.write(outputs, id)?
+        }
+    };
     eprintln!("{summary}");
     Ok(())
+}
+
+/// `lidarsim onboard --combine PART.json ... [--report PATH]`: the single run's report
+/// from the partials of its shards ([`crate::onboard::partial`]), to `report` or stdout.
+pub fn onboard_combine(partials: &[PathBuf], report: Option<&Path>) -> Result<()> {
+    let mut outputs = Outputs::new(partials.iter().map(PathBuf::as_path));
+    let id = outputs.add("--report", report.unwrap_or(Path::new("-")), Stream::Text)?;
+    let (native, sums, word_bits) = crate::onboard::partial::combine(partials)?;
+    let input = native.report_input(&sums, word_bits);
+    outputs.write(id, |w| crate::onboard::report::write_report(w, &input))?;
+    outputs.commit()
 }

@@ -124,8 +124,9 @@ enum Command {
     },
     /// Onboard averaging of shot-level counts: the downlinked product and the report.
     Onboard {
-        /// Scenario config (TOML).
-        config: PathBuf,
+        /// Scenario config (TOML); not with --combine.
+        #[arg(required_unless_present = "combine")]
+        config: Option<PathBuf>,
         /// Override a config key (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
@@ -133,9 +134,14 @@ enum Command {
         #[arg(long, value_name = "NAME|FILE")]
         scheme: Vec<String>,
         /// The downlinked product (HDF5, one group per region).
-        #[arg(short = 'o', long = "output", value_name = "PRODUCT.h5")]
-        output: PathBuf,
-        /// One CSV row per scheme and region (`-` for stdout).
+        #[arg(
+            short = 'o',
+            long = "output",
+            value_name = "PRODUCT.h5",
+            required_unless_present = "combine"
+        )]
+        output: Option<PathBuf>,
+        /// One CSV row per scheme and region (`-` for stdout); with --combine, stdout when absent.
         #[arg(long, value_name = "PATH")]
         report: Option<PathBuf>,
         /// Also write the native shot-level raw file of the same draw.
@@ -147,6 +153,17 @@ enum Command {
         /// Bits per downlinked count, for the data rate.
         #[arg(long, default_value_t = 16)]
         word_bits: u32,
+        /// Draw shard K of N of the run only (whole frames of shots; its product shard for
+        /// `merge`); `auto` reads K and N from an array job's environment.
+        #[arg(long, value_name = "K/N|auto", value_parser = cli_values::shard)]
+        shard: Option<ShardArg>,
+        /// Write the shard's report sums (JSON) for --combine; with --shard.
+        #[arg(long, value_name = "PART.json", requires = "shard")]
+        partial: Option<PathBuf>,
+        /// The report of the whole run from the partials of all its shards.
+        #[arg(long, value_name = "PART.json", num_args = 1..,
+              conflicts_with_all = ["config", "set", "scheme", "output", "raw", "seed", "word_bits", "shard", "partial"])]
+        combine: Vec<PathBuf>,
     },
     /// Instrument design grid from the deterministic model: metrics over varied config keys.
     Sweep {
@@ -298,21 +315,34 @@ fn main() -> ExitCode {
             raw,
             seed,
             word_bits,
-        } => {
-            let opts = lidarsim::onboard::run::OnboardOptions {
-                schemes: scheme.clone(),
-                output: output.clone(),
-                report: report.clone(),
-                raw: raw.clone(),
-                seed: *seed,
-                word_bits: *word_bits,
-            };
-            if opts.schemes.is_empty() {
-                Err(lidarsim::onboard::run::no_scheme())
-            } else {
-                lidarsim::onboard::run::run(config, set, &opts).map(|()| true)
+            shard,
+            partial,
+            combine,
+        } => match (config, output) {
+            _ if !combine.is_empty() => {
+                lidarsim::commands::onboard_combine(combine, report.as_deref()).map(|()| true)
             }
-        }
+            (Some(config), Some(output)) => shard
+                .map(ShardArg::resolve)
+                .transpose()
+                .and_then(|shard| {
+                    let opts = lidarsim::onboard::run::OnboardOptions {
+                        schemes: scheme.clone(),
+                        output: output.clone(),
+                        report: report.clone(),
+                        raw: raw.clone(),
+                        seed: *seed,
+                        word_bits: *word_bits,
+                        shard,
+                        partial: partial.clone(),
+                    };
+                    lidarsim::onboard::run::run(config, set, &opts)
+                })
+                .map(|()| true),
+            _ => Err(lidarsim::error::Error::Unsupported(
+                "onboard needs a CONFIG and -o PRODUCT.h5, or --combine PART.json ...".into(),
+            )),
+        },
         Command::Sweep {
             config,
             set,

@@ -5,51 +5,11 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Output;
 
+use common::cli::{lidarsim, ok, refused, scratch};
 use common::config_path;
-
-/// SOURCE_DATE_EPOCH of every run here: reproducible bytes.
-const EPOCH: &str = "1700000000";
-
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("lidarsim-shard-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// `lidarsim ARGS` in `dir` with SOURCE_DATE_EPOCH and `env` set, no array-job variables.
-fn lidarsim(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> Output {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_lidarsim"));
-    cmd.current_dir(dir)
-        .args(args)
-        .env("SOURCE_DATE_EPOCH", EPOCH);
-    for v in [
-        "SLURM_ARRAY_TASK_ID",
-        "SLURM_ARRAY_TASK_COUNT",
-        "SLURM_ARRAY_TASK_MIN",
-        "SLURM_ARRAY_TASK_STEP",
-        "JOB_COMPLETION_INDEX",
-        "AWS_BATCH_JOB_ARRAY_INDEX",
-        "LIDARSIM_SHARD_COUNT",
-    ] {
-        cmd.env_remove(v);
-    }
-    cmd.envs(env.iter().copied());
-    cmd.output().unwrap()
-}
-
-fn ok(o: Output) -> Output {
-    assert!(
-        o.status.success(),
-        "exit {:?}: {}",
-        o.status.code(),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
-}
 
 /// Runs `simulate CONFIG -o OUT EXTRA...` in `dir`.
 fn simulate(dir: &Path, cfg: &str, out: &str, extra: &[&str]) -> Output {
@@ -236,27 +196,6 @@ fn shard_auto_reads_slurm_and_kubernetes_indices() {
     );
     assert!(!dir.join("none.h5").exists());
     std::fs::remove_dir_all(&dir).ok();
-}
-
-/// Expects `args` to fail with one line containing every one of `words`, leaving no
-/// `out` behind.
-fn refused(dir: &Path, args: &[&str], words: &[&str], out: &str) {
-    let o = lidarsim(dir, args, &[]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
-    for w in words {
-        assert!(err.contains(w), "{args:?}: {err} lacks {w:?}");
-    }
-    assert!(!dir.join(out).exists(), "{args:?} left {out}");
-    assert!(
-        std::fs::read_dir(dir).unwrap().all(|e| !e
-            .unwrap()
-            .file_name()
-            .to_string_lossy()
-            .starts_with('.')),
-        "{args:?} left a temporary file"
-    );
 }
 
 #[test]

@@ -6,8 +6,12 @@
 //! broken cloud or with dead time it does not, and that is what averaging studies
 //! measure.
 
+pub mod merge;
+pub mod partial;
+pub mod report;
 pub mod run;
 pub mod scheme;
+pub mod shard;
 pub mod sum;
 
 pub use scheme::{Region, RegionLayout, Scheme};

@@ -1,22 +1,28 @@
 //! `lidarsim onboard`: the run's shots drawn one by one (the shot path, dead time and a
 //! changing scene included), summed onboard by every scheme given, the first scheme's
-//! product written, and the report of every scheme side by side.
+//! product written, and the report of every scheme side by side; or, with `--shard K/N`,
+//! the shots of one shard ([`super::shard`]), its product shard and the partial of its
+//! report ([`super::partial`]).
 
-use std::io::Write;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
+use super::report::{self, ReportInput, SchemeSums, averaging_bias};
+use super::shard::{FRAME_ATTRIBUTE, frame_shots, region_profiles, shard_shots_of};
 use super::{Averager, RegionLayout, Scheme};
 use crate::config::Method;
 use crate::error::{Error, Result};
-use crate::output::product::{ProductWriter, RegionSpec};
-use crate::output::safe_file::Stream;
+use crate::output::product::{ProductHeader, ProductWriter, RegionSpec};
+use crate::output::raw_file::AttrValue;
+use crate::output::safe_file::{OutputId, Outputs, Stream};
 use crate::scenario::{ExpectedProfile, Lidar};
+use crate::shard::{SHARD_ATTRIBUTES, Shard, fingerprint_with};
 use crate::simulate;
 
 /// Options of `lidarsim onboard`.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct OnboardOptions {
     /// `--scheme`, at least one: the first one's product is written.
     pub schemes: Vec<String>,
@@ -30,38 +36,327 @@ pub struct OnboardOptions {
     pub seed: Option<u64>,
     /// Bits per downlinked count, for the data rate.
     pub word_bits: u32,
+    /// Draw this shard of the run only (`--shard K/N`).
+    pub shard: Option<Shard>,
+    /// With `shard`: the partial of the report (`--partial`, JSON).
+    pub partial: Option<PathBuf>,
 }
 
-/// Per scheme: its regions and averager, and per region and bin the running sums of the
-/// downlinked counts (first channel) for the empirical S/N.
+/// The root attribute that marks a file as an onboard product.
+pub const PRODUCT_ATTRIBUTE: &str = "lidarsim_product";
+
+/// The method of every onboard run: shot by shot.
+pub const METHOD: &str = "shot";
+
+/// The native run that every scheme averages: one shot per native profile.
+pub struct NativeRun {
+    /// The lidar of the native run (`accumulation_time_s` one shot, `profiles` the shots).
+    pub lidar: Lidar,
+    /// Seed of the counts.
+    pub seed: u64,
+    /// Shots of the run, T.
+    pub shots: u64,
+    /// Shots per second.
+    pub rep_rate_hz: f64,
+    /// Every scheme given, the first one's product written.
+    pub schemes: Vec<Scheme>,
+    /// Their regions on the native grid.
+    pub layouts: Vec<Vec<RegionLayout>>,
+    /// Every channel's per-shot expectations (the scene's first column).
+    pub expected: Vec<ExpectedProfile>,
+    /// Whether the scene changes along the track.
+    pub scene_changes: bool,
+}
+
+impl NativeRun {
+    /// The native run of `config` with `overrides`: `acquisition.profiles` profiles of
+    /// the config's shots each, drawn as single shots.
+    pub fn load(
+        config: &Path,
+        overrides: &[String],
+        seed: Option<u64>,
+        schemes: &[String],
+    ) -> Result<NativeRun> {
+        let nominal = Lidar::load(config, overrides)?;
+        let first = nominal.first();
+        let fl = first.instrument.rep_rate_hz;
+        let total = first.shots_per_profile() * first.loaded.config.acquisition.profiles as u64;
+        let mut native = overrides.to_vec();
+        native.push(format!("acquisition.accumulation_time_s={}", 1.0 / fl));
+        native.push(format!("acquisition.profiles={total}"));
+        let lidar = Lidar::load(config, &native)?;
+        let seed = seed.unwrap_or(lidar.first().loaded.config.simulation.seed);
+        let schemes = schemes
+            .iter()
+            .map(|s| Scheme::parse(s))
+            .collect::<Result<_>>()?;
+        NativeRun::new(lidar, seed, schemes)
+    }
+
+    /// The run of a native `lidar` (as [`NativeRun::load`] makes it, or from a stored
+    /// config) with `schemes`.
+    pub fn new(lidar: Lidar, seed: u64, schemes: Vec<Scheme>) -> Result<NativeRun> {
+        let sc = lidar.first();
+        let g = &sc.geometry;
+        let native_vertical = g.bin_range_m * g.local_cos_at(0.0);
+        let layouts = schemes
+            .iter()
+            .map(|s| s.layout(g.n_bins, &|i| g.bin_centre_altitude_m(i), native_vertical))
+            .collect::<Result<_>>()?;
+        Ok(NativeRun {
+            seed,
+            shots: sc.loaded.config.acquisition.profiles as u64,
+            rep_rate_hz: sc.instrument.rep_rate_hz,
+            expected: lidar.expected()?,
+            scene_changes: simulate::scene_changes(&lidar),
+            schemes,
+            layouts,
+            lidar,
+        })
+    }
+
+    /// Shots of a frame: the least common multiple of every region's shots, over every
+    /// scheme (None beyond 64 bits).
+    pub fn frame_shots(&self) -> Option<u64> {
+        frame_shots(self.layouts.iter().flatten())
+    }
+
+    /// The identity of the run (`run_id` of its product shards and partials): the
+    /// lidarsim version, the resolved config and its path, the seed, method, schemes,
+    /// word size and shots, and the first channel's per-shot model that the report uses.
+    pub fn run_id(&self, word_bits: u32) -> String {
+        let loaded = &self.lidar.first().loaded;
+        let schemes = serde_json::to_string(&self.schemes).unwrap_or_default();
+        let e = &self.expected[0];
+        let model: Vec<f64> = e
+            .signal
+            .iter()
+            .copied()
+            .chain([e.background, e.dark])
+            .collect();
+        fingerprint_with(
+            &[
+                &source(),
+                &loaded.resolved_toml,
+                &loaded.path.display().to_string(),
+                &self.seed.to_string(),
+                METHOD,
+                &schemes,
+                &word_bits.to_string(),
+                &self.shots.to_string(),
+            ],
+            &model,
+        )
+    }
+
+    /// The shots of `shard` (all of them without one).
+    pub fn shots_of(&self, shard: Option<Shard>) -> Result<Range<u64>> {
+        match shard {
+            Some(s) => shard_shots_of(s, self.shots, self.frame_shots()),
+            None => Ok(0..self.shots),
+        }
+    }
+
+    /// The product's root: its attributes (and a shard's, for `shots` of `shard`).
+    fn header(&self, shard: Option<(Shard, &Range<u64>)>, word_bits: u32) -> Result<ProductHeader> {
+        let sc = self.lidar.first();
+        let mut attributes = product_attributes(
+            &self.schemes[0].name,
+            &source(),
+            &sc.loaded.resolved_toml,
+            self.seed,
+        );
+        if let Some((s, shots)) = shard {
+            let values = [
+                AttrValue::U64(s.index as u64),
+                AttrValue::U64(s.count as u64),
+                AttrValue::U64(shots.start),
+                AttrValue::U64(self.shots),
+                AttrValue::Str(self.run_id(word_bits)),
+                AttrValue::U64(self.frame_shots().unwrap_or(0)),
+            ];
+            let names = SHARD_ATTRIBUTES.iter().chain([&FRAME_ATTRIBUTE]);
+            attributes.extend(names.map(|n| n.to_string()).zip(values));
+        }
+        Ok(ProductHeader {
+            channels: self.lidar.channel_names(),
+            time_units: crate::output::raw_file::content::time_units(
+                &sc.loaded.config.acquisition.start_time,
+            )?,
+            attributes,
+        })
+    }
+
+    /// The first scheme's regions within `shots`: profiles, coordinates and bounds.
+    fn region_specs(&self, shots: &Range<u64>) -> Vec<RegionSpec> {
+        let g = &self.lidar.first().geometry;
+        let e = &self.expected[0];
+        self.layouts[0]
+            .iter()
+            .map(|r| {
+                let profiles = region_profiles(r, shots);
+                let altitude_m = (0..r.bins)
+                    .map(|j| {
+                        let bins = r.first_bin + j * r.merge..r.first_bin + (j + 1) * r.merge;
+                        bins.clone().map(|i| e.altitude_m[i]).sum::<f64>() / r.merge as f64
+                    })
+                    .collect();
+                let bounds = match &r.region {
+                    Some(reg) => (reg.bottom_km, reg.top_km, reg.vertical_resolution_m),
+                    None => (
+                        g.bin_centre_altitude_m(g.n_bins - 1) / 1e3,
+                        g.bin_centre_altitude_m(0) / 1e3,
+                        g.bin_range_m * g.cos_angle,
+                    ),
+                };
+                RegionSpec {
+                    first_profile: profiles.start,
+                    profiles: profiles.len(),
+                    altitude_m,
+                    shots: r.shots,
+                    bounds,
+                }
+            })
+            .collect()
+    }
+
+    /// What the report is made of, with every scheme's `sums`.
+    pub fn report_input<'a>(&'a self, sums: &'a [SchemeSums], word_bits: u32) -> ReportInput<'a> {
+        ReportInput {
+            scene_changes: self.scene_changes,
+            schemes: self
+                .schemes
+                .iter()
+                .zip(&self.layouts)
+                .zip(sums)
+                .map(|((s, l), x)| (s, l.as_slice(), x))
+                .collect(),
+            expected: &self.expected[0],
+            rep_rate_hz: self.rep_rate_hz,
+            channels: self.lidar.channels.len(),
+            word_bits,
+        }
+    }
+}
+
+/// `lidarsim <version>`.
+pub fn source() -> String {
+    format!("lidarsim {}", env!("CARGO_PKG_VERSION"))
+}
+
+/// The product's root attributes (docs/file-format.md), in order: `title`, `source`,
+/// `config`, [`PRODUCT_ATTRIBUTE`], `scheme`, `seed`.
+pub fn product_attributes(
+    scheme: &str,
+    source: &str,
+    config: &str,
+    seed: u64,
+) -> Vec<(String, AttrValue)> {
+    let text = |k: &str, v: String| (k.to_string(), AttrValue::Str(v));
+    vec![
+        text(
+            "title",
+            format!("lidarsim onboard product, scheme {scheme}"),
+        ),
+        text("source", source.to_string()),
+        text("config", config.to_string()),
+        text(PRODUCT_ATTRIBUTE, "onboard".into()),
+        text("scheme", scheme.to_string()),
+        ("seed".into(), AttrValue::U64(seed)),
+    ]
+}
+
+/// Profile-centre time of profile `j` of a region of `shots` shots, s since the start.
+pub fn profile_time(j: usize, shots: u32, rep_rate_hz: f64) -> f64 {
+    (j as f64 + 0.5) * f64::from(shots) / rep_rate_hz
+}
+
+/// The draw of the native shots: the samplers, or the changing scene.
+struct Draw {
+    seed: u64,
+    energy: simulate::RunEnergy,
+    scene: Option<simulate::scene::SceneModel>,
+    samplers: Vec<Vec<(simulate::StreamSampler, u64)>>,
+    channels: usize,
+    n_bins: usize,
+}
+
+impl Draw {
+    /// The draw of `native`'s shots (the whole run's model, whatever the shard).
+    fn new(native: &NativeRun) -> Result<Draw> {
+        let lidar = &native.lidar;
+        let seed = native.seed;
+        let mut method = simulate::resolve_method(Method::Shot, lidar)?;
+        let duration = native.shots as f64 / native.rep_rate_hz;
+        let energy = simulate::run_energy(lidar, seed, duration)?;
+        let profiles = native.shots as usize;
+        let scene = simulate::changing_scene(lidar, seed, profiles, &mut method, false, &energy)?;
+        let samplers = lidar
+            .channels
+            .iter()
+            .zip(&native.expected)
+            .enumerate()
+            .map(|(k, (c, e))| {
+                let seed = simulate::channel_seed(seed, k);
+                simulate::stream_samplers(e, method, energy, false, seed, c.instrument.dead_time)
+            })
+            .collect();
+        Ok(Draw {
+            seed,
+            energy,
+            scene,
+            samplers,
+            channels: lidar.channels.len(),
+            n_bins: lidar.first().geometry.n_bins,
+        })
+    }
+
+    /// The native counts of shot `p`, every channel (channel-major).
+    fn shot(&self, p: u64) -> Vec<u64> {
+        let (seed, channels, n_bins, energy) =
+            (self.seed, self.channels, self.n_bins, &self.energy);
+        match &self.scene {
+            Some(s) => {
+                simulate::draw_scene_counts(s, seed, channels, p, n_bins, energy)
+                    .0
+                    .counts
+            }
+            None => simulate::draw_profile(&self.samplers, p, 1, n_bins, false, energy).counts,
+        }
+    }
+
+    /// The true signal shot `p` saw (first channel, its column), in a changing scene.
+    fn truth(&self, p: u64) -> Option<&[f64]> {
+        let s = self.scene.as_ref()?;
+        Some(&s.expected[s.column_of_shot(p)][0].signal)
+    }
+}
+
+/// One scheme's averaging and the sums of its report.
 struct SchemeRun {
-    scheme: Scheme,
-    regions: Vec<RegionLayout>,
     averager: Averager,
-    stats: Vec<Vec<(f64, f64, f64)>>,
-    /// Per region: the running `(Σ s, Σ ln s, shots)` of the expected signal per merged
-    /// bin over the pending profile's shots, and per bin the sum and number of the
-    /// averaging biases of the profiles done.
+    sums: SchemeSums,
+    /// Per region: the running `(Σ s, Σ ln s)` of the expected signal per merged bin over
+    /// the pending profile's shots, and those shots.
     truth: Vec<(Vec<(f64, f64)>, u32)>,
-    biases: Vec<Vec<(f64, u32)>>,
-}
-
-/// The averaging bias of one downlinked bin (model.md §7): how far the log of the
-/// averaged true signal lies above the average of the shots' logs,
-/// `ln(Σs/N) − Σ ln s/N ≥ 0` (Jensen), what a retrieval working on the log of averaged
-/// counts (extinction, optical depth) misses against the full-resolution truth; 0 over a
-/// uniform scene, growing with the horizontal averaging over broken cloud. NaN where a
-/// shot has no signal.
-fn averaging_bias(sum: f64, sum_ln: f64, n: u32) -> f64 {
-    let n = f64::from(n);
-    (sum / n).ln() - sum_ln / n
 }
 
 impl SchemeRun {
+    fn new(regions: &[RegionLayout], channels: usize, n_bins: usize) -> Self {
+        SchemeRun {
+            averager: Averager::with_channels(regions.to_vec(), channels, n_bins),
+            sums: SchemeSums::new(regions),
+            truth: regions
+                .iter()
+                .map(|r| (vec![(0.0, 0.0); r.bins], 0))
+                .collect(),
+        }
+    }
+
     /// Adds one shot's expected signal (first channel, per native bin) to the truth sums,
-    /// closing each region's profile after its shots.
+    /// closing each region's profile after its shots with its averaging biases.
     fn add_truth(&mut self, signal: &[f64]) {
-        for (k, r) in self.regions.iter().enumerate() {
+        for (k, r) in self.averager.regions().iter().enumerate() {
             let (sums, shots) = &mut self.truth[k];
             for (j, s) in sums.iter_mut().enumerate() {
                 let bins = r.first_bin + j * r.merge..r.first_bin + (j + 1) * r.merge;
@@ -70,10 +365,11 @@ impl SchemeRun {
             }
             *shots += 1;
             if *shots == r.shots {
-                for (acc, &(a, b)) in self.biases[k].iter_mut().zip(sums.iter()) {
+                for (acc, &(a, b)) in self.sums.regions[k].iter_mut().zip(sums.iter()) {
                     let bias = averaging_bias(a, b, *shots);
                     if bias.is_finite() {
-                        *acc = (acc.0 + bias, acc.1 + 1);
+                        acc.bias.add(bias);
+                        acc.biased += 1;
                     }
                 }
                 sums.iter_mut().for_each(|s| *s = (0.0, 0.0));
@@ -81,292 +377,154 @@ impl SchemeRun {
             }
         }
     }
+
+    /// Adds one shot (its native counts, and its true signal in a changing scene);
+    /// `emit(region, sums)` receives every downlinked profile it completes.
+    fn add_shot(
+        &mut self,
+        native: &[u64],
+        truth: Option<&[f64]>,
+        mut emit: impl FnMut(usize, &[u64]) -> Result<()>,
+    ) -> Result<()> {
+        if let Some(signal) = truth {
+            self.add_truth(signal);
+        }
+        let SchemeRun { averager, sums, .. } = self;
+        let mut emitted = Ok(());
+        averager.add_shot(native, |k, downlinked| {
+            for (s, &c) in sums.regions[k].iter_mut().zip(downlinked) {
+                s.add_count(c);
+            }
+            if emitted.is_ok() {
+                emitted = emit(k, downlinked);
+            }
+        });
+        emitted
+    }
 }
 
-/// Runs the onboard simulation of `config`.
-pub fn run(config: &Path, overrides: &[String], opts: &OnboardOptions) -> Result<()> {
-    let nominal = Lidar::load(config, overrides)?;
-    let first = nominal.first();
-    let fl = first.instrument.rep_rate_hz;
-    let total = first.shots_per_profile() * first.loaded.config.acquisition.profiles as u64;
-    // the native run: one shot per profile
-    let mut native_overrides = overrides.to_vec();
-    native_overrides.push(format!("acquisition.accumulation_time_s={}", 1.0 / fl));
-    native_overrides.push(format!("acquisition.profiles={total}"));
-    let lidar = Lidar::load(config, &native_overrides)?;
-    let sc = lidar.first();
-    let seed = opts.seed.unwrap_or(sc.loaded.config.simulation.seed);
-    let mut method = simulate::resolve_method(Method::Shot, &lidar)?;
-    let energy = simulate::run_energy(&lidar, seed, total as f64 / fl)?;
-    let scene =
-        simulate::changing_scene(&lidar, seed, total as usize, &mut method, false, &energy)?;
-    let expected = lidar.expected()?;
-    let g = &sc.geometry;
-    let native_vertical = g.bin_range_m * g.local_cos_at(0.0);
-    let channels = lidar.channels.len();
-    let mut runs: Vec<SchemeRun> = opts
-        .schemes
-        .iter()
-        .map(|s| {
-            let scheme = Scheme::parse(s)?;
-            let regions =
-                scheme.layout(g.n_bins, &|i| g.bin_centre_altitude_m(i), native_vertical)?;
-            let stats = regions
-                .iter()
-                .map(|r| vec![(0.0, 0.0, 0.0); r.bins])
-                .collect();
-            let averager = Averager::with_channels(regions.clone(), channels, g.n_bins);
-            let truth = regions
-                .iter()
-                .map(|r| (vec![(0.0, 0.0); r.bins], 0))
-                .collect();
-            let biases = regions.iter().map(|r| vec![(0.0, 0); r.bins]).collect();
-            Ok(SchemeRun {
-                scheme,
-                regions,
-                averager,
-                stats,
-                truth,
-                biases,
-            })
-        })
-        .collect::<Result<_>>()?;
-    let mut outputs = crate::commands::outputs_for(sc);
-    let product = outputs.add("-o", &opts.output, Stream::Binary)?;
-    let raw = opts
-        .raw
-        .as_deref()
-        .map(|p| outputs.add("--raw", p, Stream::Binary))
-        .transpose()?;
-    let report = opts
-        .report
-        .as_deref()
-        .map(|p| outputs.add("--report", p, Stream::Text))
-        .transpose()?;
-    let specs = region_specs(&runs[0].regions, &expected[0], total, fl, g);
-    let mut writer = ProductWriter::create(
-        outputs.temp_path(product)?,
-        &opts.output,
-        &lidar.channel_names(),
-        &crate::output::raw_file::content::time_units(&sc.loaded.config.acquisition.start_time)?,
-        &[
-            (
-                "title",
-                format!("lidarsim onboard product, scheme {}", runs[0].scheme.name),
-            ),
-            ("source", format!("lidarsim {}", env!("CARGO_PKG_VERSION"))),
-            ("config", sc.loaded.resolved_toml.clone()),
-        ],
-        &specs,
-    )?;
-    let samplers: Vec<Vec<(simulate::StreamSampler, u64)>> = lidar
-        .channels
-        .iter()
-        .zip(&expected)
-        .enumerate()
-        .map(|(k, (c, e))| {
-            simulate::stream_samplers(
-                e,
-                method,
-                energy,
-                false,
-                simulate::channel_seed(seed, k),
-                c.instrument.dead_time,
-            )
-        })
-        .collect();
-    let n_bins = g.n_bins;
-    let batch = ((4 << 20) / (n_bins * channels).max(1)).clamp(1, 4096) as u64;
-    for start in (0..total).step_by(batch as usize) {
-        let end = (start + batch).min(total);
-        let drawn: Vec<Vec<u64>> = (start..end)
-            .into_par_iter()
-            .map(|p| match &scene {
-                Some(s) => {
-                    simulate::draw_scene_counts(s, seed, channels, p, n_bins, &energy)
-                        .0
-                        .counts
-                }
-                None => simulate::draw_profile(&samplers, p, 1, n_bins, false, &energy).counts,
-            })
-            .collect();
+/// Draws `shots` in batches (in parallel, then in order) and adds each to every scheme;
+/// the first scheme's downlinked profiles go to `writer`.
+fn draw_shots(
+    draw: &Draw,
+    shots: Range<u64>,
+    runs: &mut [SchemeRun],
+    writer: &mut ProductWriter,
+) -> Result<()> {
+    let batch = ((4 << 20) / (draw.n_bins * draw.channels).max(1)).clamp(1, 4096) as u64;
+    for start in shots.clone().step_by(batch as usize) {
+        let end = (start + batch).min(shots.end);
+        let drawn: Vec<Vec<u64>> = (start..end).into_par_iter().map(|p| draw.shot(p)).collect();
         for (shot, native) in (start..end).zip(&drawn) {
-            // the true signal this shot saw (its column), for the averaging bias
-            let truth = scene
-                .as_ref()
-                .map(|s| &s.expected[s.column_of_shot(shot)][0].signal);
+            let truth = draw.truth(shot);
             for (i, r) in runs.iter_mut().enumerate() {
-                if let Some(signal) = truth {
-                    r.add_truth(signal);
-                }
-                let SchemeRun {
-                    averager, stats, ..
-                } = r;
-                let mut written = Ok(());
-                averager.add_shot(native, |k, sums| {
-                    for (s, &c) in stats[k].iter_mut().zip(sums) {
-                        let x = c as f64;
-                        *s = (s.0 + 1.0, s.1 + x, s.2 + x * x);
-                    }
-                    if i == 0 && written.is_ok() {
-                        written = writer.write(k, sums);
-                    }
-                });
-                written?;
+                r.add_shot(native, truth, |k, sums| match i {
+                    0 => writer.write(k, sums),
+                    _ => Ok(()),
+                })?;
             }
-        }
-    }
-    writer.finish()?;
-    if let Some(id) = report {
-        outputs.write(id, |w| {
-            write_report(
-                w,
-                scene.is_some(),
-                &runs,
-                &expected[0],
-                fl,
-                channels,
-                opts.word_bits,
-            )
-        })?;
-    }
-    match (raw, &opts.raw) {
-        // the same draw again (counts depend on the seed and shot only), written as
-        // `simulate` writes it; that run commits every output together
-        (Some(id), Some(path)) => {
-            let raw_opts = simulate::RunOptions {
-                output: path.clone(),
-                seed: Some(seed),
-                profiles: Some(total as usize),
-                method: Some(Method::Shot),
-                command_line: crate::output::raw_file::content::history_command(std::env::args()),
-                ..Default::default()
-            };
-            simulate::run(&lidar, &raw_opts, outputs, id).map(|_| ())
-        }
-        _ => outputs.commit(),
-    }
-}
-
-/// The product's regions: profiles, coordinates and bounds.
-fn region_specs(
-    regions: &[RegionLayout],
-    e: &ExpectedProfile,
-    total: u64,
-    fl: f64,
-    g: &crate::geometry::Geometry,
-) -> Vec<RegionSpec> {
-    regions
-        .iter()
-        .map(|r| {
-            let profiles = (total / u64::from(r.shots)) as usize;
-            let altitude_m = (0..r.bins)
-                .map(|j| {
-                    let bins = r.first_bin + j * r.merge..r.first_bin + (j + 1) * r.merge;
-                    bins.clone().map(|i| e.altitude_m[i]).sum::<f64>() / r.merge as f64
-                })
-                .collect();
-            let time_s = (0..profiles)
-                .map(|j| (j as f64 + 0.5) * f64::from(r.shots) / fl)
-                .collect();
-            let bounds = match &r.region {
-                Some(reg) => (reg.bottom_km, reg.top_km, reg.vertical_resolution_m),
-                None => (
-                    g.bin_centre_altitude_m(g.n_bins - 1) / 1e3,
-                    g.bin_centre_altitude_m(0) / 1e3,
-                    g.bin_range_m * g.cos_angle,
-                ),
-            };
-            RegionSpec {
-                profiles,
-                altitude_m,
-                time_s,
-                shots: r.shots,
-                bounds,
-            }
-        })
-        .collect()
-}
-
-/// The median of the finite values.
-fn median(mut v: Vec<f64>) -> f64 {
-    v.retain(|x| x.is_finite());
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
-/// The report: one row per scheme and region (interface.md columns).
-#[allow(clippy::too_many_arguments)]
-fn write_report(
-    w: &mut dyn Write,
-    scene_changes: bool,
-    runs: &[SchemeRun],
-    e: &ExpectedProfile,
-    fl: f64,
-    channels: usize,
-    word_bits: u32,
-) -> std::io::Result<()> {
-    writeln!(
-        w,
-        "scheme,region,altitude_min_km,altitude_max_km,vertical_resolution_m,shots_averaged,bins,snr_eq4_median,snr_empirical_median,data_rate_bps,averaging_bias_median"
-    )?;
-    for r in runs {
-        let rate: f64 = r
-            .regions
-            .iter()
-            .map(|g| (g.bins * channels) as f64 * f64::from(word_bits) * fl / f64::from(g.shots))
-            .sum();
-        for (k, (g, stats)) in r.regions.iter().zip(&r.stats).enumerate() {
-            let shots = f64::from(g.shots);
-            let rest = (e.background + e.dark) * g.merge as f64;
-            let eq4: Vec<f64> = (0..g.bins)
-                .map(|j| {
-                    let s: f64 = e.signal
-                        [g.first_bin + j * g.merge..g.first_bin + (j + 1) * g.merge]
-                        .iter()
-                        .sum();
-                    crate::snr::eq4(s, rest, 0.0, shots)
-                })
-                .collect();
-            let empirical: Vec<f64> = stats
-                .iter()
-                .map(|&(n, sum, sq)| {
-                    let mean = sum / n;
-                    let var = (sq - n * mean * mean) / (n - 1.0);
-                    (mean - shots * rest) / var.sqrt()
-                })
-                .collect();
-            let (lo, hi, res) = match &g.region {
-                Some(reg) => (reg.bottom_km, reg.top_km, reg.vertical_resolution_m),
-                None => (f64::NAN, f64::NAN, f64::NAN),
-            };
-            // per bin the mean over the profiles; the median over the bins the scene's
-            // changes reach (0 when none do); empty for a static scene
-            let bias = if scene_changes {
-                let affected: Vec<f64> = r.biases[k]
-                    .iter()
-                    .filter(|&&(sum, n)| n > 0 && sum > 1e-12)
-                    .map(|&(sum, n)| sum / f64::from(n))
-                    .collect();
-                format!("{:e}", median(affected).max(0.0))
-            } else {
-                String::new()
-            };
-            writeln!(
-                w,
-                "{},{k},{lo},{hi},{res},{},{},{:e},{:e},{rate},{bias}",
-                r.scheme.name,
-                g.shots,
-                g.bins,
-                median(eq4),
-                median(empirical)
-            )?;
         }
     }
     Ok(())
+}
+
+/// Refuses options that do not go together (one line each).
+fn check_options(opts: &OnboardOptions) -> Result<()> {
+    let refuse = |why: &str| Err(Error::Unsupported(why.into()));
+    if opts.schemes.is_empty() {
+        return Err(no_scheme());
+    }
+    match opts.shard {
+        Some(_) if opts.report.is_some() => refuse(
+            "--report needs the whole run: with --shard write --partial PART.json, then \
+             `lidarsim onboard --combine PART.json ... --report PATH`",
+        ),
+        Some(_) if opts.raw.is_some() => refuse(
+            "--raw is not written with --shard (a product shard cuts at whole frames, not \
+             as `simulate --shard`); run `simulate --shard` for the raw shards",
+        ),
+        None if opts.partial.is_some() => refuse("--partial goes with --shard K/N"),
+        _ => Ok(()),
+    }
+}
+
+/// Draws `shots` of `native` into the first scheme's product, written as output
+/// `product` of `outputs`, and returns every scheme's report sums.
+fn write_product(
+    native: &NativeRun,
+    shots: &Range<u64>,
+    opts: &OnboardOptions,
+    outputs: &Outputs,
+    product: OutputId,
+) -> Result<Vec<SchemeSums>> {
+    let draw = Draw::new(native)?;
+    let header = native.header(opts.shard.map(|s| (s, shots)), opts.word_bits)?;
+    let specs = native.region_specs(shots);
+    let fl = native.rep_rate_hz;
+    let mut times = |k: usize, rows: Range<usize>| {
+        let r = &specs[k];
+        Ok(rows
+            .map(|i| profile_time(r.first_profile + i, r.shots, fl))
+            .collect())
+    };
+    let path = outputs.temp_path(product)?;
+    let mut writer = ProductWriter::create(path, &opts.output, &header, &specs, &mut times)?;
+    let mut runs: Vec<SchemeRun> = native
+        .layouts
+        .iter()
+        .map(|l| SchemeRun::new(l, draw.channels, draw.n_bins))
+        .collect();
+    draw_shots(&draw, shots.clone(), &mut runs, &mut writer)?;
+    writer.finish()?;
+    Ok(runs.into_iter().map(|r| r.sums).collect())
+}
+
+/// Commits `outputs`, with `--raw` (output `raw`) the native raw file of the same draw
+/// first (counts depend on the seed and shot only), written as `simulate` writes it:
+/// that run commits every output together.
+fn commit_with_raw(
+    native: &NativeRun,
+    outputs: Outputs,
+    raw: Option<(OutputId, &Path)>,
+) -> Result<()> {
+    let Some((id, path)) = raw else {
+        return outputs.commit();
+    };
+    let raw_opts = simulate::RunOptions {
+        output: path.to_path_buf(),
+        seed: Some(native.seed),
+        profiles: Some(native.shots as usize),
+        method: Some(Method::Shot),
+        command_line: crate::output::raw_file::content::history_command(std::env::args()),
+        ..Default::default()
+    };
+    simulate::run(&native.lidar, &raw_opts, outputs, id).map(|_| ())
+}
+
+/// Runs the onboard simulation of `config` (with `opts.shard`, one shard of it).
+pub fn run(config: &Path, overrides: &[String], opts: &OnboardOptions) -> Result<()> {
+    check_options(opts)?;
+    let native = NativeRun::load(config, overrides, opts.seed, &opts.schemes)?;
+    let shots = native.shots_of(opts.shard)?;
+    let mut outputs = crate::commands::outputs_for(native.lidar.first());
+    let product = outputs.add("-o", &opts.output, Stream::Binary)?;
+    let mut add = |option, path: &Option<PathBuf>, stream| {
+        let id = path.as_deref().map(|p| outputs.add(option, p, stream));
+        id.transpose()
+    };
+    let raw = add("--raw", &opts.raw, Stream::Binary)?;
+    let report = add("--report", &opts.report, Stream::Text)?;
+    let partial = add("--partial", &opts.partial, Stream::Text)?;
+    let sums = write_product(&native, &shots, opts, &outputs, product)?;
+    if let Some(id) = report {
+        let input = native.report_input(&sums, opts.word_bits);
+        outputs.write(id, |w| report::write_report(w, &input))?;
+    }
+    if let (Some(id), Some(shard)) = (partial, opts.shard) {
+        let p = super::partial::OnboardPartial::new(&native, opts.word_bits, shard, shots, sums);
+        outputs.write(id, |w| p.write(w))?;
+    }
+    commit_with_raw(&native, outputs, raw.zip(opts.raw.as_deref()))
 }
 
 /// A refusal of the onboard command.

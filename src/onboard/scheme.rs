@@ -2,12 +2,12 @@
 //! TOML file of `[[regions]]` with `top_km`, `bottom_km`, `vertical_resolution_m` and
 //! `shots_averaged`, from the top down.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
 /// One altitude region of a scheme.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Region {
     /// Top of the region, km.
@@ -21,7 +21,7 @@ pub struct Region {
 }
 
 /// A named averaging scheme; `regions` empty = everything at native resolution.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Scheme {
     /// Its name (`caliop`, `uniform:15`, the file's stem).
     pub name: String,

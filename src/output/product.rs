@@ -4,49 +4,86 @@
 //! `counts (profile, channel, bin)` (integer sums, u32), and the region's attributes
 //! `altitude_min_km`, `altitude_max_km`, `vertical_resolution_m`, `shots_averaged`.
 //! Readable as netCDF-4 (groups with dimensions of their own).
+//!
+//! The bytes depend on the content only (as the raw file's, `raw_file::layout`): no
+//! modification times, and `counts` written a whole chunk at a time by HDF5's direct
+//! chunk write, in the order the rows complete their chunks, so that the merge of a
+//! run's shards ([`crate::onboard::merge`]), sending the rows in the whole run's order,
+//! writes the whole run's file byte for byte.
 
+use std::ops::Range;
 use std::path::Path;
 
 use hdf5::types::VarLenUnicode;
 use hdf5::{Dataset, File, Group};
 
-use super::raw_file::hdf5_ds::{attach_scales, set_scale, write_num_attr, write_str_attr};
+use super::raw_file::chunk::{self, Filling};
+use super::raw_file::layout::{create_file, create_group, create_var, write_index};
+use super::raw_file::{AttrValue, check::Row, hdf5_ds};
 use crate::error::{Error, Result};
 use crate::output::safe_file::describe_hdf5_error;
 
+/// Elements of one chunk of a region's `counts` (16 KiB of u32).
+const CHUNK_ELEMS: usize = 4096;
+/// Rows of `time` written per call at creation (bounds memory).
+const TIME_BLOCK: usize = 64 * 1024;
+
+/// What the product's root holds besides its regions.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProductHeader {
+    /// Channel names (each region's `channel` coordinate).
+    pub channels: Vec<String>,
+    /// CF units of `time`.
+    pub time_units: String,
+    /// Root attributes, in this order.
+    pub attributes: Vec<(String, AttrValue)>,
+}
+
 /// What one region of the product holds, known up front.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct RegionSpec {
-    /// Downlinked profiles.
+    /// Index in the run of the file's first profile of the region (0 but in a shard).
+    pub first_profile: usize,
+    /// Downlinked profiles in the file.
     pub profiles: usize,
     /// Bin-centre altitude of each downlinked bin, m.
     pub altitude_m: Vec<f64>,
-    /// Profile-centre time of each downlinked profile, s since the start.
-    pub time_s: Vec<f64>,
     /// Shots summed per profile.
     pub shots: u32,
     /// `altitude_min_km`, `altitude_max_km`, `vertical_resolution_m`.
     pub bounds: (f64, f64, f64),
 }
 
+/// The times of a region's profiles: `(region, rows)` gives the profile-centre times (s
+/// since the start) of rows `rows` of the file's region.
+pub type Times<'a> = dyn FnMut(usize, Range<usize>) -> Result<Vec<f64>> + 'a;
+
+/// One region's `counts` being filled, chunk by chunk.
+struct RegionCounts {
+    ds: Dataset,
+    filling: Filling,
+    written: usize,
+    profiles: usize,
+}
+
 /// A product being written.
 pub struct ProductWriter {
     file: File,
-    counts: Vec<Dataset>,
-    written: Vec<usize>,
+    regions: Vec<RegionCounts>,
     channels: usize,
+    spare: Vec<Vec<u8>>,
     display: std::path::PathBuf,
 }
 
 impl ProductWriter {
-    /// Creates the product at exactly `path` (a temporary name from `safe_file`).
+    /// Creates the product at exactly `path` (a temporary name from `safe_file`), with
+    /// every region's coordinates (`times` gives the times, in blocks).
     pub fn create(
         path: &Path,
         display: &Path,
-        channels: &[String],
-        time_units: &str,
-        attributes: &[(&str, String)],
+        header: &ProductHeader,
         regions: &[RegionSpec],
+        times: &mut Times,
     ) -> Result<Self> {
         let fail = |e: hdf5::Error| {
             Error::output(
@@ -54,46 +91,62 @@ impl ProductWriter {
                 format!("cannot write: {}", describe_hdf5_error(&e.to_string())),
             )
         };
-        let file = File::create(path).map_err(fail)?;
-        for (k, v) in attributes {
-            write_str_attr(&file, k, v).map_err(fail)?;
+        let file = create_file(path).map_err(fail)?;
+        for (k, v) in &header.attributes {
+            hdf5_ds::write_attr(&file, k, v).map_err(fail)?;
         }
-        let counts = regions
-            .iter()
-            .enumerate()
-            .map(|(k, r)| {
-                let g = file.create_group(&format!("region_{k}"))?;
-                region_layout(&g, r, channels, time_units)
-            })
-            .collect::<hdf5::Result<Vec<_>>>()
-            .map_err(fail)?;
+        let mut out = Vec::with_capacity(regions.len());
+        for (k, r) in regions.iter().enumerate() {
+            let g = create_group(&file, &format!("region_{k}")).map_err(fail)?;
+            let (ds, time) = region_layout(&g, r, header).map_err(fail)?;
+            for start in (0..r.profiles).step_by(TIME_BLOCK) {
+                let rows = start..(start + TIME_BLOCK).min(r.profiles);
+                let values = times(k, rows.clone())?;
+                time.write_slice(&values[..], rows).map_err(fail)?;
+            }
+            let row_elems = header.channels.len() * r.altitude_m.len();
+            let chunk_rows = ds.chunk().map_or(1, |c| c[0]);
+            out.push(RegionCounts {
+                ds,
+                filling: Filling::new(4, chunk_rows, row_elems, r.profiles),
+                written: 0,
+                profiles: r.profiles,
+            });
+        }
         Ok(ProductWriter {
             file,
-            written: vec![0; regions.len()],
-            counts,
-            channels: channels.len(),
+            regions: out,
+            channels: header.channels.len(),
+            spare: Vec::new(),
             display: display.to_path_buf(),
         })
     }
 
-    /// Writes the next profile of region `k` (channel-major sums); profiles beyond the
-    /// region's size are not written (a trailing partial sum never is).
+    /// Writes the next profile of region `k` (channel-major sums, saturated at u32's
+    /// largest value); profiles beyond the region's size are not written (a trailing
+    /// partial sum never is). A chunk is stored when its last row arrives.
     pub fn write(&mut self, k: usize, sums: &[u64]) -> Result<()> {
-        let ds = &self.counts[k];
-        let row = self.written[k];
-        if row >= ds.shape()[0] {
+        let display = &self.display;
+        let r = &mut self.regions[k];
+        let row = r.written;
+        if row >= r.profiles {
             return Ok(());
         }
-        let bins = sums.len() / self.channels;
-        let data: Vec<u32> = sums
-            .iter()
-            .map(|&c| u32::try_from(c).unwrap_or(u32::MAX))
-            .collect();
-        let view = ndarray::ArrayView2::from_shape((self.channels, bins), &data)
-            .map_err(|e| Error::output(&self.display, e.to_string()))?;
-        ds.write_slice(view, (row, .., ..))
-            .map_err(|e| Error::output(&self.display, describe_hdf5_error(&e.to_string())))?;
-        self.written[k] += 1;
+        debug_assert_eq!(sums.len() % self.channels, 0);
+        let clamped: Vec<u64> = sums.iter().map(|&c| c.min(u64::from(u32::MAX))).collect();
+        let done = r
+            .filling
+            .put(row, Row::Counts(&clamped), &mut self.spare)
+            .map_err(|e| Error::output(display, e))?;
+        r.written += 1;
+        if let Some((c, data)) = done {
+            let bytes = chunk::deflate(&data).map_err(|e| Error::output(display, e))?;
+            let first = (c * r.filling.chunk_rows()) as u64;
+            hdf5_ds::write_chunk(&r.ds, &[first, 0, 0], &bytes)
+                .map_err(|e| Error::output(display, describe_hdf5_error(&e.to_string())))?;
+            self.spare.push(data);
+            self.spare.truncate(1);
+        }
         Ok(())
     }
 
@@ -101,75 +154,79 @@ impl ProductWriter {
     pub fn finish(self) -> Result<()> {
         let ProductWriter {
             file,
-            counts,
+            regions,
             display,
             ..
         } = self;
-        drop(counts);
+        drop(regions);
         file.close()
             .map_err(|e| Error::output(display, describe_hdf5_error(&e.to_string())))
     }
 }
 
-/// One region's group: its dimension scales, coordinates, attributes and counts.
-fn region_layout(
-    g: &Group,
-    r: &RegionSpec,
-    channels: &[String],
-    time_units: &str,
-) -> hdf5::Result<Dataset> {
-    let var = |name: &str, data: &[f64], units: &str| -> hdf5::Result<Dataset> {
-        let ds = g.new_dataset::<f64>().shape(data.len()).create(name)?;
-        ds.write_raw(data)?;
-        write_str_attr(&ds, "units", units)?;
-        Ok(ds)
-    };
-    let profile = g.new_dataset::<i64>().shape(r.profiles).create("profile")?;
-    profile.write_raw(&(0..r.profiles as i64).collect::<Vec<_>>())?;
-    set_scale(&profile, "profile")?;
-    let channel = g
-        .new_dataset::<VarLenUnicode>()
-        .shape(channels.len())
-        .create("channel")?;
+/// A region's dimension scales `profile` (the run's indices), `channel` and `bin`.
+fn dimension_scales(g: &Group, r: &RegionSpec, channels: &[String]) -> hdf5::Result<[Dataset; 3]> {
+    let profile = create_var::<i64>(g, "profile", &[r.profiles])?;
+    write_index(&profile, r.first_profile, r.profiles)?;
+    hdf5_ds::set_scale(&profile, "profile")?;
+    let channel = create_var::<VarLenUnicode>(g, "channel", &[channels.len()])?;
     let names: Vec<VarLenUnicode> = channels
         .iter()
         .map(|c| c.parse().unwrap_or_default())
         .collect();
     channel.write_raw(&names)?;
-    set_scale(&channel, "channel")?;
-    let bin = g
-        .new_dataset::<i64>()
-        .shape(r.altitude_m.len())
-        .create("bin")?;
-    bin.write_raw(&(0..r.altitude_m.len() as i64).collect::<Vec<_>>())?;
-    set_scale(&bin, "bin")?;
-    let altitude = var("altitude", &r.altitude_m, "m")?;
-    write_str_attr(&altitude, "standard_name", "altitude")?;
-    attach_scales(&altitude, &[&bin])?;
-    let time = var("time", &r.time_s, time_units)?;
-    write_str_attr(&time, "standard_name", "time")?;
-    attach_scales(&time, &[&profile])?;
-    let n_shots = g.new_dataset::<u32>().shape(r.profiles).create("n_shots")?;
-    n_shots.write_raw(&vec![r.shots; r.profiles])?;
-    attach_scales(&n_shots, &[&profile])?;
-    let (bins, c) = (r.altitude_m.len(), channels.len());
+    hdf5_ds::set_scale(&channel, "channel")?;
+    let bin = create_var::<i64>(g, "bin", &[r.altitude_m.len()])?;
+    write_index(&bin, 0, r.altitude_m.len())?;
+    hdf5_ds::set_scale(&bin, "bin")?;
+    Ok([profile, channel, bin])
+}
+
+/// One region's group: its dimension scales, coordinates but `time`'s values,
+/// attributes, and its empty `counts`; returns `counts` and `time`.
+fn region_layout(
+    g: &Group,
+    r: &RegionSpec,
+    header: &ProductHeader,
+) -> hdf5::Result<(Dataset, Dataset)> {
+    let text = |ds: &Dataset, k: &str, v: &str| hdf5_ds::write_str_attr(ds, k, v);
+    let [profile, channel, bin] = dimension_scales(g, r, &header.channels)?;
+    let bins = r.altitude_m.len();
+    let altitude = create_var::<f64>(g, "altitude", &[bins])?;
+    altitude.write_raw(&r.altitude_m)?;
+    text(&altitude, "units", "m")?;
+    text(&altitude, "standard_name", "altitude")?;
+    hdf5_ds::attach_scales(&altitude, &[&bin])?;
+    let time = create_var::<f64>(g, "time", &[r.profiles])?;
+    text(&time, "units", &header.time_units)?;
+    text(&time, "standard_name", "time")?;
+    hdf5_ds::attach_scales(&time, &[&profile])?;
+    let n_shots = create_var::<u32>(g, "n_shots", &[r.profiles])?;
+    for start in (0..r.profiles).step_by(TIME_BLOCK) {
+        let end = (start + TIME_BLOCK).min(r.profiles);
+        n_shots.write_slice(&vec![r.shots; end - start][..], start..end)?;
+    }
+    hdf5_ds::attach_scales(&n_shots, &[&profile])?;
+    let c = header.channels.len();
     let counts = g
         .new_dataset::<u32>()
         .shape((r.profiles, c, bins))
         .chunk((
-            (4096 / (c * bins).max(1)).clamp(1, r.profiles.max(1)),
+            (CHUNK_ELEMS / (c * bins).max(1)).clamp(1, r.profiles.max(1)),
             c,
             bins,
         ))
         .shuffle()
-        .deflate(1)
+        .deflate(chunk::DEFLATE_LEVEL)
+        .obj_track_times(false)
+        .attr_creation_order(hdf5::plist::dataset_create::AttrCreationOrder::Indexed)
         .create("counts")?;
-    write_str_attr(&counts, "units", "count")?;
-    write_str_attr(&counts, "coordinates", "time altitude")?;
-    attach_scales(&counts, &[&profile, &channel, &bin])?;
-    write_num_attr(g, "altitude_min_km", &r.bounds.0)?;
-    write_num_attr(g, "altitude_max_km", &r.bounds.1)?;
-    write_num_attr(g, "vertical_resolution_m", &r.bounds.2)?;
-    write_num_attr(g, "shots_averaged", &r.shots)?;
-    Ok(counts)
+    text(&counts, "units", "count")?;
+    text(&counts, "coordinates", "time altitude")?;
+    hdf5_ds::attach_scales(&counts, &[&profile, &channel, &bin])?;
+    hdf5_ds::write_num_attr(g, "altitude_min_km", &r.bounds.0)?;
+    hdf5_ds::write_num_attr(g, "altitude_max_km", &r.bounds.1)?;
+    hdf5_ds::write_num_attr(g, "vertical_resolution_m", &r.bounds.2)?;
+    hdf5_ds::write_num_attr(g, "shots_averaged", &r.shots)?;
+    Ok((counts, time))
 }

@@ -15,10 +15,12 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use hdf5::Dataset;
-use hdf5::types::VarLenUnicode;
 use ndarray::{Ix1, Ix3, s};
 
-use super::{RunIdentity, Shard, check_cover, check_same_run, run_id, stored_lidar};
+use super::{
+    FileAttributes, Piece, RunIdentity, Shard, ShardKind, check_pieces, open_shard,
+    require_disk_for_merge, run_id, stored_lidar,
+};
 use crate::error::{Error, Result};
 use crate::output::raw_file::{COMPONENT_NAMES, Dims, ProfileRecord, RawFileSpec, RawFileWriter};
 use crate::output::safe_file::{OutputId, Outputs, describe_hdf5_error};
@@ -54,33 +56,14 @@ impl ShardFile {
     /// shard of `simulate --shard`.
     fn open(path: &Path) -> Result<ShardFile> {
         let fail = |why: &str| Error::output(path, why);
-        let file = hdf5::File::open(path)
-            .map_err(|_| fail("not a lidarsim raw file (not HDF5, or unreadable)"))?;
-        if file.attr("shard_index").is_err() {
+        let (file, kind) = open_shard(path)?;
+        if kind != ShardKind::Raw {
             return Err(fail(
-                "not a shard (no `shard_index` attribute): merge takes the files of \
-                 `simulate --shard K/N`",
+                "a product shard (of `onboard --shard`), not a raw shard",
             ));
         }
-        let text = |name: &str| -> Result<String> {
-            let v: VarLenUnicode = file
-                .attr(name)
-                .and_then(|a| a.read_scalar())
-                .map_err(|_| fail(&format!("has no text attribute `{name}`")))?;
-            Ok(v.as_str().to_string())
-        };
-        let number = |name: &str| -> Result<u64> {
-            file.attr(name)
-                .and_then(|a| a.read_scalar::<u64>())
-                .map_err(|_| fail(&format!("has no whole-number attribute `{name}`")))
-        };
-        let real = |name: &str| file.attr(name).and_then(|a| a.read_scalar::<f64>()).ok();
-        let whole = |name: &str| -> Result<usize> {
-            usize::try_from(number(name)?).map_err(|_| fail(&format!("`{name}` too large")))
-        };
-        let shard = Shard::new(whole("shard_index")?, whole("shard_count")?)
-            .map_err(|why| fail(&format!("shard_index/shard_count: {why}")))?;
-        let (history, created) = (text("history")?, text("date_created")?);
+        let a = FileAttributes { file: &file, path };
+        let (history, created) = (a.text("history")?, a.text("date_created")?);
         let command = history
             .strip_prefix(&format!("{created} "))
             .ok_or_else(|| fail("its `history` does not start with its `date_created`"))?
@@ -90,54 +73,39 @@ impl ShardFile {
             .map(|d| d.shape().first().copied().unwrap_or(0))
             .map_err(|_| fail("has no `counts`: not a lidarsim raw file"))?;
         Ok(ShardFile {
-            shard,
-            run_profiles: whole("run_profiles")?,
-            run_id: text("run_id")?,
-            first_profile: whole("shard_first_profile")?,
+            shard: a.shard()?,
+            run_profiles: a.whole("run_profiles")?,
+            run_id: a.text("run_id")?,
+            first_profile: a.whole("shard_first_profile")?,
             rows,
-            seed: number("seed")?,
-            method: text("method")?,
-            config: text("config")?,
-            config_file: text("config_file")?,
+            seed: a.number("seed")?,
+            method: a.text("method")?,
+            config: a.text("config")?,
+            config_file: a.text("config_file")?,
             command,
-            threshold: real("normal_approximation_threshold"),
-            tolerance: real("tolerance_ks"),
+            threshold: a.real("normal_approximation_threshold"),
+            tolerance: a.real("tolerance_ks"),
             components: file.dataset(COMPONENT_NAMES[0]).is_ok(),
             path: path.to_path_buf(),
             file,
         })
     }
 
-    /// What makes it a shard of its run.
-    fn identity(&self) -> RunIdentity {
-        RunIdentity {
-            config: self.config.clone(),
-            seed: self.seed,
-            method: self.method.clone(),
-            shard_count: self.shard.count,
-            total: self.run_profiles,
-            run_id: self.run_id.clone(),
+    /// It as a piece of its run.
+    fn piece(&self) -> Piece<'_> {
+        Piece {
+            path: &self.path,
+            identity: RunIdentity {
+                config: self.config.clone(),
+                seed: self.seed,
+                method: self.method.clone(),
+                shard_count: self.shard.count,
+                total: self.run_profiles,
+                run_id: self.run_id.clone(),
+            },
+            shard_index: self.shard.index,
+            rows: self.first_profile..self.first_profile + self.rows,
         }
-    }
-
-    /// Refuses a file whose profiles are not those of its shard.
-    fn holds_its_rows(&self) -> Result<()> {
-        let want = self.shard.rows(self.run_profiles);
-        if want.start != self.first_profile || want.len() != self.rows {
-            return Err(Error::output(
-                &self.path,
-                format!(
-                    "holds {} profiles from {}, but shard {} of {} profiles is profiles {}–{}",
-                    self.rows,
-                    self.first_profile,
-                    self.shard,
-                    self.run_profiles,
-                    want.start,
-                    want.end.saturating_sub(1)
-                ),
-            ));
-        }
-        Ok(())
     }
 
     /// The options that make `simulate` plan this shard's run again.
@@ -165,8 +133,12 @@ pub struct MergeSummary {
     pub output: PathBuf,
     /// Shards merged.
     pub shards: usize,
-    /// Profiles of the run.
+    /// Profiles (or shots) of the run.
     pub profiles: usize,
+    /// What `profiles` counts: `profiles` (raw shards) or `shots` (product shards).
+    pub what: &'static str,
+    /// What was written: `file` (raw) or `product`.
+    pub file: &'static str,
     /// Wall time.
     pub elapsed: Duration,
 }
@@ -175,10 +147,12 @@ impl std::fmt::Display for MergeSummary {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "Merged {} shards into {}: {} profiles, the file of the whole run; {:.3} s.",
+            "Merged {} shards into {}: {} {}, the {} of the whole run; {:.3} s.",
             self.shards,
             self.output.display(),
             self.profiles,
+            self.what,
+            self.file,
             self.elapsed.as_secs_f64()
         )
     }
@@ -207,18 +181,8 @@ pub fn prepare(out: &Path, shards: &[PathBuf]) -> Result<Merge> {
     let Some(first) = files.first() else {
         return Err(Error::Unsupported("merge needs at least one shard".into()));
     };
-    let identities: Vec<RunIdentity> = files.iter().map(ShardFile::identity).collect();
-    let pieces: Vec<(&Path, &RunIdentity)> = files
-        .iter()
-        .map(|f| f.path.as_path())
-        .zip(&identities)
-        .collect();
-    check_same_run(&pieces, "shard", "profiles")?;
-    for f in &files {
-        f.holds_its_rows()?;
-    }
-    let pieces: Vec<(&Path, Shard)> = files.iter().map(|f| (f.path.as_path(), f.shard)).collect();
-    let order = check_cover(&pieces, |s| s.rows(first.run_profiles), "profiles")?;
+    let pieces: Vec<Piece> = files.iter().map(ShardFile::piece).collect();
+    let order = check_pieces(&pieces, "shard", "profiles", |s| s.rows(first.run_profiles))?;
     let lidar = stored_lidar(&first.config, &first.config_file)?;
     let (opts, method) = first.run_options(out)?;
     let plan = simulate::plan(&lidar, &opts, Some(method))?;
@@ -249,13 +213,7 @@ impl Merge {
     /// Writes the whole run's raw file as output `id` of `outputs` (complete or absent,
     /// through [`crate::output::safe_file`]), streaming the shards' rows in order.
     pub fn write(self, outputs: Outputs, id: OutputId) -> Result<MergeSummary> {
-        let bytes: u64 = self
-            .files
-            .iter()
-            .filter_map(|f| std::fs::metadata(&f.path).ok())
-            .map(|m| m.len())
-            .sum();
-        crate::resources::require_disk("OUT.h5", &self.out, bytes as f64)?;
+        require_disk_for_merge(&self.out, self.files.iter().map(|f| f.path.as_path()))?;
         let spec = &self.plan.spec;
         let mut writer = RawFileWriter::create(outputs.temp_path(id)?, &self.out, spec)?;
         for &i in &self.order {
@@ -267,6 +225,8 @@ impl Merge {
             output: self.out,
             shards: self.files.len(),
             profiles: self.plan.profiles,
+            what: "profiles",
+            file: "file",
             elapsed: self.start.elapsed(),
         })
     }

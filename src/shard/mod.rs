@@ -191,8 +191,17 @@ pub fn run_id(spec: &RawFileSpec) -> String {
 /// The identity of a validation run: a hash of `parts` (the resolved config, seed,
 /// method, realizations, lidarsim version, ...), each field apart.
 pub fn fingerprint(parts: &[&str]) -> String {
+    fingerprint_with(parts, &[])
+}
+
+/// [`fingerprint`] of `parts` and of the bits of `values` (a model the run depends on,
+/// so that a run set up again with another model is told apart).
+pub fn fingerprint_with(parts: &[&str], values: &[f64]) -> String {
     let mut h = Fingerprint::new();
     parts.iter().for_each(|p| h.str(p));
+    if !values.is_empty() {
+        h.f64s(values);
+    }
     h.hex()
 }
 
@@ -331,6 +340,205 @@ pub fn check_cover(
         )));
     }
     Ok(order.into_iter().flatten().collect())
+}
+
+/// A piece of a run (a shard file, a partial): its file, the run it says it belongs to,
+/// its shard index and the rows it holds.
+pub struct Piece<'a> {
+    /// Its file.
+    pub path: &'a Path,
+    /// The run it belongs to (with the shard count N).
+    pub identity: RunIdentity,
+    /// K.
+    pub shard_index: usize,
+    /// The rows of the run it holds.
+    pub rows: Range<usize>,
+}
+
+/// Checks that `pieces` belong to one run ([`check_same_run`]), that each holds the rows
+/// of its shard (`rows` gives them) and that they cover the run exactly once
+/// ([`check_cover`]); gives their order by shard index. `kind` names the pieces
+/// (`shard`, `partial`), `what` the rows (`profiles`, `realizations`, `shots`).
+pub fn check_pieces(
+    pieces: &[Piece],
+    kind: &str,
+    what: &str,
+    rows: impl Fn(Shard) -> Range<usize>,
+) -> Result<Vec<usize>> {
+    let same: Vec<(&Path, &RunIdentity)> = pieces.iter().map(|p| (p.path, &p.identity)).collect();
+    check_same_run(&same, kind, what)?;
+    let mut shards = Vec::with_capacity(pieces.len());
+    for p in pieces {
+        let shard = Shard::new(p.shard_index, p.identity.shard_count)
+            .map_err(|why| Error::output(p.path, format!("shard_index/shard_count: {why}")))?;
+        let want = rows(shard);
+        if want != p.rows {
+            let span = |r: &Range<usize>| format!("{}–{}", r.start, r.end.saturating_sub(1));
+            return Err(Error::output(
+                p.path,
+                format!(
+                    "holds {what} {}, but shard {shard} of the run's {} {what} is {what} {}",
+                    span(&p.rows),
+                    p.identity.total,
+                    span(&want)
+                ),
+            ));
+        }
+        shards.push((p.path, shard));
+    }
+    check_cover(&shards, rows, what)
+}
+
+/// Reads a partial (JSON) whose `format` must be `format`; one line naming the file when
+/// it is not one (`made_by`: the command that writes such partials).
+pub fn read_partial<T: serde::de::DeserializeOwned>(
+    path: &Path,
+    format: &str,
+    made_by: &str,
+) -> Result<T> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let not_one = |e: &dyn std::fmt::Display| {
+        Error::output(path, format!("not a partial of `{made_by}` ({e})"))
+    };
+    let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| not_one(&e))?;
+    match value.get("format").and_then(|f| f.as_str()) {
+        Some(f) if f == format => serde_json::from_value(value).map_err(|e| not_one(&e)),
+        Some(f) => Err(Error::output(
+            path,
+            format!("a partial of format {f:?}; this lidarsim reads {format:?} here"),
+        )),
+        None => Err(not_one(&"no `format`")),
+    }
+}
+
+/// The root attributes of an HDF5 shard file, read with one-line errors naming it.
+pub struct FileAttributes<'a> {
+    /// The open file.
+    pub file: &'a hdf5::File,
+    /// Its path, for messages.
+    pub path: &'a Path,
+}
+
+impl FileAttributes<'_> {
+    fn fail(&self, why: String) -> Error {
+        Error::output(self.path, why)
+    }
+
+    /// A text attribute.
+    pub fn text(&self, name: &str) -> Result<String> {
+        self.file
+            .attr(name)
+            .and_then(|a| a.read_scalar::<hdf5::types::VarLenUnicode>())
+            .map(|v| v.as_str().to_string())
+            .map_err(|_| self.fail(format!("has no text attribute `{name}`")))
+    }
+
+    /// A whole-number attribute.
+    pub fn number(&self, name: &str) -> Result<u64> {
+        self.file
+            .attr(name)
+            .and_then(|a| a.read_scalar::<u64>())
+            .map_err(|_| self.fail(format!("has no whole-number attribute `{name}`")))
+    }
+
+    /// A whole-number attribute as a size.
+    pub fn whole(&self, name: &str) -> Result<usize> {
+        usize::try_from(self.number(name)?).map_err(|_| self.fail(format!("`{name}` too large")))
+    }
+
+    /// A real attribute, if present.
+    pub fn real(&self, name: &str) -> Option<f64> {
+        self.file
+            .attr(name)
+            .and_then(|a| a.read_scalar::<f64>())
+            .ok()
+    }
+
+    /// Its shard (`shard_index` of `shard_count`).
+    pub fn shard(&self) -> Result<Shard> {
+        Shard::new(self.whole("shard_index")?, self.whole("shard_count")?)
+            .map_err(|why| self.fail(format!("shard_index/shard_count: {why}")))
+    }
+}
+
+/// What a shard file is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ShardKind {
+    /// A raw file of `simulate --shard`.
+    Raw,
+    /// An onboard product of `onboard --shard`.
+    Product,
+}
+
+impl ShardKind {
+    fn describe(self) -> &'static str {
+        match self {
+            ShardKind::Raw => "a raw shard (of `simulate --shard`)",
+            ShardKind::Product => "a product shard (of `onboard --shard`)",
+        }
+    }
+}
+
+/// Opens the shard file at `path` and says what it is; one line naming the file when it
+/// is not HDF5 or not a shard.
+pub fn open_shard(path: &Path) -> Result<(hdf5::File, ShardKind)> {
+    let fail = |why: &str| Error::output(path, why);
+    let file = hdf5::File::open(path)
+        .map_err(|_| fail("not a lidarsim raw file or product (not HDF5, or unreadable)"))?;
+    if file.attr("shard_index").is_err() {
+        return Err(fail(
+            "not a shard (no `shard_index` attribute): merge takes the files of \
+             `simulate --shard K/N` or of `onboard --shard K/N`",
+        ));
+    }
+    let kind = match file.attr(crate::onboard::run::PRODUCT_ATTRIBUTE) {
+        Ok(_) => ShardKind::Product,
+        Err(_) => ShardKind::Raw,
+    };
+    Ok((file, kind))
+}
+
+/// What the shards given to `merge` are: all raw or all product shards; refuses a file
+/// that is no shard, and a mix, naming the file.
+pub fn kind_of_shards(paths: &[std::path::PathBuf]) -> Result<ShardKind> {
+    let mut first: Option<(&Path, ShardKind)> = None;
+    for path in paths {
+        let kind = open_shard(path)?.1;
+        match first {
+            Some((p, k)) if k != kind => {
+                return Err(Error::output(
+                    path,
+                    format!(
+                        "{}, but {} is {}: merge raw shards and product shards apart",
+                        kind.describe(),
+                        p.display(),
+                        k.describe()
+                    ),
+                ));
+            }
+            None => first = Some((path, kind)),
+            _ => {}
+        }
+    }
+    first
+        .map(|(_, k)| k)
+        .ok_or_else(|| Error::Unsupported("merge needs at least one shard".into()))
+}
+
+/// Refuses a merge into `out` where the free space is below the shards' size.
+pub fn require_disk_for_merge<'a>(
+    out: &Path,
+    shards: impl IntoIterator<Item = &'a Path>,
+) -> Result<()> {
+    let bytes: u64 = shards
+        .into_iter()
+        .filter_map(|p| std::fs::metadata(p).ok())
+        .map(|m| m.len())
+        .sum();
+    crate::resources::require_disk("OUT.h5", out, bytes as f64)
 }
 
 #[cfg(test)]

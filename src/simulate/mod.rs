@@ -759,6 +759,14 @@ pub struct DrawnProfile {
 /// Index in [`DrawnProfile::values`] of a changing scene's expected recorded counts per shot.
 pub const RECORDED_ROW: usize = 2;
 
+/// Whether the scene of `lidar` changes along the track (or with the sun): a run of it
+/// draws from a [`changing_scene`].
+pub fn scene_changes(lidar: &Lidar) -> bool {
+    let cfg = &lidar.first().loaded.config;
+    let solar = cfg.background.model == crate::config::BackgroundModel::Solar;
+    crate::scene::track::Track::is_changing(cfg) || solar
+}
+
 /// The scene model of a run whose scene changes along the track (`None` for one column
 /// everywhere); refuses what this version does not draw in a changing scene.
 pub fn changing_scene(
@@ -769,9 +777,7 @@ pub fn changing_scene(
     components: bool,
     energy: &RunEnergy,
 ) -> Result<Option<scene::SceneModel>> {
-    let cfg = &lidar.first().loaded.config;
-    let solar = cfg.background.model == crate::config::BackgroundModel::Solar;
-    if !crate::scene::track::Track::is_changing(cfg) && !solar {
+    if !scene_changes(lidar) {
         return Ok(None);
     }
     if components {

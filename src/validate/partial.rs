@@ -17,7 +17,9 @@ use super::{Report, Sums, ValidateOptions, Validation};
 use crate::config::Method;
 use crate::error::{Error, Result};
 use crate::scenario::Lidar;
-use crate::shard::{RunIdentity, Shard, check_cover, check_same_run, fingerprint, stored_lidar};
+use crate::shard::{
+    Piece, RunIdentity, Shard, check_pieces, fingerprint, read_partial, stored_lidar,
+};
 
 /// `format` of the partials this version writes.
 pub const PARTIAL_FORMAT: &str = "lidarsim validate partial 1";
@@ -99,38 +101,24 @@ pub fn partial(lidar: &Lidar, opts: &ValidateOptions, shard: Shard) -> Result<Pa
 
 /// Reads a partial; one line naming the file when it is not one.
 pub fn read(path: &Path) -> Result<Partial> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let p: Partial = serde_json::from_str(&text).map_err(|e| {
-        Error::output(
-            path,
-            format!("not a partial of `validate --shard K/N --partial` ({e})"),
-        )
-    })?;
-    if p.format != PARTIAL_FORMAT {
-        return Err(Error::output(
-            path,
-            format!(
-                "a partial of format {:?}; this lidarsim reads {PARTIAL_FORMAT:?}",
-                p.format
-            ),
-        ));
-    }
-    Ok(p)
+    read_partial(path, PARTIAL_FORMAT, "validate --shard K/N --partial")
 }
 
 impl Partial {
-    /// What makes it a piece of its run.
-    fn identity(&self) -> RunIdentity {
-        RunIdentity {
-            config: self.config.clone(),
-            seed: self.seed,
-            method: self.method.clone(),
-            shard_count: self.shard_count,
-            total: self.realizations,
-            run_id: self.run_id.clone(),
+    /// It as a piece of its run.
+    fn piece<'a>(&self, path: &'a Path) -> Piece<'a> {
+        Piece {
+            path,
+            identity: RunIdentity {
+                config: self.config.clone(),
+                seed: self.seed,
+                method: self.method.clone(),
+                shard_count: self.shard_count,
+                total: self.realizations,
+                run_id: self.run_id.clone(),
+            },
+            shard_index: self.shard_index,
+            rows: self.first..self.end,
         }
     }
 }
@@ -144,29 +132,14 @@ pub fn combine(paths: &[PathBuf]) -> Result<Report> {
             "--combine needs at least one partial".into(),
         ));
     };
-    let identities: Vec<RunIdentity> = parts.iter().map(Partial::identity).collect();
-    let same: Vec<(&Path, &RunIdentity)> = paths
+    let pieces: Vec<Piece> = paths
         .iter()
-        .map(PathBuf::as_path)
-        .zip(&identities)
+        .zip(&parts)
+        .map(|(path, p)| p.piece(path))
         .collect();
-    check_same_run(&same, "partial", "realizations")?;
-    let mut pieces = Vec::with_capacity(parts.len());
-    for (path, p) in paths.iter().zip(&parts) {
-        let shard = Shard::new(p.shard_index, p.shard_count)
-            .map_err(|why| Error::output(path, format!("shard_index/shard_count: {why}")))?;
-        if shard.rows(p.realizations) != (p.first..p.end) {
-            return Err(Error::output(
-                path,
-                format!(
-                    "holds realizations {}..{}, not those of shard {shard}",
-                    p.first, p.end
-                ),
-            ));
-        }
-        pieces.push((path.as_path(), shard));
-    }
-    let order = check_cover(&pieces, |s| s.rows(first.realizations), "realizations")?;
+    let order = check_pieces(&pieces, "partial", "realizations", |s| {
+        s.rows(first.realizations)
+    })?;
     let lidar = stored_lidar(&first.config, &first.config_file)?;
     let opts = ValidateOptions {
         realizations: first.realizations,

@@ -8,10 +8,12 @@
 # 2. starts munged, slurmctld and slurmd in the foreground as children of this script
 #    (no systemd needed), and waits until the node is idle;
 # 3. submits, through deploy/slurm/submit.sh, a 4-task `simulate` array job with its
-#    dependent merge, and a 4-task `validate` array job with its dependent combine;
+#    dependent merge, a 4-task `validate` array job with its dependent combine, and a
+#    4-task `onboard` array job with its dependent merge and combine;
 # 4. waits for every job, checks that each COMPLETED, that the merged file equals the
-#    single run's byte for byte (cmp), and that the combined verdict is the single
-#    validate's (cmp of their tables);
+#    single run's byte for byte (cmp), that the combined verdict is the single
+#    validate's (cmp of their tables), and that the merged product and combined report
+#    are the single onboard run's (cmp);
 # 5. stops every daemon and deletes the directory, on success, failure or interruption.
 #
 # Usage: tests/slurm/run_cluster_test.sh [LIDARSIM_BINARY]  (default target/release/lidarsim)
@@ -147,11 +149,18 @@ read -r sim_array sim_merge <<<"$ids"
 ids=$("$repo/deploy/slurm/submit.sh" validate "$config" "$tmp/work/verdict.txt" "$tasks" \
   --realizations 400 --seed 3)
 read -r val_array val_combine <<<"$ids"
-say "submitted simulate array $sim_array + merge $sim_merge, validate array $val_array + combine $val_combine"
+caliop=$repo/configs/instruments/caliop_532.toml
+onboard=(--set acquisition.top_altitude_km=40 --set acquisition.bottom_altitude_km=-2
+  --set acquisition.profiles=30 --scheme caliop --scheme uniform:7)
+ids=$("$repo/deploy/slurm/submit.sh" onboard "$caliop" "$tmp/work/product.h5" "$tasks" "${onboard[@]}")
+read -r ob_array ob_merge <<<"$ids"
+say "submitted simulate array $sim_array + merge $sim_merge, validate array $val_array + combine $val_combine, onboard array $ob_array + merge $ob_merge"
 
 # the single runs to compare with, meanwhile
 "$lidarsim" simulate "$config" --profiles 10 -o "$tmp/work/whole.h5" 2>/dev/null
 "$lidarsim" validate "$config" --realizations 400 --seed 3 >"$tmp/work/single.txt" 2>/dev/null
+"$lidarsim" onboard "$caliop" "${onboard[@]}" -o "$tmp/work/whole_product.h5" \
+  --report "$tmp/work/whole_product.csv" 2>/dev/null
 
 deadline=$((SECONDS + timeout_s))
 while [ -n "$(squeue -h -o %i 2>/dev/null)" ]; do
@@ -163,14 +172,14 @@ while [ -n "$(squeue -h -o %i 2>/dev/null)" ]; do
 done
 
 # every job, each array task included, must have COMPLETED
-for job in "$sim_array" "$sim_merge" "$val_array" "$val_combine"; do
+for job in "$sim_array" "$sim_merge" "$val_array" "$val_combine" "$ob_array" "$ob_merge"; do
   states=$(scontrol show job "$job" 2>/dev/null | grep -o 'JobState=[A-Z_]*' | sort | uniq -c | tr -s ' ' | tr '\n' ';')
   count=$(scontrol show job "$job" | grep -c 'JobState=COMPLETED' || true)
   want=1
-  [ "$job" = "$sim_array" ] || [ "$job" = "$val_array" ] && want=$tasks
+  [ "$job" = "$sim_array" ] || [ "$job" = "$val_array" ] || [ "$job" = "$ob_array" ] && want=$tasks
   [ "$count" = "$want" ] || fail "job $job: $count of $want tasks COMPLETED ($states)"
 done
-say "all jobs COMPLETED: $tasks-task simulate array, merge (afterok), $tasks-task validate array, combine (afterok)"
+say "all jobs COMPLETED: $tasks-task simulate array, merge (afterok), $tasks-task validate array, combine (afterok), $tasks-task onboard array, merge and combine (afterok)"
 
 shards=$(find "$tmp/work/merged.h5.shards" -name 'shard-*.h5' | wc -l)
 [ "$shards" = "$tasks" ] || fail "$shards shard files, not $tasks"
@@ -178,4 +187,7 @@ cmp "$tmp/work/whole.h5" "$tmp/work/merged.h5" || fail "the merged file differs 
 say "cmp: merged.h5 of $tasks shards is byte-identical to the single run's file"
 cmp "$tmp/work/single.txt" "$tmp/work/verdict.txt" || fail "the combined verdict differs from the single validate's"
 say "cmp: the combined validate table of $tasks partials equals the single run's ($(tail -n 1 "$tmp/work/verdict.txt" | cut -d: -f1))"
+cmp "$tmp/work/whole_product.h5" "$tmp/work/product.h5" || fail "the merged product differs from the single onboard run's"
+cmp "$tmp/work/whole_product.csv" "$tmp/work/product.csv" || fail "the combined report differs from the single onboard run's"
+say "cmp: product.h5 and product.csv of $tasks onboard shards are byte-identical to the single onboard run's"
 say "PASSED"

@@ -11,6 +11,8 @@ use std::ffi::CString;
 use hdf5::types::VarLenUnicode;
 use hdf5::{Dataset, H5Type, Location};
 
+use super::AttrValue;
+
 mod ffi {
     use hdf5_sys::h5::herr_t;
     use hdf5_sys::h5i::hid_t;
@@ -47,6 +49,16 @@ pub fn write_num_attr<T: H5Type>(loc: &Location, name: &str, value: &T) -> hdf5:
         .shape(())
         .create(name)?
         .write_scalar(value)
+}
+
+/// Writes a scalar attribute of any [`AttrValue`] kind.
+pub fn write_attr(loc: &Location, name: &str, value: &AttrValue) -> hdf5::Result<()> {
+    match value {
+        AttrValue::Str(s) => write_str_attr(loc, name, s),
+        AttrValue::U64(v) => write_num_attr(loc, name, v),
+        AttrValue::I32(v) => write_num_attr(loc, name, v),
+        AttrValue::F64(v) => write_num_attr(loc, name, v),
+    }
 }
 
 /// Makes `ds` the dimension scale named `name`.

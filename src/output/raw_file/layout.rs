@@ -17,13 +17,13 @@ use hdf5::plist::dataset_create::AttrCreationOrder;
 use hdf5::plist::file_access::LibraryVersion;
 use hdf5::plist::file_create::LinkCreationOrder;
 use hdf5::types::VarLenUnicode;
-use hdf5::{Dataset, File, H5Type};
+use hdf5::{Dataset, File, Group, H5Type};
 
 use super::chunk;
-use super::hdf5_ds::{attach_scales, set_scale, write_num_attr, write_str_attr};
+use super::hdf5_ds::{attach_scales, set_scale, write_attr, write_str_attr};
 use super::{
-    AttrValue, BIN_DIM, CHANNEL_DIM, COMPONENT_NAMES, CountWidth, Dims, PROFILE_DIM,
-    RESERVED_NAMES, RawFileSpec,
+    BIN_DIM, CHANNEL_DIM, COMPONENT_NAMES, CountWidth, Dims, PROFILE_DIM, RESERVED_NAMES,
+    RawFileSpec,
 };
 
 /// Target size of one chunk of a (profile, channel, bin) variable, in bytes, for that
@@ -166,9 +166,15 @@ fn create_rows<T: H5Type>(file: &File, name: &str, spec: &RawFileSpec) -> hdf5::
     })
 }
 
-/// Creates an empty contiguous variable of the given shape.
-fn create_var<T: H5Type>(file: &File, name: &str, shape: &[usize]) -> hdf5::Result<Dataset> {
-    file.new_dataset::<T>()
+/// Creates an empty contiguous variable of the given shape (no modification time, its
+/// attributes in creation order).
+pub(crate) fn create_var<T: H5Type>(
+    group: &Group,
+    name: &str,
+    shape: &[usize],
+) -> hdf5::Result<Dataset> {
+    group
+        .new_dataset::<T>()
         .shape(shape)
         .obj_track_times(false)
         .attr_creation_order(AttrCreationOrder::Indexed)
@@ -176,7 +182,7 @@ fn create_var<T: H5Type>(file: &File, name: &str, shape: &[usize]) -> hdf5::Resu
 }
 
 /// Writes `first..first + n` into a 1-D i64 variable, in blocks.
-fn write_index(ds: &Dataset, first: usize, n: usize) -> hdf5::Result<()> {
+pub(crate) fn write_index(ds: &Dataset, first: usize, n: usize) -> hdf5::Result<()> {
     let mut block = Vec::with_capacity(n.min(COORD_BLOCK));
     for start in (0..n).step_by(COORD_BLOCK) {
         let end = (start + COORD_BLOCK).min(n);
@@ -192,24 +198,37 @@ fn write_attrs(ds: &Dataset, attrs: &[(&str, &str)]) -> hdf5::Result<()> {
     attrs.iter().try_for_each(|(k, v)| write_str_attr(ds, k, v))
 }
 
-/// Creates the whole layout in a new HDF5 file at `path` (truncating it).
-pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> {
-    let file = File::with_options()
+/// A new HDF5 file at `path` (truncating it) with the choices of the module docs: the
+/// 1.8 file format, links and attributes in creation order, no modification times.
+pub(crate) fn create_file(path: &Path) -> hdf5::Result<File> {
+    File::with_options()
         .with_fapl(|fapl| fapl.libver_bounds(LibraryVersion::V18, LibraryVersion::V18))
         .with_fcpl(|fcpl| {
             fcpl.link_creation_order(LinkCreationOrder::Indexed)
                 .attr_creation_order(AttrCreationOrder::Indexed)
                 .obj_track_times(false)
         })
-        .create(path)?;
+        .create(path)
+}
+
+/// A new group of `parent` with the file's choices ([`create_file`]).
+pub(crate) fn create_group(parent: &Group, name: &str) -> hdf5::Result<Group> {
+    parent
+        .create_group_builder()
+        .with_gcpl(|gcpl| {
+            gcpl.link_creation_order(LinkCreationOrder::Indexed)
+                .attr_creation_order(AttrCreationOrder::Indexed)
+                .obj_track_times(false)
+        })
+        .create(name)
+}
+
+/// Creates the whole layout in a new HDF5 file at `path` (truncating it).
+pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> {
+    let file = create_file(path)?;
 
     for (name, value) in &spec.root_attributes {
-        match value {
-            AttrValue::Str(s) => write_str_attr(&file, name, s)?,
-            AttrValue::U64(v) => write_num_attr(&file, name, v)?,
-            AttrValue::I32(v) => write_num_attr(&file, name, v)?,
-            AttrValue::F64(v) => write_num_attr(&file, name, v)?,
-        }
+        write_attr(&file, name, value)?;
     }
 
     // the coordinates of (profile, …) variables: time, and latitude/longitude where given

@@ -1,0 +1,441 @@
+//! `lidarsim merge OUT.h5 SHARD.h5 ...` of product shards (`onboard --shard K/N`): the
+//! product the whole run writes, byte for byte (docs/scale.md).
+//!
+//! 1. Each shard's root attributes say which run it belongs to and which shots it holds
+//!    ([`crate::shard::SHARD_ATTRIBUTES`] and [`super::shard::FRAME_ATTRIBUTE`]); shards
+//!    of different runs, a gap, an overlap, a file given twice or regions other than the
+//!    run's are refused, naming the file.
+//! 2. The whole product's root and regions are those of the shards (the same attributes,
+//!    coordinates and bounds; the profiles of all of them, their times read in order).
+//! 3. Each region's rows are streamed from the shards a block at a time and sent to the
+//!    [`ProductWriter`] in the whole run's order (the row that completes first, at shot
+//!    `(j + 1)·shots_averaged`, the upper region first at a tie), so that its chunks are
+//!    stored in the same order: memory does not grow with the run.
+
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use hdf5::{Dataset, Group};
+use ndarray::{Ix1, Ix3, s};
+
+use super::run::{METHOD, product_attributes, source};
+use super::shard::{FRAME_ATTRIBUTE, profiles_within, shard_shots};
+use crate::error::{Error, Result};
+use crate::output::product::{ProductHeader, ProductWriter, RegionSpec};
+use crate::output::safe_file::{OutputId, Outputs, describe_hdf5_error};
+use crate::shard::merge::MergeSummary;
+use crate::shard::{
+    FileAttributes, Piece, RunIdentity, Shard, ShardKind, check_pieces, open_shard,
+    require_disk_for_merge,
+};
+
+/// Bytes of rows read from a shard at once, over every region.
+pub const BLOCK_BYTES: usize = 8 << 20;
+
+/// One region of a product shard.
+struct ShardRegion {
+    /// Its profiles, and the shots summed in each.
+    rows: usize,
+    shots: u32,
+    /// Channels × bins of a profile.
+    row_elems: usize,
+}
+
+/// A product shard and what its root attributes say of it (the file is closed: it is
+/// opened again while its rows are read, so that the shards done and to come hold no
+/// memory).
+struct ProductShard {
+    path: PathBuf,
+    shard: Shard,
+    /// Shots of the run, its first, and of a frame.
+    run_shots: u64,
+    first_shot: u64,
+    frame: u64,
+    run_id: String,
+    seed: u64,
+    config: String,
+    source: String,
+    scheme: String,
+    regions: Vec<ShardRegion>,
+}
+
+/// A failure reading `path`, in one line.
+fn unreadable(path: &Path) -> impl Fn(hdf5::Error) -> Error + '_ {
+    move |e| {
+        Error::output(
+            path,
+            format!("cannot read: {}", describe_hdf5_error(&e.to_string())),
+        )
+    }
+}
+
+impl ProductShard {
+    /// Opens `path` (a product shard, [`crate::shard::kind_of_shards`]) and reads its
+    /// identity and regions.
+    fn open(path: &Path) -> Result<ProductShard> {
+        let (file, kind) = open_shard(path)?;
+        if kind != ShardKind::Product {
+            return Err(Error::output(
+                path,
+                "a raw shard (of `simulate --shard`), not a product shard",
+            ));
+        }
+        let a = FileAttributes { file: &file, path };
+        let mut regions = Vec::new();
+        while let Ok(g) = file.group(&format!("region_{}", regions.len())) {
+            regions.push(ShardRegion::of(&g, path)?);
+        }
+        Ok(ProductShard {
+            shard: a.shard()?,
+            run_shots: a.number("run_profiles")?,
+            first_shot: a.number("shard_first_profile")?,
+            frame: a.number(FRAME_ATTRIBUTE)?,
+            run_id: a.text("run_id")?,
+            seed: a.number("seed")?,
+            config: a.text("config")?,
+            source: a.text("source")?,
+            scheme: a.text("scheme")?,
+            regions,
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// Dataset `name` of its region `k`.
+    fn dataset(&self, k: usize, name: &str) -> Result<Dataset> {
+        let mut mdc = hdf5::plist::file_access::MetadataCacheConfig::default();
+        (mdc.max_size, mdc.initial_size) = (4 << 20, 1 << 20);
+        hdf5::File::with_options()
+            .with_fapl(|fapl| fapl.mdc_config(&mdc).chunk_cache(0, 0, 1.0))
+            .open(&self.path)
+            .and_then(|f| f.dataset(&format!("region_{k}/{name}")))
+            .map_err(unreadable(&self.path))
+    }
+
+    /// The shots of its shard.
+    fn shots(&self) -> Range<u64> {
+        shard_shots(self.shard, self.run_shots, self.frame)
+    }
+
+    /// It as a piece of its run: the shots from its first to its shard's end (its
+    /// regions' profiles are checked against them by [`check_regions`]).
+    fn piece(&self) -> Piece<'_> {
+        Piece {
+            path: &self.path,
+            identity: RunIdentity {
+                config: self.config.clone(),
+                seed: self.seed,
+                method: METHOD.into(),
+                shard_count: self.shard.count,
+                total: self.run_shots as usize,
+                run_id: self.run_id.clone(),
+            },
+            shard_index: self.shard.index,
+            rows: self.first_shot as usize..self.shots().end as usize,
+        }
+    }
+}
+
+impl ShardRegion {
+    /// Region group `g` of the shard at `path`.
+    fn of(g: &Group, path: &Path) -> Result<ShardRegion> {
+        let get = |name: &str| {
+            g.dataset(name).map_err(|_| {
+                Error::output(path, format!("{} has no `{name}`: not a product", g.name()))
+            })
+        };
+        let shape = get("counts")?.shape();
+        let shots = g
+            .attr("shots_averaged")
+            .and_then(|a| a.read_scalar::<u32>())
+            .map_err(unreadable(path))?;
+        if get("time")?.shape().first() != shape.first() {
+            return Err(Error::output(
+                path,
+                format!("{}: `time` and `counts` differ in profiles", g.name()),
+            ));
+        }
+        Ok(ShardRegion {
+            rows: shape.first().copied().unwrap_or(0),
+            row_elems: shape.iter().skip(1).product(),
+            shots,
+        })
+    }
+}
+
+/// Region `k` of the whole product, as the first shard (open as `file`) describes it,
+/// with `profiles`.
+fn region_spec(
+    f: &ProductShard,
+    file: &hdf5::File,
+    k: usize,
+    profiles: usize,
+) -> Result<RegionSpec> {
+    let g = file
+        .group(&format!("region_{k}"))
+        .map_err(unreadable(&f.path))?;
+    let num = |name: &str| {
+        g.attr(name)
+            .and_then(|a| a.read_scalar::<f64>())
+            .map_err(unreadable(&f.path))
+    };
+    let altitude = g.dataset("altitude").map_err(unreadable(&f.path))?;
+    Ok(RegionSpec {
+        first_profile: 0,
+        profiles,
+        altitude_m: altitude.read_raw::<f64>().map_err(unreadable(&f.path))?,
+        shots: f.regions[k].shots,
+        bounds: (
+            num("altitude_min_km")?,
+            num("altitude_max_km")?,
+            num("vertical_resolution_m")?,
+        ),
+    })
+}
+
+/// The whole product's root, as the first shard (open as `file`) describes it.
+fn header(f: &ProductShard, file: &hdf5::File) -> Result<ProductHeader> {
+    let g = file.group("region_0").map_err(unreadable(&f.path))?;
+    let read = || -> hdf5::Result<(Vec<String>, String)> {
+        let channels = g
+            .dataset("channel")?
+            .read_raw::<hdf5::types::VarLenUnicode>()?;
+        let units = g
+            .dataset("time")?
+            .attr("units")?
+            .read_scalar::<hdf5::types::VarLenUnicode>()?;
+        Ok((
+            channels.iter().map(|c| c.as_str().to_string()).collect(),
+            units.as_str().to_string(),
+        ))
+    };
+    let (channels, time_units) = read().map_err(unreadable(&f.path))?;
+    Ok(ProductHeader {
+        channels,
+        time_units,
+        attributes: product_attributes(&f.scheme, &f.source, &f.config, f.seed),
+    })
+}
+
+/// A merge of product shards checked and planned, ready to write.
+pub struct ProductMerge {
+    files: Vec<ProductShard>,
+    header: ProductHeader,
+    specs: Vec<RegionSpec>,
+    out: PathBuf,
+    start: Instant,
+}
+
+/// Refuses a shard whose regions are not the first one's or do not hold its shots'
+/// profiles, or that another lidarsim wrote.
+fn check_regions(first: &ProductShard, f: &ProductShard) -> Result<()> {
+    let shape = |f: &ProductShard| -> Vec<(u32, usize)> {
+        f.regions.iter().map(|r| (r.shots, r.row_elems)).collect()
+    };
+    if shape(f) != shape(first) || f.regions.is_empty() {
+        return Err(Error::output(
+            &f.path,
+            format!(
+                "its regions (shots, channels × bins) {:?} are not those of {} {:?}",
+                shape(f),
+                first.path.display(),
+                shape(first)
+            ),
+        ));
+    }
+    let shots = f.shots();
+    for (k, r) in f.regions.iter().enumerate() {
+        let want = profiles_within(r.shots, &shots);
+        if want.len() != r.rows {
+            return Err(Error::output(
+                &f.path,
+                format!(
+                    "region_{k} holds {} profiles, but its shots {}–{} make {}",
+                    r.rows,
+                    shots.start,
+                    shots.end.saturating_sub(1),
+                    want.len()
+                ),
+            ));
+        }
+    }
+    if f.source != source() {
+        return Err(Error::output(
+            &f.path,
+            format!(
+                "written by {}, not by this {}: merge with the lidarsim that wrote the shards",
+                f.source,
+                source()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The first half of `lidarsim merge OUT SHARD...` for product shards: checks that
+/// `shards` are one run's, each once, and lays out the whole product (nothing written).
+pub fn prepare(out: &Path, shards: &[PathBuf]) -> Result<ProductMerge> {
+    let start = Instant::now();
+    let files = shards
+        .iter()
+        .map(|p| ProductShard::open(p))
+        .collect::<Result<Vec<_>>>()?;
+    let first = files
+        .first()
+        .ok_or_else(|| Error::Unsupported("merge needs at least one shard".into()))?;
+    let pieces: Vec<Piece> = files.iter().map(ProductShard::piece).collect();
+    let rows = |s: Shard| {
+        let r = shard_shots(s, first.run_shots, first.frame);
+        r.start as usize..r.end as usize
+    };
+    let order = check_pieces(&pieces, "shard", "shots", rows)?;
+    for f in &files {
+        check_regions(first, f)?;
+    }
+    let mut files: Vec<Option<ProductShard>> = files.into_iter().map(Some).collect();
+    let files: Vec<ProductShard> = order.iter().filter_map(|&i| files[i].take()).collect();
+    let f = &files[0];
+    let file = hdf5::File::open(&f.path).map_err(unreadable(&f.path))?;
+    let whole = 0..f.run_shots;
+    let specs = (0..f.regions.len())
+        .map(|k| {
+            let profiles = profiles_within(f.regions[k].shots, &whole).len();
+            region_spec(f, &file, k, profiles)
+        })
+        .collect::<Result<_>>()?;
+    let header = header(f, &file)?;
+    drop(file);
+    Ok(ProductMerge {
+        header,
+        files,
+        specs,
+        out: out.to_path_buf(),
+        start,
+    })
+}
+
+/// The rows of one region of the whole run, read from the shards in order, a block of
+/// rows at a time.
+struct RegionRows<'a> {
+    files: &'a [ProductShard],
+    k: usize,
+    /// The shard read, its `counts` of the region, and its next row.
+    shard: usize,
+    counts: Option<Dataset>,
+    row: usize,
+    /// Rows of the shard read, `block_start .. block_start + block_len`.
+    block: Vec<u64>,
+    block_start: usize,
+    block_len: usize,
+    /// Rows read at once.
+    block_rows: usize,
+}
+
+impl<'a> RegionRows<'a> {
+    fn new(files: &'a [ProductShard], k: usize, bytes: usize) -> Self {
+        let elems = files[0].regions[k].row_elems.max(1);
+        RegionRows {
+            files,
+            k,
+            shard: 0,
+            counts: None,
+            row: 0,
+            block: Vec::new(),
+            block_start: 0,
+            block_len: 0,
+            block_rows: (bytes / (8 * elems)).max(1),
+        }
+    }
+
+    /// The next row of the region (channel-major counts).
+    fn next(&mut self) -> Result<&[u64]> {
+        while self.row >= self.files[self.shard].regions[self.k].rows {
+            if self.shard + 1 == self.files.len() {
+                return Err(Error::Unsupported(
+                    "the shards hold fewer profiles than the run".into(),
+                ));
+            }
+            (self.shard, self.row, self.block_start, self.block_len) = (self.shard + 1, 0, 0, 0);
+            self.counts = None;
+        }
+        let f = &self.files[self.shard];
+        let r = &f.regions[self.k];
+        if self.row >= self.block_start + self.block_len {
+            let end = (self.row + self.block_rows).min(r.rows);
+            if self.counts.is_none() {
+                self.counts = Some(f.dataset(self.k, "counts")?);
+            }
+            self.block = self
+                .counts
+                .as_ref()
+                .ok_or_else(|| Error::Unsupported("no counts".into()))?
+                .read_slice::<u64, _, Ix3>(s![self.row..end, .., ..])
+                .map_err(unreadable(&f.path))?
+                .into_raw_vec();
+            (self.block_start, self.block_len) = (self.row, end - self.row);
+        }
+        let i = (self.row - self.block_start) * r.row_elems;
+        self.row += 1;
+        Ok(&self.block[i..i + r.row_elems])
+    }
+}
+
+/// Times of rows `rows` of region `k` of the whole run, read from the shards in order.
+fn read_times(files: &[ProductShard], k: usize, rows: Range<usize>) -> Result<Vec<f64>> {
+    let mut out = Vec::with_capacity(rows.len());
+    let mut offset = 0;
+    for f in files {
+        let r = &f.regions[k];
+        let (a, b) = (rows.start.max(offset), rows.end.min(offset + r.rows));
+        if a < b {
+            let part = f
+                .dataset(k, "time")?
+                .read_slice::<f64, _, Ix1>(s![a - offset..b - offset])
+                .map_err(unreadable(&f.path))?;
+            out.extend(part.iter());
+        }
+        offset += r.rows;
+    }
+    Ok(out)
+}
+
+impl ProductMerge {
+    /// Writes the whole run's product as output `id` of `outputs` (complete or absent),
+    /// streaming the shards' rows in the whole run's order.
+    pub fn write(self, outputs: Outputs, id: OutputId) -> Result<MergeSummary> {
+        require_disk_for_merge(&self.out, self.files.iter().map(|f| f.path.as_path()))?;
+        let files = &self.files;
+        let mut times = |k: usize, rows: Range<usize>| read_times(files, k, rows);
+        let mut writer = ProductWriter::create(
+            outputs.temp_path(id)?,
+            &self.out,
+            &self.header,
+            &self.specs,
+            &mut times,
+        )?;
+        let per_region = BLOCK_BYTES / self.specs.len().max(1);
+        let mut readers: Vec<RegionRows> = (0..self.specs.len())
+            .map(|k| RegionRows::new(files, k, per_region))
+            .collect();
+        let mut next = vec![0usize; self.specs.len()];
+        // the row that completes first in the whole run (at shot (j + 1)·shots), the
+        // upper region first at a tie: the order the whole run writes them in
+        while let Some(k) = (0..self.specs.len())
+            .filter(|&k| next[k] < self.specs[k].profiles)
+            .min_by_key(|&k| ((next[k] as u128 + 1) * u128::from(self.specs[k].shots), k))
+        {
+            writer.write(k, readers[k].next()?)?;
+            next[k] += 1;
+        }
+        writer.finish()?;
+        outputs.commit()?;
+        Ok(MergeSummary {
+            output: self.out,
+            shards: self.files.len(),
+            profiles: self.files[0].run_shots as usize,
+            what: "shots",
+            file: "product",
+            elapsed: self.start.elapsed(),
+        })
+    }
+}
