@@ -486,6 +486,11 @@ impl ShardKind {
 /// is not HDF5 or not a shard.
 pub fn open_shard(path: &Path) -> Result<(hdf5::File, ShardKind)> {
     let fail = |why: &str| Error::output(path, why);
+    match std::fs::metadata(path) {
+        Err(e) => return Err(fail(&crate::error::describe_io(&e))),
+        Ok(m) if !m.is_file() => return Err(fail("not a regular file")),
+        Ok(_) => {}
+    }
     let file = hdf5::File::open(path)
         .map_err(|_| fail("not a lidarsim raw file or product (not HDF5, or unreadable)"))?;
     if file.attr("shard_index").is_err() {
