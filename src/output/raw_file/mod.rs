@@ -24,6 +24,7 @@
 
 pub mod check;
 pub mod chunk;
+pub mod planes;
 pub mod content;
 pub(crate) mod hdf5_ds;
 pub mod layout;

@@ -37,6 +37,7 @@ use rayon::prelude::*;
 
 use super::check::{RecordShape, Row};
 use super::chunk::{self, Filling};
+use super::planes;
 use super::hdf5_ds::write_chunk;
 use super::layout::{self, OpenFile};
 use super::{ProfileRecord, RawFileSpec};
@@ -453,15 +454,20 @@ impl RawFileWriter {
         if ready.is_empty() {
             return Ok(());
         }
+        let open = self.open.as_ref().ok_or("the writer is already closed")?;
         // compressed in parallel, in any order; `collect` keeps the queue's order
         let encoded: Vec<(ReadyChunk, Stored)> = ready
             .into_par_iter()
             .map(|c| {
-                let stored = chunk::deflate(&c.data);
+                let v = &open.rows[c.var];
+                let stored = if v.by_planes {
+                    planes::deflate_planes(&c.data, v.elem_bytes)
+                } else {
+                    chunk::deflate(&c.data)
+                };
                 (c, stored)
             })
             .collect();
-        let open = self.open.as_ref().ok_or("the writer is already closed")?;
         for (c, stored) in encoded {
             let bytes = stored?;
             if self.spare.iter().map(Vec::len).sum::<usize>() + c.data.len() <= SPARE_BYTES {
