@@ -7,7 +7,7 @@
 //! HDF5 and netCDF-4 reader, through the dataset's declared shuffle + deflate filters):
 //!
 //! * the zlib header, `78 01` (deflate, 32 KiB window, level "fastest"), as
-//!   [`super::chunk::deflate`] writes it;
+//!   [`deflate`] writes it;
 //! * per byte plane, in order: either raw deflate blocks from a compressor reset for that
 //!   plane (so no back-reference reaches outside it), none final, ended by a sync flush
 //!   (an empty stored block, so the plane's blocks end on a byte boundary); or stored
@@ -23,7 +23,7 @@
 use miniz_oxide::DataFormat;
 use miniz_oxide::deflate::core::TDEFLFlush;
 
-use super::chunk::Deflater;
+use super::chunk::{Deflater, deflate};
 
 /// The zlib header: CMF `78` (CM 8 = deflate, CINFO 7 = 32 KiB window), FLG `01` (FLEVEL
 /// 0, "fastest", as miniz_oxide writes for level 1; FCHECK makes `0x7801` a multiple of
@@ -34,16 +34,24 @@ pub const MAX_STORED: usize = 65_535;
 /// A final, empty stored block: BFINAL 1, BTYPE 00, padding, LEN 0, NLEN 0xFFFF.
 const FINAL_EMPTY_BLOCK: [u8; 5] = [0x01, 0x00, 0x00, 0xFF, 0xFF];
 /// A plane is stored when its bytes' order-0 entropy is at least this many thousandths
-/// of 8 bits per byte: deflate could then save at most ~3 % of it. Chosen by measurement
-/// (`validation/reports/writer.md`, "Noise planes stored").
-pub const NOISE_ENTROPY_MILLI: u64 = 970;
-/// Fraction bits of the fixed-point base-2 logarithms of [`is_noise`].
+/// of 8 bits per byte. Measured on the low-byte planes of counts (scenario 1 at seven
+/// accumulation times, `validation/noise_planes.rs`, `validation/reports/writer.md`
+/// "Noise planes stored"), deflate level 1 shrinks such a plane to its entropy plus
+/// 0.2–0.6 % (0.949 → 0.951, 0.970 → 0.976, 0.987 → 0.993): from 0.965 on it could save
+/// at most ~3 % of the plane, and storing it instead makes the chunk 1.6× faster.
+pub const NOISE_ENTROPY_MILLI: u64 = 965;
+/// Bytes of a plane that [`entropy_milli`] looks at, about: measured, a full histogram
+/// costs a quarter of a counts chunk's deflate time, a sample of 4,096 bytes 1–3 %,
+/// within ±0.003 of the full plane's entropy.
+const SAMPLE_BYTES: usize = 4096;
+/// Fraction bits of the fixed-point base-2 logarithms of [`entropy_milli`].
 const LOG2_FRAC_BITS: u32 = 16;
 
-/// Encodes a shuffled chunk of `elem_bytes`-byte elements into one zlib stream, storing
-/// the byte planes that [`is_noise`] finds incompressible and deflating the others.
-/// A chunk whose length is not a multiple of `elem_bytes` (never the writer's) is taken
-/// as one plane.
+/// Encodes a shuffled chunk of `elem_bytes`-byte elements into one zlib stream: if
+/// [`is_noise`] finds any of its byte planes incompressible, by planes ([`encode`]),
+/// those stored and the others deflated; otherwise deflated whole ([`deflate`], which
+/// compresses such chunks as well and faster than by planes). A chunk whose length is
+/// not a multiple of `elem_bytes` (never the writer's) is taken as one plane.
 pub fn deflate_planes(shuffled: &[u8], elem_bytes: usize) -> Result<Vec<u8>, String> {
     let n = shuffled.len() / elem_bytes.max(1);
     let planes: Vec<(&[u8], bool)> = if n == 0 || n * elem_bytes != shuffled.len() {
@@ -54,7 +62,11 @@ pub fn deflate_planes(shuffled: &[u8], elem_bytes: usize) -> Result<Vec<u8>, Str
             .map(|p| (p, is_noise(p)))
             .collect()
     };
-    encode(&planes)
+    if planes.iter().any(|&(_, stored)| stored) {
+        encode(&planes)
+    } else {
+        deflate(shuffled)
+    }
 }
 
 /// One zlib stream of `planes` (bytes, stored?) in order, as the module describes.
@@ -97,55 +109,61 @@ fn put_stored(out: &mut Vec<u8>, data: &[u8]) {
 }
 
 /// Whether a plane's bytes are noise that deflate cannot shrink by more than ~3 %: their
-/// order-0 entropy `H = Σ c·log2(n/c)` over the byte histogram (`c` of each value, `n`
-/// bytes) is at least [`NOISE_ENTROPY_MILLI`]/1000 of `8n` bits. Deflate's Huffman
-/// codes (RFC 1951 §3.2.2) cannot code bytes below their order-0 entropy, and its LZ77
-/// matches find nothing in fresh random draws: a measured plane of Poisson low bytes at
-/// 0.99 of 8 bits deflated to 0.975 of its size (the Huffman tables' cost), while data
-/// repeated from row to row (a changing scene's truth) would, which is why only fresh
-/// draws are encoded by planes. Integer arithmetic throughout, so the decision is the
-/// same on every machine.
+/// order-0 entropy ([`entropy_milli`]) is at least [`NOISE_ENTROPY_MILLI`]/1000 of 8
+/// bits per byte. Deflate's Huffman codes (RFC 1951 §3.2.2) code bytes no shorter than
+/// their order-0 entropy, and its LZ77 matches (§4) find next to nothing in fresh random
+/// draws: measured, such planes deflate to their entropy plus ~0.6 %. Data repeated from
+/// row to row (a changing scene's truth) is another matter, which is why only fresh draws
+/// are encoded by planes.
 pub fn is_noise(plane: &[u8]) -> bool {
     !plane.is_empty() && entropy_milli(plane) >= NOISE_ENTROPY_MILLI
 }
 
 /// The order-0 entropy of `bytes` in thousandths of 8 bits per byte, rounded down (0 for
-/// no bytes): `1000 · Σ c·log2(n/c) / 8n` over the byte histogram.
+/// no bytes), estimated from a sample: every `s`-th byte, `s` the odd number at or just
+/// above `⌊len / SAMPLE_BYTES⌋` (odd, so that rows of a power-of-two number of bins are
+/// not sampled at the same few bins), so about 2,700 to 8,200 bytes of a long plane,
+/// every byte of a short one. The plug-in
+/// estimate `Σ c·log2(n/c)` over the sample's byte histogram (`c` of each value) plus
+/// Miller and Madow's correction for its bias, `(k − 1) / (2 ln 2)` bits for `k` values
+/// seen. Integer arithmetic throughout, so the same on every machine.
 pub fn entropy_milli(bytes: &[u8]) -> u64 {
-    let n = bytes.len() as u64;
+    let step = (bytes.len() / SAMPLE_BYTES).max(1) | 1;
+    let (hist, n) = histogram(bytes, step);
     if n == 0 {
         return 0;
     }
     let log_n = log2_fixed(n);
-    // Σ c·(log2 n − log2 c) in fixed point: at most n·8·2^16, far within u128
-    let bits: u128 = histogram(bytes)
-        .iter()
-        .filter(|&&c| c > 0)
-        .map(|&c| u128::from(c) * u128::from(log_n.saturating_sub(log2_fixed(c))))
-        .sum();
-    let milli = bits * 1000 / (u128::from(8 * n) << LOG2_FRAC_BITS);
-    u64::try_from(milli).unwrap_or(u64::MAX)
+    let mut bits = 0u128;
+    let mut seen = 0u128;
+    for &c in hist.iter().filter(|&&c| c > 0) {
+        bits += u128::from(c) * u128::from(log_n.saturating_sub(log2_fixed(c)));
+        seen += 1;
+    }
+    // 2^16 / (2 ln 2), the correction per value seen in fixed point
+    bits += (seen - 1) * 47_274;
+    let milli = bits * 1000 / ((u128::from(n) * 8) << LOG2_FRAC_BITS);
+    u64::try_from(milli.min(1000)).unwrap_or(1000)
 }
 
-/// The counts of each byte value, over four tables (so that runs of one value do not
-/// wait on one counter).
-fn histogram(bytes: &[u8]) -> [u64; 256] {
-    let mut t = [[0u64; 256]; 4];
-    let mut quads = bytes.chunks_exact(4);
-    for q in &mut quads {
-        t[0][usize::from(q[0])] += 1;
-        t[1][usize::from(q[1])] += 1;
-        t[2][usize::from(q[2])] += 1;
-        t[3][usize::from(q[3])] += 1;
+/// The histogram of every `step`-th byte of `bytes` (`step` ≥ 1), and how many were
+/// counted: over two tables, so that runs of one value do not wait on one counter.
+fn histogram(bytes: &[u8], step: usize) -> ([u64; 256], u64) {
+    // at most 2 · SAMPLE_BYTES bytes are counted: u32 counters suffice
+    let mut t = [[0u32; 256]; 2];
+    let mut sample = bytes.iter().step_by(step.max(1));
+    while let Some(&a) = sample.next() {
+        t[0][usize::from(a)] += 1;
+        let Some(&b) = sample.next() else { break };
+        t[1][usize::from(b)] += 1;
     }
-    for &b in quads.remainder() {
-        t[0][usize::from(b)] += 1;
-    }
+    let mut n = 0;
     let mut h = [0u64; 256];
     for (v, slot) in h.iter_mut().enumerate() {
-        *slot = t.iter().map(|row| row[v]).sum();
+        *slot = u64::from(t[0][v]) + u64::from(t[1][v]);
+        n += *slot;
     }
-    h
+    (h, n)
 }
 
 /// `log2(x)` in fixed point with [`LOG2_FRAC_BITS`] fraction bits, rounded down (to
