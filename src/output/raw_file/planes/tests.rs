@@ -74,7 +74,9 @@ fn a_stored_plane_is_its_bytes_in_blocks_of_at_most_65535() {
         at += 5 + block.len();
     }
     assert_eq!(z[at..at + 5], FINAL_EMPTY_BLOCK);
-    assert_eq!(z[at + 5..], adler2::adler32_slice(&p).to_be_bytes());
+    assert_eq!(z[at + 5..], simd_adler32::adler32(&p.as_slice()).to_be_bytes());
+    // the checksum itself, on the usual example (Adler-32 of "Wikipedia")
+    assert_eq!(simd_adler32::adler32(&&b"Wikipedia"[..]), 0x11E6_0398);
 }
 
 #[test]
@@ -177,5 +179,6 @@ fn fixed_point_log2_is_within_its_last_bit() {
         assert!((exact - got).abs() <= 2.0, "log2({x}): {got} vs {exact}");
     }
     assert_eq!(log2_fixed(0), 0);
+    assert_eq!(log2_fixed(1 << 40), 40 << LOG2_FRAC_BITS);
     assert!(log2_fixed(u64::MAX) >= 63 << LOG2_FRAC_BITS);
 }
