@@ -410,7 +410,13 @@ fn noise_planes_are_stored_and_read_back_through_hdf5s_filters() {
         let (a, b): (Vec<f64>, Vec<f64>) = (0..n).map(|i| (truth(p, i, 0), truth(p, i, 1))).unzip();
         let lat = [0.0];
         let values: [&[f64]; 3] = [&a, &lat, &b];
-        let d = Profile { parts: vec![], counts, a: vec![], lat, b: vec![] };
+        let d = Profile {
+            parts: vec![],
+            counts,
+            a: vec![],
+            lat,
+            b: vec![],
+        };
         w.write_profile(&record(&s, p, &d, &values)).unwrap();
     }
     w.finish().unwrap();

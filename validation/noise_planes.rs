@@ -28,7 +28,10 @@ fn main() {
         eprintln!("usage: noise_planes DATA_DIR [TARGET_BYTES]");
         std::process::exit(2);
     };
-    let target: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(512 << 10);
+    let target: usize = args
+        .get(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(512 << 10);
     let mut files: Vec<_> = std::fs::read_dir(dir)
         .expect("a readable directory")
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -37,7 +40,11 @@ fn main() {
     // (entropy bucket of 10/1000) → (planes, raw bytes, deflated bytes)
     let mut buckets: BTreeMap<u64, (usize, usize, usize)> = BTreeMap::new();
     for p in files {
-        let name = p.file_stem().unwrap_or_default().to_string_lossy().to_string();
+        let name = p
+            .file_stem()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .to_string();
         let Some((elem, chunks)) = read_chunks(&p, &name, target) else {
             continue;
         };
@@ -47,16 +54,17 @@ fn main() {
     }
     println!("all planes by entropy (thousandths of 8 bits): planes, deflated / raw");
     for (b, (k, raw, z)) in buckets {
-        println!("  {:4}–{:4}: {k:5} planes, {:.4}", b, b + 9, z as f64 / raw as f64);
+        println!(
+            "  {:4}–{:4}: {k:5} planes, {:.4}",
+            b,
+            b + 9,
+            z as f64 / raw as f64
+        );
     }
 }
 
 /// The file's chunks in shuffled layout, and its element size.
-fn read_chunks(
-    path: &std::path::Path,
-    name: &str,
-    target: usize,
-) -> Option<(usize, Vec<Vec<u8>>)> {
+fn read_chunks(path: &std::path::Path, name: &str, target: usize) -> Option<(usize, Vec<Vec<u8>>)> {
     let parts: Vec<&str> = name.split('_').collect();
     let elem: usize = parts.get(parts.len().checked_sub(2)?)?.parse().ok()?;
     let row_elems: usize = parts.last()?.parse().ok()?;
@@ -83,11 +91,7 @@ fn read_chunks(
 }
 
 /// Each plane index's mean entropy and deflated ratio; every plane into `buckets`.
-fn per_plane(
-    chunks: &[Vec<u8>],
-    elem: usize,
-    buckets: &mut BTreeMap<u64, (usize, usize, usize)>,
-) {
+fn per_plane(chunks: &[Vec<u8>], elem: usize, buckets: &mut BTreeMap<u64, (usize, usize, usize)>) {
     for j in 0..elem {
         let (mut h, mut raw, mut z) = (0u64, 0usize, 0usize);
         let (mut lo, mut hi) = (u64::MAX, 0u64);
@@ -158,7 +162,8 @@ fn per_threshold(chunks: &[Vec<u8>], elem: usize) {
         report(&label, time(&by_planes));
     }
     let segmented = |c: &[u8]| {
-        let planes: Vec<(&[u8], bool)> = c.chunks_exact(c.len() / elem).map(|p| (p, false)).collect();
+        let planes: Vec<(&[u8], bool)> =
+            c.chunks_exact(c.len() / elem).map(|p| (p, false)).collect();
         encode(&planes).map_or(0, |z| z.len())
     };
     report("by planes, none stored", time(&segmented));

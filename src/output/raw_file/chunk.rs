@@ -17,7 +17,9 @@
 //!   `miniz_oxide` at [`DEFLATE_LEVEL`] (chosen by measurement, see
 //!   `validation/reports/writer.md`): pure Rust with no CPU-dependent code path, so the
 //!   bytes of a chunk depend on its data (and the crate's version, pinned in
-//!   `Cargo.lock`) only, whatever the machine or thread that compressed it.
+//!   `Cargo.lock`) only, whatever the machine or thread that compressed it. The count
+//!   variables' chunks are one zlib stream too, assembled byte plane by byte plane with
+//!   the planes of noise stored rather than compressed (`planes.rs`).
 
 use std::cell::RefCell;
 use std::collections::BTreeMap;
@@ -28,8 +30,7 @@ use miniz_oxide::deflate::core::CompressionStrategy;
 use super::check::Row;
 use miniz_oxide::DataFormat;
 use miniz_oxide::deflate::core::{
-    CompressorOxide, TDEFLFlush, TDEFLStatus, compress_to_output,
-    create_comp_flags_from_zip_params,
+    CompressorOxide, TDEFLFlush, TDEFLStatus, compress_to_output, create_comp_flags_from_zip_params,
 };
 
 /// Deflate level of every chunked variable: miniz_oxide's level 1 (greedy parsing, one

@@ -60,10 +60,7 @@ pub fn deflate_planes(shuffled: &[u8], elem_bytes: usize) -> Result<Vec<u8>, Str
     let planes: Vec<(&[u8], bool)> = if n == 0 || n * elem_bytes != shuffled.len() {
         vec![(shuffled, is_noise(shuffled))]
     } else {
-        shuffled
-            .chunks_exact(n)
-            .map(|p| (p, is_noise(p)))
-            .collect()
+        shuffled.chunks_exact(n).map(|p| (p, is_noise(p))).collect()
     };
     if planes.iter().any(|&(_, stored)| stored) {
         encode(&planes)
@@ -91,7 +88,9 @@ pub fn encode(planes: &[(&[u8], bool)]) -> Result<Vec<u8>, String> {
         if stored {
             put_stored(&mut out, plane);
         } else {
-            Deflater::with(|d| d.compress_into(plane, DataFormat::Raw, TDEFLFlush::Sync, &mut out))?;
+            Deflater::with(|d| {
+                d.compress_into(plane, DataFormat::Raw, TDEFLFlush::Sync, &mut out)
+            })?;
         }
     }
     out.extend_from_slice(&FINAL_EMPTY_BLOCK);

@@ -74,7 +74,10 @@ fn a_stored_plane_is_its_bytes_in_blocks_of_at_most_65535() {
         at += 5 + block.len();
     }
     assert_eq!(z[at..at + 5], FINAL_EMPTY_BLOCK);
-    assert_eq!(z[at + 5..], simd_adler32::adler32(&p.as_slice()).to_be_bytes());
+    assert_eq!(
+        z[at + 5..],
+        simd_adler32::adler32(&p.as_slice()).to_be_bytes()
+    );
     // the checksum itself, on the usual example (Adler-32 of "Wikipedia")
     assert_eq!(simd_adler32::adler32(&&b"Wikipedia"[..]), 0x11E6_0398);
 }
@@ -130,7 +133,12 @@ fn poisson_counts_store_the_low_bytes_and_deflate_the_rest() {
     assert_eq!(&z[2 + 5..2 + 5 + MAX_STORED], &planes[0][..MAX_STORED]);
     // within 2 % of the whole chunk's deflate
     let whole = deflate(&chunk).unwrap();
-    assert!(z.len() * 100 <= whole.len() * 102, "{} vs {}", z.len(), whole.len());
+    assert!(
+        z.len() * 100 <= whole.len() * 102,
+        "{} vs {}",
+        z.len(),
+        whole.len()
+    );
     // the same bytes from a fresh thread
     let again = std::thread::spawn(move || deflate_planes(&chunk, 4).unwrap());
     assert_eq!(again.join().unwrap(), z);
@@ -141,7 +149,11 @@ fn odd_chunk_lengths_are_one_plane() {
     for (len, elem) in [(0usize, 4usize), (3, 4), (10, 4), (9, 0), (5, 1), (8, 8)] {
         let data = noise(len, len as u64);
         let z = deflate_planes(&data, elem).unwrap();
-        assert_eq!(inflate(&z).unwrap(), data, "{len} bytes of {elem}-byte elements");
+        assert_eq!(
+            inflate(&z).unwrap(),
+            data,
+            "{len} bytes of {elem}-byte elements"
+        );
     }
 }
 
@@ -163,7 +175,11 @@ fn noise_is_told_by_entropy() {
         (0..256_000)
             .map(|_| {
                 let r = rng.next_u64();
-                if r % 1000 < p_milli { 0 } else { (r >> 32) as u8 % 255 + 1 }
+                if r % 1000 < p_milli {
+                    0
+                } else {
+                    (r >> 32) as u8 % 255 + 1
+                }
             })
             .collect()
     };
@@ -173,7 +189,19 @@ fn noise_is_told_by_entropy() {
 
 #[test]
 fn fixed_point_log2_is_within_its_last_bit() {
-    for x in [1u64, 2, 3, 5, 255, 256, 1000, 65_535, 1 << 20, 123_456_789, u32::MAX as u64] {
+    for x in [
+        1u64,
+        2,
+        3,
+        5,
+        255,
+        256,
+        1000,
+        65_535,
+        1 << 20,
+        123_456_789,
+        u32::MAX as u64,
+    ] {
         let exact = (x as f64).log2() * f64::from(1u32 << LOG2_FRAC_BITS);
         let got = log2_fixed(x) as f64;
         assert!((exact - got).abs() <= 2.0, "log2({x}): {got} vs {exact}");
