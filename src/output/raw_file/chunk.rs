@@ -247,9 +247,11 @@ impl Deflater {
 /// Deflates a shuffled chunk into one zlib stream, as `H5Z_FILTER_DEFLATE` stores it
 /// (with this thread's compressor).
 pub fn deflate(shuffled: &[u8]) -> Result<Vec<u8>, String> {
-    // room for what a chunk that compresses well takes; more is grown into if needed
+    // room for what a chunk that compresses well takes; more is grown into if needed,
+    // the rest given back (in place: a shrinking realloc does not copy)
     let mut out = Vec::with_capacity(shuffled.len() / 4 + 64);
     Deflater::with(|d| d.compress_into(shuffled, DataFormat::Zlib, TDEFLFlush::Finish, &mut out))?;
+    out.shrink_to_fit();
     Ok(out)
 }
 
