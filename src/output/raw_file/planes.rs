@@ -143,11 +143,11 @@ pub fn entropy_milli(bytes: &[u8]) -> u64 {
     if n == 0 {
         return 0;
     }
-    let log_n = log2_fixed(n);
+    let log_n = log2_of(n);
     let mut bits = 0u128;
     let mut seen = 0u128;
     for &c in hist.iter().filter(|&&c| c > 0) {
-        bits += u128::from(c) * u128::from(log_n.saturating_sub(log2_fixed(c)));
+        bits += u128::from(c) * u128::from(log_n.saturating_sub(log2_of(c)));
         seen += 1;
     }
     // 2^16 / (2 ln 2), the correction per value seen in fixed point
@@ -179,8 +179,8 @@ fn histogram(bytes: &[u8], step: usize) -> ([u64; 256], u64) {
 /// `log2(x)` in fixed point with [`LOG2_FRAC_BITS`] fraction bits, rounded down (to
 /// within 2^-16 for `x` below 2^32; 0 for 0): the integer part from the leading bit, the
 /// fraction bit by bit by squaring the mantissa (a Q31 number in [1, 2), so that its
-/// square fits in 64 bits).
-fn log2_fixed(x: u64) -> u64 {
+/// square fits in 64 bits). Looked up for the counts of a sample ([`LOG2_TABLE`]).
+const fn log2_fixed(x: u64) -> u64 {
     if x == 0 {
         return 0;
     }
@@ -191,14 +191,37 @@ fn log2_fixed(x: u64) -> u64 {
         x >> (int - 31)
     };
     let mut frac = 0u64;
-    for bit in (0..LOG2_FRAC_BITS).rev() {
+    let mut bit = LOG2_FRAC_BITS;
+    while bit > 0 {
+        bit -= 1;
         m = (m * m) >> 31;
         if m >= 2 << 31 {
             m >>= 1;
             frac |= 1 << bit;
         }
     }
-    (u64::from(int) << LOG2_FRAC_BITS) | frac
+    ((int as u64) << LOG2_FRAC_BITS) | frac
+}
+
+/// [`log2_fixed`] of 0 to 2 · [`SAMPLE_BYTES`] − 1, every count a sample can hold,
+/// computed at compile time: computing the 256 logarithms of a plane's histogram each
+/// time cost more than the sampling.
+static LOG2_TABLE: [u32; 2 * SAMPLE_BYTES] = {
+    let mut t = [0u32; 2 * SAMPLE_BYTES];
+    let mut i = 0;
+    while i < t.len() {
+        t[i] = log2_fixed(i as u64) as u32;
+        i += 1;
+    }
+    t
+};
+
+/// [`log2_fixed`] of `x`, looked up when [`LOG2_TABLE`] holds it.
+fn log2_of(x: u64) -> u64 {
+    match usize::try_from(x).ok().and_then(|i| LOG2_TABLE.get(i)) {
+        Some(&v) => u64::from(v),
+        None => log2_fixed(x),
+    }
 }
 
 #[cfg(test)]

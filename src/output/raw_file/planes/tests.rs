@@ -207,6 +207,9 @@ fn fixed_point_log2_is_within_its_last_bit() {
         assert!((exact - got).abs() <= 2.0, "log2({x}): {got} vs {exact}");
     }
     assert_eq!(log2_fixed(0), 0);
+    for x in [0u64, 1, 7, 4096, 8191, 8192, 1 << 20] {
+        assert_eq!(log2_of(x), log2_fixed(x), "the table at {x}");
+    }
     assert_eq!(log2_fixed(1 << 40), 40 << LOG2_FRAC_BITS);
     assert!(log2_fixed(u64::MAX) >= 63 << LOG2_FRAC_BITS);
 }
