@@ -41,10 +41,10 @@ const FINAL_EMPTY_BLOCK: [u8; 5] = [0x01, 0x00, 0x00, 0xFF, 0xFF];
 /// accumulation times, `validation/noise_planes.rs`, `validation/reports/writer.md`
 /// "Noise planes stored"), deflate level 1 shrinks such a plane to its entropy plus
 /// 0.2–0.6 % (0.949 → 0.951, 0.970 → 0.976, 0.987 → 0.993): from 0.965 on it could save
-/// at most ~3 % of the plane, and storing it instead makes the chunk 1.6× faster.
+/// at most ~3 % of the plane, and storing it instead makes the chunk ~1.7× faster.
 pub const NOISE_ENTROPY_MILLI: u64 = 965;
 /// Bytes of a plane that [`entropy_milli`] looks at, about: measured, a full histogram
-/// costs a quarter of a counts chunk's deflate time, a sample of 4,096 bytes 1–3 %,
+/// costs a quarter of a counts chunk's deflate time, a sample of 4,096 bytes ~1 %,
 /// within ±0.003 of the full plane's entropy.
 const SAMPLE_BYTES: usize = 4096;
 /// Fraction bits of the fixed-point base-2 logarithms of [`entropy_milli`].
@@ -53,7 +53,7 @@ const LOG2_FRAC_BITS: u32 = 16;
 /// Encodes a shuffled chunk of `elem_bytes`-byte elements into one zlib stream: if
 /// [`is_noise`] finds any of its byte planes incompressible, by planes ([`encode`]),
 /// those stored and the others deflated; otherwise deflated whole ([`deflate`]: measured
-/// on such chunks, 3–7 % faster than by planes for 1–3 % more bytes, and the bytes the
+/// on such chunks, 1–6 % faster than by planes for 1–3 % more bytes, and the bytes the
 /// writer stored before planes were). A chunk whose length is not a multiple of
 /// `elem_bytes` (never the writer's) is taken as one plane.
 pub fn deflate_planes(shuffled: &[u8], elem_bytes: usize) -> Result<Vec<u8>, String> {
@@ -132,11 +132,11 @@ pub fn is_noise(plane: &[u8]) -> bool {
 /// The order-0 entropy of `bytes` in thousandths of 8 bits per byte, rounded down (0 for
 /// no bytes), estimated from a sample: every `s`-th byte, `s` the odd number at or just
 /// above `⌊len / SAMPLE_BYTES⌋` (odd, so that rows of a power-of-two number of bins are
-/// not sampled at the same few bins), so about 2,700 to 8,200 bytes of a long plane,
-/// every byte of a short one. The plug-in
-/// estimate `Σ c·log2(n/c)` over the sample's byte histogram (`c` of each value) plus
-/// Miller and Madow's correction for its bias, `(k − 1) / (2 ln 2)` bits for `k` values
-/// seen. Integer arithmetic throughout, so the same on every machine.
+/// not sampled at the same few bins): 2,731 to ~4,100 bytes of a plane of 8 KiB or
+/// more, every byte of a shorter one, so under 2 · `SAMPLE_BYTES` in all cases. The
+/// plug-in estimate `Σ c·log2(n/c)` over the sample's byte histogram (`n` bytes, `c` of
+/// each value) plus Miller and Madow's correction for its bias, `(k − 1) / (2 ln 2)` bits
+/// for `k` values seen. Integer arithmetic throughout, so the same on every machine.
 pub fn entropy_milli(bytes: &[u8]) -> u64 {
     let step = (bytes.len() / SAMPLE_BYTES).max(1) | 1;
     let (hist, n) = histogram(bytes, step);
