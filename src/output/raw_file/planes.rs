@@ -132,7 +132,7 @@ pub fn is_noise(plane: &[u8]) -> bool {
 /// The order-0 entropy of `bytes` in thousandths of 8 bits per byte, rounded down (0 for
 /// no bytes), estimated from a sample: every `s`-th byte, `s` the odd number at or just
 /// above `⌊len / SAMPLE_BYTES⌋` (odd, so that rows of a power-of-two number of bins are
-/// not sampled at the same few bins): 2,731 to ~4,100 bytes of a plane of 8 KiB or
+/// not sampled at the same few bins): 2,731 to 5,461 bytes of a plane of 8 KiB or
 /// more, every byte of a shorter one, so under 2 · `SAMPLE_BYTES` in all cases. The
 /// plug-in estimate `Σ c·log2(n/c)` over the sample's byte histogram (`n` bytes, `c` of
 /// each value) plus Miller and Madow's correction for its bias, `(k − 1) / (2 ln 2)` bits
