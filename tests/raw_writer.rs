@@ -195,29 +195,6 @@ fn check_all(path: &Path, spec: &RawFileSpec) {
     }
 }
 
-/// The stored bytes of one chunk (`H5Dread_chunk`).
-fn raw_chunk(ds: &hdf5::Dataset, offset: &[u64], size: u64) -> Vec<u8> {
-    use hdf5_sys::h5d::H5Dread_chunk;
-    use hdf5_sys::h5p::H5P_DEFAULT;
-    let mut buf = vec![0u8; size as usize];
-    let mut filters = 0u32;
-    let mut len = size as usize;
-    hdf5::sync::sync(|| unsafe {
-        assert!(
-            H5Dread_chunk(
-                ds.id(),
-                H5P_DEFAULT,
-                offset.as_ptr(),
-                &mut filters,
-                buf.as_mut_ptr().cast(),
-                &mut len,
-            ) >= 0
-        );
-    });
-    assert_eq!(filters, 0, "every filter applied");
-    buf
-}
-
 #[test]
 fn profiles_in_any_order_read_back_exactly_with_edge_chunks_and_components() {
     let dir = scratch("roundtrip");
@@ -401,13 +378,66 @@ fn stored_chunks_unpack_to_hdf5s_own_shuffled_bytes() {
         assert!(a.len() >= 2, "{name}: an edge chunk is tested");
         for ((oa, _, sa), (ob, _, sb)) in a.iter().zip(&b) {
             assert_eq!(oa, ob);
-            let mine = chunk::inflate(&raw_chunk(&ds, oa, *sa)).unwrap();
-            let hdf5s = chunk::inflate(&raw_chunk(&copy, ob, *sb)).unwrap();
+            let mine = chunk::inflate(&common::raw_chunk(&ds, oa, *sa)).unwrap();
+            let hdf5s = chunk::inflate(&common::raw_chunk(&copy, ob, *sb)).unwrap();
             assert_eq!(mine.len(), chunk_dims.iter().product::<usize>() * elem);
             assert!(
                 mine == hdf5s,
                 "{name} chunk at {oa:?}: shuffled bytes differ"
             );
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Counts whose two low bytes are noise (fresh draws of large means): those byte planes
+/// are stored as deflate stored blocks, the others deflated, in one zlib stream per
+/// chunk that HDF5 reads back through the declared filters, and that inflates to the
+/// bytes of HDF5's own pipeline.
+#[test]
+fn noise_planes_are_stored_and_read_back_through_hdf5s_filters() {
+    let dir = scratch("noise");
+    // 2500 u32 counts a profile: 52 rows a chunk, planes of 130,000 bytes; 70 profiles
+    let s = spec(70, 1, 2500, CountWidth::U32, false);
+    let n = s.counts_per_profile();
+    let noisy = |p: usize, i: usize| {
+        1_000_000 + (((p * 1_000_003 + i * 7919) as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 48)
+    };
+    let path = dir.join("noise.h5");
+    let mut w = RawFileWriter::create(&path, &path, &s).unwrap();
+    for p in 0..s.n_profiles {
+        let counts: Vec<u64> = (0..n).map(|i| noisy(p, i)).collect();
+        let (a, b): (Vec<f64>, Vec<f64>) = (0..n).map(|i| (truth(p, i, 0), truth(p, i, 1))).unzip();
+        let lat = [0.0];
+        let values: [&[f64]; 3] = [&a, &lat, &b];
+        let d = Profile {
+            parts: vec![],
+            counts,
+            a: vec![],
+            lat,
+            b: vec![],
+        };
+        w.write_profile(&record(&s, p, &d, &values)).unwrap();
+    }
+    w.finish().unwrap();
+    let f = hdf5::File::open(&path).unwrap();
+    let ds = f.dataset("counts").unwrap();
+    let back: Vec<u64> = ds.read_raw().unwrap();
+    let want: Vec<u64> = (0..s.n_profiles * n).map(|k| noisy(k / n, k % n)).collect();
+    assert!(back == want, "counts read back through HDF5's filters");
+    let theirs = hdf5::File::create(dir.join("theirs.h5")).unwrap();
+    let copy = hdf5_pipeline_copy::<u32>(&ds, &theirs, "counts");
+    let (a, b) = (common::chunk_info(&ds), common::chunk_info(&copy));
+    for (k, ((oa, _, sa), (ob, _, sb))) in a.iter().zip(&b).enumerate() {
+        let mine = common::raw_chunk(&ds, oa, *sa);
+        assert_eq!(
+            chunk::inflate(&mine).unwrap(),
+            chunk::inflate(&common::raw_chunk(&copy, ob, *sb)).unwrap()
+        );
+        if k == 0 {
+            // zlib header, then a stored block of 65,535 bytes: the low bytes as they are
+            assert_eq!(mine[..7], [0x78, 0x01, 0x00, 0xFF, 0xFF, 0x00, 0x00]);
+            assert!(mine.len() < 52 * n * 4 * 55 / 100, "higher planes deflated");
         }
     }
     std::fs::remove_dir_all(&dir).ok();

@@ -49,6 +49,19 @@ fn one_and_two_threads_write_the_same_bytes() {
             "instruments/caliop_orbit.toml",
             vec!["--profiles", "100", "--method", "shot"],
         ),
+        // 10,000-shot profiles: the counts' low bytes are noise, stored (`planes.rs`);
+        // two full chunks and an edge chunk
+        (
+            "paper/scenario1.toml",
+            vec![
+                "--profiles",
+                "800",
+                "--method",
+                "aggregate",
+                "--set",
+                "acquisition.accumulation_time_s=1000",
+            ],
+        ),
     ]
     .into_iter()
     .enumerate()
@@ -67,6 +80,13 @@ fn one_and_two_threads_write_the_same_bytes() {
                     "{name}"
                 );
             }
+        }
+        if extra.contains(&"acquisition.accumulation_time_s=1000") {
+            // zlib header, then a stored block of 65,535 bytes
+            let ds = f.dataset("counts").unwrap();
+            let (offset, _, size) = &common::chunk_info(&ds)[0];
+            let stored = common::raw_chunk(&ds, offset, *size);
+            assert_eq!(stored[..7], [0x78, 0x01, 0x00, 0xFF, 0xFF, 0x00, 0x00]);
         }
         if extra.contains(&"--components") {
             let counts: Vec<u64> = f.dataset("counts").unwrap().read_raw().unwrap();

@@ -106,3 +106,26 @@ pub fn chunk_info(ds: &hdf5::Dataset) -> Vec<(Vec<u64>, u32, u64)> {
             .collect()
     })
 }
+
+/// The stored bytes of one chunk (`H5Dread_chunk`).
+pub fn raw_chunk(ds: &hdf5::Dataset, offset: &[u64], size: u64) -> Vec<u8> {
+    use hdf5_sys::h5d::H5Dread_chunk;
+    use hdf5_sys::h5p::H5P_DEFAULT;
+    let mut buf = vec![0u8; size as usize];
+    let mut filters = 0u32;
+    let mut len = size as usize;
+    hdf5::sync::sync(|| unsafe {
+        assert!(
+            H5Dread_chunk(
+                ds.id(),
+                H5P_DEFAULT,
+                offset.as_ptr(),
+                &mut filters,
+                buf.as_mut_ptr().cast(),
+                &mut len,
+            ) >= 0
+        );
+    });
+    assert_eq!(filters, 0, "every filter applied");
+    buf
+}

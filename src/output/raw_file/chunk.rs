@@ -17,7 +17,9 @@
 //!   `miniz_oxide` at [`DEFLATE_LEVEL`] (chosen by measurement, see
 //!   `validation/reports/writer.md`): pure Rust with no CPU-dependent code path, so the
 //!   bytes of a chunk depend on its data (and the crate's version, pinned in
-//!   `Cargo.lock`) only, whatever the machine or thread that compressed it.
+//!   `Cargo.lock`) only, whatever the machine or thread that compressed it. The count
+//!   variables' chunks are one zlib stream too, assembled byte plane by byte plane with
+//!   the planes of noise stored rather than compressed (`planes.rs`).
 
 use std::cell::RefCell;
 use std::collections::BTreeMap;
@@ -26,8 +28,9 @@ use std::collections::btree_map::Entry;
 use miniz_oxide::deflate::core::CompressionStrategy;
 
 use super::check::Row;
+use miniz_oxide::DataFormat;
 use miniz_oxide::deflate::core::{
-    CompressorOxide, TDEFLFlush, TDEFLStatus, compress, create_comp_flags_from_zip_params,
+    CompressorOxide, TDEFLFlush, TDEFLStatus, compress_to_output, create_comp_flags_from_zip_params,
 };
 
 /// Deflate level of every chunked variable: miniz_oxide's level 1 (greedy parsing, one
@@ -174,12 +177,19 @@ impl Filling {
     }
 }
 
-/// A zlib compressor at [`DEFLATE_LEVEL`] with its output buffer, reused from chunk to
-/// chunk (one per thread): `reset` clears every table, so a chunk's bytes do not depend
-/// on the chunks compressed before it.
-struct Deflater {
+/// A compressor at [`DEFLATE_LEVEL`], reused from chunk to chunk (one per thread):
+/// `reset` clears every table, so a chunk's bytes do not depend on the chunks compressed
+/// before it.
+///
+/// Output goes through miniz_oxide's callback (`compress_to_output`), which always
+/// writes through the compressor's internal buffer, so the stream is a function of the
+/// input only. (Given an output slice instead, miniz_oxide writes into it directly while
+/// more than its internal buffer, ~83 KiB, is left and through that buffer otherwise,
+/// stopping and resuming when the slice is full, which moves block boundaries: a first
+/// version of the writer whose slice depended on the thread's history wrote different
+/// bytes with one and two threads, `validation/reports/writer.md`.)
+pub(super) struct Deflater {
     compressor: CompressorOxide,
-    out: Vec<u8>,
 }
 
 thread_local! {
@@ -195,57 +205,54 @@ impl Deflater {
         );
         Box::new(Deflater {
             compressor: CompressorOxide::new(flags),
-            out: Vec::new(),
         })
     }
 
-    fn deflate(&mut self, mut input: &[u8]) -> Result<Vec<u8>, String> {
+    /// Runs `f` with this thread's compressor.
+    pub(super) fn with<R>(f: impl FnOnce(&mut Deflater) -> R) -> R {
+        DEFLATER.with(|cell| f(cell.borrow_mut().get_or_insert_with(Deflater::new)))
+    }
+
+    /// Appends to `out` the whole of `input` compressed in `format` and ended by `flush`:
+    /// [`TDEFLFlush::Finish`] for a complete zlib stream (RFC 1950 §2.2: header, final
+    /// block, Adler-32), [`TDEFLFlush::Sync`] for raw deflate blocks (RFC 1951 §3.2),
+    /// none of them final, ending with an empty stored block, so byte-aligned.
+    pub(super) fn compress_into(
+        &mut self,
+        input: &[u8],
+        format: DataFormat,
+        flush: TDEFLFlush,
+        out: &mut Vec<u8>,
+    ) -> Result<(), String> {
+        self.compressor.set_format_and_level(format, DEFLATE_LEVEL);
         self.compressor.reset();
-        // miniz_oxide's stream depends on the room it is given for output: when the room
-        // left is under its internal buffer (~83 KiB) it writes through that buffer and
-        // may stop and resume, which moves block boundaries (measured: 24 of 24
-        // poorly compressible f64 chunks came out different with room for half the
-        // input than with ample room). So the room is a function of the input's length
-        // only, never of what this buffer held before, and ample: the input plus 1/8
-        // (a static-Huffman block's worst case, 9 bits per byte) plus 128 KiB, so that
-        // one call finishes without ever falling back to the internal buffer.
-        let mut room = input.len() + input.len() / 8 + (128 << 10);
-        if self.out.len() < room {
-            self.out.resize(room, 0);
+        let (status, used) = compress_to_output(&mut self.compressor, input, flush, |bytes| {
+            out.extend_from_slice(bytes);
+            true
+        });
+        let expected = match flush {
+            TDEFLFlush::Finish => TDEFLStatus::Done,
+            _ => TDEFLStatus::Okay,
+        };
+        if status != expected || used != input.len() {
+            return Err(format!(
+                "deflate failed ({status:?} after {used} of {} bytes)",
+                input.len()
+            ));
         }
-        let mut written = 0;
-        loop {
-            let (status, used, made) = compress(
-                &mut self.compressor,
-                input,
-                &mut self.out[written..room],
-                TDEFLFlush::Finish,
-            );
-            written += made;
-            match status {
-                TDEFLStatus::Done => return Ok(self.out[..written].to_vec()),
-                TDEFLStatus::Okay if used <= input.len() => {
-                    // not expected with that room; still deterministic: the room grows
-                    // by a rule of its own
-                    input = &input[used..];
-                    room *= 2;
-                    if self.out.len() < room {
-                        self.out.resize(room, 0);
-                    }
-                }
-                other => return Err(format!("deflate failed ({other:?})")),
-            }
-        }
+        Ok(())
     }
 }
 
-/// Deflates a shuffled chunk into a zlib stream, as `H5Z_FILTER_DEFLATE` stores it (with
-/// this thread's compressor).
+/// Deflates a shuffled chunk into one zlib stream, as `H5Z_FILTER_DEFLATE` stores it
+/// (with this thread's compressor).
 pub fn deflate(shuffled: &[u8]) -> Result<Vec<u8>, String> {
-    DEFLATER.with(|cell| {
-        let mut slot = cell.borrow_mut();
-        slot.get_or_insert_with(Deflater::new).deflate(shuffled)
-    })
+    // room for what a chunk that compresses well takes; more is grown into if needed,
+    // the rest given back (in place: a shrinking realloc does not copy)
+    let mut out = Vec::with_capacity(shuffled.len() / 4 + 64);
+    Deflater::with(|d| d.compress_into(shuffled, DataFormat::Zlib, TDEFLFlush::Finish, &mut out))?;
+    out.shrink_to_fit();
+    Ok(out)
 }
 
 /// Undoes [`deflate`] (any zlib stream); for checks.

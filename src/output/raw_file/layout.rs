@@ -48,6 +48,10 @@ pub struct RowVar {
     pub elem_bytes: usize,
     /// Profiles per chunk (the chunk holds every channel and bin of them).
     pub chunk_rows: usize,
+    /// Whether its rows are fresh random draws (the count variables), whose chunks are
+    /// encoded plane by plane, noise planes stored (`planes.rs`); otherwise (a changing
+    /// scene's truth, often the same from row to row) each chunk is deflated whole.
+    pub by_planes: bool,
 }
 
 /// Open HDF5 handles of a file being written.
@@ -133,13 +137,18 @@ pub fn chunk_rows(spec: &RawFileSpec, elem_bytes: usize) -> usize {
     (TARGET_CHUNK_BYTES / row_bytes.max(1)).clamp(1, spec.n_profiles)
 }
 
-/// Creates an empty (profile, channel, bin) count variable at the file's width.
+/// Creates an empty (profile, channel, bin) count variable at the file's width, its
+/// chunks encoded by planes.
 fn create_count_var(file: &File, name: &str, spec: &RawFileSpec) -> hdf5::Result<RowVar> {
-    match spec.count_width {
+    let var = match spec.count_width {
         CountWidth::U16 => create_rows::<u16>(file, name, spec),
         CountWidth::U32 => create_rows::<u32>(file, name, spec),
         CountWidth::U64 => create_rows::<u64>(file, name, spec),
-    }
+    }?;
+    Ok(RowVar {
+        by_planes: true,
+        ..var
+    })
 }
 
 /// Creates a (profile, channel, bin) variable of `T`, chunked along profiles with the
@@ -163,6 +172,7 @@ fn create_rows<T: H5Type>(file: &File, name: &str, spec: &RawFileSpec) -> hdf5::
         ds,
         elem_bytes,
         chunk_rows,
+        by_planes: false,
     })
 }
 

@@ -15,7 +15,8 @@
 //! The modules: [`layout`] creates the file and everything known up front,
 //! [`writer`] streams the profiles, [`check`] checks a profile record before it is
 //! buffered, [`chunk`] fills and encodes whole chunks as HDF5's shuffle and deflate
-//! filters would, [`content`] decides what a simulation puts in the
+//! filters would ([`planes`] the counts' chunks, byte plane by byte plane, their noise
+//! planes stored), [`content`] decides what a simulation puts in the
 //! file, `hdf5_ds` makes the HDF5 calls the `hdf5` crate does not.
 //!
 //! The writer creates the file at exactly the path it is given: where the file goes, its
@@ -27,6 +28,7 @@ pub mod chunk;
 pub mod content;
 pub(crate) mod hdf5_ds;
 pub mod layout;
+pub mod planes;
 pub mod writer;
 
 pub use writer::RawFileWriter;

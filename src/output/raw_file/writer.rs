@@ -7,7 +7,8 @@
 //! has come (the last chunk holds fewer; its rows past the end stay 0, the fill value, as
 //! HDF5 pads edge chunks); complete chunks wait in a queue, and when the queue holds
 //! [`FLUSH_BYTES`] (and at [`RawFileWriter::finish`]) they are deflated in parallel on
-//! rayon's pool (the run's `--threads`) and written in queue order by HDF5's direct chunk
+//! rayon's pool (the run's `--threads`; the count variables' chunks by byte planes, their
+//! noise planes stored, [`planes`]) and written in queue order by HDF5's direct chunk
 //! write. The (profile) variables (`time`, `n_shots`, `pulse_energy`, geolocation) are
 //! written [`COLUMN_BLOCK`] profiles per HDF5 call.
 //!
@@ -39,6 +40,7 @@ use super::check::{RecordShape, Row};
 use super::chunk::{self, Filling};
 use super::hdf5_ds::write_chunk;
 use super::layout::{self, OpenFile};
+use super::planes;
 use super::{ProfileRecord, RawFileSpec};
 use crate::error::{Error, Result};
 use crate::output::safe_file::describe_hdf5_error;
@@ -58,14 +60,11 @@ pub const COLUMN_BLOCK: usize = 4096;
 /// of at most `row_bytes`), the queue of complete chunks and the buffers kept for reuse
 /// (each under [`FLUSH_BYTES`] plus a chunk), the compressed chunks of one batch (no
 /// larger than their input plus 1/8), and each of `threads` workers' compressor (its
-/// tables, ~300 kB, and room for a chunk and 1/8 plus 128 KiB).
+/// tables and output buffer, ~300 kB).
 pub fn buffer_bytes(row_bytes: usize, variables: usize, threads: usize) -> f64 {
     let chunk = layout::TARGET_CHUNK_BYTES.max(row_bytes) as f64;
     let flush = FLUSH_BYTES as f64 + chunk;
-    variables as f64 * chunk
-        + 2.0 * flush
-        + 1.125 * flush
-        + threads as f64 * (300e3 + 1.125 * chunk + 131_072.0)
+    variables as f64 * chunk + 2.0 * flush + 1.125 * flush + threads as f64 * 300e3
 }
 
 /// A complete chunk waiting to be deflated and written.
@@ -453,15 +452,20 @@ impl RawFileWriter {
         if ready.is_empty() {
             return Ok(());
         }
+        let open = self.open.as_ref().ok_or("the writer is already closed")?;
         // compressed in parallel, in any order; `collect` keeps the queue's order
         let encoded: Vec<(ReadyChunk, Stored)> = ready
             .into_par_iter()
             .map(|c| {
-                let stored = chunk::deflate(&c.data);
+                let v = &open.rows[c.var];
+                let stored = if v.by_planes {
+                    planes::deflate_planes(&c.data, v.elem_bytes)
+                } else {
+                    chunk::deflate(&c.data)
+                };
                 (c, stored)
             })
             .collect();
-        let open = self.open.as_ref().ok_or("the writer is already closed")?;
         for (c, stored) in encoded {
             let bytes = stored?;
             if self.spare.iter().map(Vec::len).sum::<usize>() + c.data.len() <= SPARE_BYTES {
