@@ -232,7 +232,7 @@ pub fn simulate(
     simulate_as(config, overrides, opts, threads, OutputFormat::Raw)
 }
 
-/// `lidarsim simulate --format F`: as [`simulate`], writing `format`. For SCC the raw
+/// `lidarsim simulate --format F`: as [`fn@simulate`], writing `format`. For SCC the raw
 /// file is an intermediate scratch file beside the output, exported then deleted.
 pub fn simulate_as(
     config: &Path,

@@ -261,7 +261,7 @@ pub struct ShotSampler {
 /// How one dense bin is drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DenseMethod {
-    /// Table inversion ([`super::table`]), `λ ≤` [`DENSE_TABLE_MAX`].
+    /// Table inversion (`sampling::table`), `λ ≤` [`DENSE_TABLE_MAX`].
     Inversion,
     /// Alias table over the PMF ([`PmfAlias`]), `λ ≤` [`DENSE_ALIAS_MAX`].
     Alias,

@@ -7,7 +7,7 @@
 //! ([`Shard::rows`]). The same cut splits `validate`'s realizations.
 //!
 //! * this module: the shard (`K/N`, or `auto` from an array job's environment,
-//!   [`env`]), its rows, the run's identity ([`run_id`]), the attributes of a shard file
+//!   [`mod@env`]), its rows, the run's identity ([`run_id`]), the attributes of a shard file
 //!   ([`shard_spec`]), the lidar of a stored config ([`stored_lidar`]) and the checks that
 //!   pieces cover one run exactly once ([`check_cover`]);
 //! * [`merge`]: `lidarsim merge OUT.h5 SHARD.h5 ...`.

@@ -278,8 +278,8 @@ fn dead_time(detector: Option<&DetectorConfig>) -> (f64, i32) {
 }
 
 /// Range window (m) of the far bins free of signal: the longest run at the far end
-/// where the expected signal is at most [`SIGNAL_FREE_SHARE`] of the expected
-/// background + dark; when fewer than [`MIN_BACKGROUND_BINS`] qualify, the far 10 % of
+/// where the expected signal is at most `SIGNAL_FREE_SHARE` of the expected
+/// background + dark; when fewer than `MIN_BACKGROUND_BINS` qualify, the far 10 % of
 /// the bins (at least one).
 pub fn background_window(signal: &[f64], noise: &[f64], range_m: &[f64], res: f64) -> (f64, f64) {
     let n = signal.len();
