@@ -208,3 +208,24 @@ fn cell_ratios(first: f64, k_first: u32, mean: f64, len: usize) -> Vec<f64> {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`pmf_cells_bytes`] (what the table budget counts) is at least what
+    /// [`PmfCells::new`] allocates, from single-count cells to the widest.
+    #[test]
+    fn the_byte_estimate_bounds_the_tables() {
+        for mean in [11.0, 30.0, 1e3, 4e4, 1e6, 1e8, 3e9] {
+            let s = PmfCells::new(mean);
+            let cells = s.first_weight.len();
+            let built = 16 * cells.next_power_of_two().max(2) + s.squeeze.len() + 16 * cells;
+            assert!(
+                built <= pmf_cells_bytes(mean),
+                "μ = {mean}: {built} > {}",
+                pmf_cells_bytes(mean)
+            );
+        }
+    }
+}
