@@ -35,8 +35,8 @@
 //! # Cost
 //!
 //! Measured in [`super::shot::cost`] (`cargo run --release --example sampler_costs`):
-//! 6.3–9 ns per draw in the caches for λ = 30 … 10^6, 11 ns at 10^7 (Ahrens–Dieter:
-//! 21 ns). Per bin an alias table of `≈ 20σ/w` (80–160) cells, 16 bytes per
+//! 6.0–8.3 ns per draw in the caches for λ = 30 … 10^6, 10.3 ns at 10^7 (Ahrens–Dieter:
+//! 19–21 ns). Per bin an alias table of `≈ 20σ/w` (80–160) cells, 16 bytes per
 //! power-of-two column, 16 bytes per cell for the exact test, and a byte per count of
 //! the window (`≈ 20σ`, most of it): 7 KiB at `μ = 10^3`, 26 KiB at `10^6`, 66 KiB at
 //! `10^7` ([`pmf_cells_bytes`]), where [`super::pmf_alias::PmfAlias`] needs 16 KiB,
@@ -134,21 +134,23 @@ impl PmfCells {
     /// One draw.
     #[inline]
     pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> u32 {
-        let mask = (1u64 << self.cell_bits) - 1;
         loop {
             let c = self.cells.bin_for(rng.next_u64());
-            let y = rng.next_u64();
-            let i = (y & mask) as usize;
-            let k = (c << self.cell_bits) + i;
-            let q = self.squeeze[k];
-            let t = (y >> 56) as u8;
-            if t < q {
-                return self.k0 + k as u32;
-            }
-            if t == q && self.accepts(c, i, y >> 11) {
-                return self.k0 + k as u32;
+            if let Some(k) = self.proposal(c, rng.next_u64()) {
+                return k;
             }
         }
+    }
+
+    /// The count that the `u64` `y` proposes in cell `c` (its low bits), if its top 53
+    /// bits accept it: the squeeze byte decides unless the top 8 bits equal it.
+    #[inline(always)]
+    fn proposal(&self, c: usize, y: u64) -> Option<u32> {
+        let i = (y & ((1u64 << self.cell_bits) - 1)) as usize;
+        let k = (c << self.cell_bits) + i;
+        let q = self.squeeze[k];
+        let t = (y >> 56) as u8;
+        (t < q || (t == q && self.accepts(c, i, y >> 11))).then_some(self.k0 + k as u32)
     }
 
     /// The exact acceptance of count `i` of cell `c` for the 53-bit uniform `v`:
@@ -212,6 +214,36 @@ fn cell_ratios(first: f64, k_first: u32, mean: f64, len: usize) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The squeeze bytes and the exact test are one acceptance: for every count of a
+    /// few cells (single counts at λ = 30, 128 at 10^6) and every value of the top 8
+    /// bits, [`PmfCells::proposal`] accepts exactly when the 53-bit uniform lies below
+    /// `p_k/M_c`, at the edges of each squeeze step too. Deterministic.
+    #[test]
+    fn the_squeeze_decides_as_the_exact_test() {
+        for mean in [30.0, 1e6] {
+            let s = PmfCells::new(mean);
+            let w = 1usize << s.cell_bits;
+            let cells = s.first_weight.len();
+            for c in [0, cells / 3, cells / 2, cells - 1] {
+                let (first, inv_max) = s.first_weight[c];
+                let k_first = s.k0 + (c * w) as u32;
+                let ratios = cell_ratios(first, k_first, mean, w);
+                for (i, r) in ratios.iter().enumerate() {
+                    let r = r * inv_max;
+                    for t in 0..=255u64 {
+                        for low in [0, 1 << 20, (1u64 << 45) - 1] {
+                            let v = (t << 45) | low;
+                            let y = (v << 11) | i as u64;
+                            let want = (v as f64) * (1.0 / (1u64 << 53) as f64) < r;
+                            let got = s.proposal(c, y).is_some();
+                            assert_eq!(got, want, "μ {mean}, cell {c}, count {i}, t {t}");
+                        }
+                    }
+                }
+            }
+        }
+    }
 
     /// [`pmf_cells_bytes`] (what the table budget counts) is at least what
     /// [`PmfCells::new`] allocates, from single-count cells to the widest.

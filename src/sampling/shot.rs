@@ -25,7 +25,7 @@ pub const DENSE_TABLE_MAX: f64 = 0.07;
 /// ([`PmfCells`]: 7–27 KiB up to λ = 10^6) within the sampler's table budget, and a
 /// prebuilt [`rand_distr::Poisson`] (Ahrens–Dieter 1982) per bin past it. Where the
 /// cost model's alias cost (growing with the table, [`cost::alias`]) passes
-/// [`cost::CELLS`]; a whole scenario-1 aggregate run measured 10–15 % less drawing time
+/// [`cost::CELLS`]; a whole scenario-1 aggregate run measured 14 % less drawing time
 /// with this switch at 10^3 than at 4·10^4 (`validation/reports/throughput.md`).
 pub const DENSE_ALIAS_MAX: f64 = 1.0e3;
 
@@ -66,9 +66,9 @@ pub const TOTAL_TABLE_MAX: f64 = 512.0;
 ///   columns, measured 2.4 ns up to 64 columns (λ ≲ 10, whatever the count),
 ///   3.9 (λ = 30), 4.8–5.3 (100), 7.0 (10^3), 8–14 (10^4), 19–20 (10^5: 8192 columns,
 ///   128 MiB for the 1000 bins, out of the caches);
-/// * dense step-envelope rejection bin ([`PmfCells`]): `CELLS`, measured 6.3–9 ns for
-///   100 bins from λ = 30 to 10^6 (two `u64` per draw, tables in the caches), 11 ns at
-///   10^7, 13–27 ns for 1000 bins of 10^3–10^6 (7–26 MiB, out of the caches, which
+/// * dense step-envelope rejection bin ([`PmfCells`]): `CELLS`, measured 6.0–8.3 ns for
+///   100 bins from λ = 30 to 10^6 (two `u64` per draw, tables in the caches), 10.3 ns at
+///   10^7, 12.5–25 ns for 1000 bins of 10^3–10^6 (7–26 MiB, out of the caches, which
 ///   the table budget prevents), hence [`DENSE_ALIAS_MAX`];
 /// * dense Ahrens–Dieter bin: `DENSE_PD` (measured 21 ns for λ ≥ 30);
 /// * sparse set of `n` bins and total mean `Λ`: the alias draw of its total
