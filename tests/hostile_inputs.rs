@@ -18,6 +18,17 @@
 
 mod common;
 
+// Cases by topic (issue 18 and later): each module adds its own cases and preparations,
+// so that topics grow without touching one another.
+#[path = "hostile/crafted.rs"]
+mod crafted;
+#[path = "hostile/inputs.rs"]
+mod inputs;
+#[path = "hostile/resources.rs"]
+mod resources;
+#[path = "hostile/values.rs"]
+mod values;
+
 use std::collections::BTreeMap;
 use std::fs;
 use std::os::unix::fs::{FileTypeExt, MetadataExt};
@@ -131,6 +142,16 @@ fn expand(arg: &str, dir: &Scratch) -> String {
 
 /// Files a case prepares in its scratch directory before it runs.
 fn prepare(name: &str, dir: &Scratch) -> bool {
+    for topic in [
+        inputs::prepare,
+        crafted::prepare,
+        resources::prepare,
+        values::prepare,
+    ] {
+        if let Some(ok) = topic(name, dir) {
+            return ok;
+        }
+    }
     let d = &dir.0;
     let write = |rel: &str, text: &str| fs::write(d.join(rel), text).unwrap();
     match name {
@@ -776,6 +797,10 @@ fn cases() -> Vec<Case> {
         env: vec![("SOURCE_DATE_EPOCH", "yesterday")],
         run: args(&["simulate", "@S1", "-o", "@D/out.h5", "--profiles", "2"]),
     });
+    v.extend(inputs::cases());
+    v.extend(crafted::cases());
+    v.extend(resources::cases());
+    v.extend(values::cases());
     v
 }
 

@@ -1,0 +1,17 @@
+//! Crafted and inconsistent files refused before work (issue 18, item 2).
+
+#![allow(unused_imports)]
+
+use super::{Case, Run, Scratch, Want, args};
+
+/// This topic's cases, run after the older ones.
+pub fn cases() -> Vec<Case> {
+    vec![]
+}
+
+/// Prepares the scratch directory of one of this topic's cases: `None` when the case
+/// is not this topic's, `Some(false)` when its preparation is not possible here.
+pub fn prepare(name: &str, dir: &Scratch) -> Option<bool> {
+    let _ = (name, dir);
+    None
+}
