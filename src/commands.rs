@@ -3,7 +3,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use crate::config::{MolecularModel, PlatformKind};
+use crate::config::PlatformKind;
 use crate::error::{Error, Result};
 use crate::output::safe_file::{Outputs, ScratchFile, Stream};
 use crate::output::{expect, scc, snr_map};
@@ -39,14 +39,10 @@ fn to_stdout(fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result
     }
 }
 
-/// The files a scenario reads (its config and any profile file): no output may replace them.
+/// The files a scenario reads (its config and every file it names,
+/// [`crate::config::LoadedConfig::files_read`]): no output may replace them.
 pub fn input_files(sc: &Scenario) -> Vec<PathBuf> {
-    let loaded = &sc.loaded;
-    let mut files = vec![loaded.path.clone()];
-    if let MolecularModel::File { file } = &loaded.config.atmosphere.molecular.model {
-        files.push(loaded.resolve_path(file));
-    }
-    files
+    sc.loaded.files_read()
 }
 
 /// One channel of a config: the one named `channel`, or the first (with a note on
@@ -440,7 +436,8 @@ pub fn validate_combine(partials: &[PathBuf], json: Option<&Path>) -> Result<boo
     let json_id = json
         .map(|p| outputs.add("--json", p, Stream::Text))
         .transpose()?;
-    let report = validate::partial::combine(partials)?;
+    let (report, stored_inputs) = validate::partial::combine(partials)?;
+    outputs.protect(stored_inputs.iter().map(PathBuf::as_path))?;
     publish_report(outputs, json_id, json, &report)
 }
 
@@ -503,6 +500,8 @@ pub fn onboard_combine(partials: &[PathBuf], report: Option<&Path>) -> Result<()
     let mut outputs = Outputs::new(partials.iter().map(PathBuf::as_path));
     let id = outputs.add("--report", report.unwrap_or(Path::new("-")), Stream::Text)?;
     let (native, sums, word_bits) = crate::onboard::partial::combine(partials)?;
+    let stored_inputs = native.files_read();
+    outputs.protect(stored_inputs.iter().map(PathBuf::as_path))?;
     let input = native.report_input(&sums, word_bits);
     outputs.write(id, |w| crate::onboard::report::write_report(w, &input))?;
     outputs.commit()

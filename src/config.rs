@@ -659,22 +659,25 @@ impl LoadedConfig {
             self.path.parent().unwrap_or(Path::new(".")).join(p)
         }
     }
+
+    /// Every file a run of this config reads: the config file itself and each file it
+    /// names ([`ScenarioConfig::named_files`]), resolved. No output may replace one of
+    /// them (`commands::input_files`).
+    pub fn files_read(&self) -> Vec<PathBuf> {
+        std::iter::once(self.path.clone())
+            .chain(
+                self.config
+                    .named_files()
+                    .into_iter()
+                    .map(|(_, p)| self.resolve_path(p)),
+            )
+            .collect()
+    }
 }
 
 /// Reads `path`, applies `overrides` (`KEY=VALUE`, dotted keys), deserializes and validates.
 pub fn load(path: &Path, overrides: &[String]) -> Result<LoadedConfig> {
-    let io = |source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    if std::fs::metadata(path).map_err(io)?.is_dir() {
-        return Err(Error::config(
-            path.display().to_string(),
-            "",
-            "is a directory, not a config file",
-        ));
-    }
-    let bytes = std::fs::read(path).map_err(io)?;
+    let bytes = crate::input_file::read("config", path)?;
     let text = String::from_utf8(bytes).map_err(|_| {
         Error::config(
             path.display().to_string(),
@@ -924,6 +927,21 @@ impl Checker<'_> {
 }
 
 impl ScenarioConfig {
+    /// Every file the config names, with its key, as written (relative to the config
+    /// file): the molecular profile file and the scene's curtain. A key that names a
+    /// file belongs here, so that the file is an input no output may replace
+    /// ([`LoadedConfig::files_read`]); its reader opens it through [`crate::input_file`].
+    pub fn named_files(&self) -> Vec<(&'static str, &Path)> {
+        let mut files = Vec::new();
+        if let MolecularModel::File { file } = &self.atmosphere.molecular.model {
+            files.push(("atmosphere.molecular.model.file", file.as_path()));
+        }
+        if let Some(curtain) = self.scene.as_ref().and_then(|s| s.curtain.as_ref()) {
+            files.push(("scene.curtain", curtain.as_path()));
+        }
+        files
+    }
+
     /// A layer's values at other wavelengths: Ångström exponent, reference wavelength and
     /// lidar ratios per wavelength; an aerosol layer seen at another wavelength than its
     /// values' needs its exponent.

@@ -12,6 +12,7 @@ pub mod design;
 pub mod detector;
 pub mod error;
 pub mod geometry;
+pub mod input_file;
 pub mod instrument;
 pub mod laser;
 pub mod onboard;

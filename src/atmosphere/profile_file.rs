@@ -96,13 +96,11 @@ fn parse_header(names: &[&str]) -> std::result::Result<Columns, String> {
 
 impl MolecularProfile {
     /// Reads and parses a profile file (format in the module docs). Parse errors
-    /// are [`Error::Config`] naming the file, the key and the line; a file that
-    /// cannot be read is [`Error::Io`].
+    /// are [`Error::Config`] naming the file, the key and the line; a file that is
+    /// missing, unreadable or not a regular file (a FIFO is refused before it is opened,
+    /// [`crate::input_file`]) names the key and the path.
     pub fn from_file(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::input_file::read_to_string(KEY, path)?;
         Self::parse(&text, &path.display().to_string())
     }
 
@@ -474,10 +472,16 @@ mod tests {
             "{e}"
         );
         let missing = dir.join("missing.txt");
-        assert!(matches!(
-            MolecularProfile::from_file(&missing),
-            Err(Error::Io { .. })
-        ));
+        let e = MolecularProfile::from_file(&missing)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            format!(
+                "atmosphere.molecular.model {}: no such file or directory",
+                missing.display()
+            )
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -115,6 +115,15 @@ impl NativeRun {
         })
     }
 
+    /// Every file the run reads: its config, the files the config names and the scheme
+    /// files; no output may replace one.
+    pub fn files_read(&self) -> Vec<PathBuf> {
+        let scheme_files = self.schemes.iter().filter_map(|s| s.file.clone());
+        let mut files = self.lidar.first().loaded.files_read();
+        files.extend(scheme_files);
+        files
+    }
+
     /// Shots of a frame: the least common multiple of every region's shots, over every
     /// scheme (None beyond 64 bits).
     pub fn frame_shots(&self) -> Option<u64> {
@@ -506,7 +515,8 @@ pub fn run(config: &Path, overrides: &[String], opts: &OnboardOptions) -> Result
     check_options(opts)?;
     let native = NativeRun::load(config, overrides, opts.seed, &opts.schemes)?;
     let shots = native.shots_of(opts.shard)?;
-    let mut outputs = crate::commands::outputs_for(native.lidar.first());
+    let inputs = native.files_read();
+    let mut outputs = Outputs::new(inputs.iter().map(PathBuf::as_path));
     let product = outputs.add("-o", &opts.output, Stream::Binary)?;
     let mut add = |option, path: &Option<PathBuf>, stream| {
         let id = path.as_deref().map(|p| outputs.add(option, p, stream));

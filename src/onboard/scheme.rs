@@ -29,6 +29,10 @@ pub struct Scheme {
     pub regions: Vec<Region>,
     /// Shots summed over the whole window when `regions` is empty.
     pub uniform_shots: u32,
+    /// The scheme file it was read from (an input no output may replace); not part of
+    /// the scheme's identity.
+    #[serde(skip)]
+    pub file: Option<std::path::PathBuf>,
 }
 
 #[derive(Deserialize)]
@@ -64,11 +68,13 @@ impl Scheme {
                 name: "none".into(),
                 regions: vec![],
                 uniform_shots: 1,
+                file: None,
             }),
             "caliop" => Ok(Scheme {
                 name: "caliop".into(),
                 regions: caliop_regions(),
                 uniform_shots: 1,
+                file: None,
             }),
             _ if spec.starts_with("uniform:") => {
                 let n: u32 = spec["uniform:".len()..]
@@ -80,14 +86,12 @@ impl Scheme {
                     name: spec.into(),
                     regions: vec![],
                     uniform_shots: n,
+                    file: None,
                 })
             }
             _ => {
                 let path = std::path::Path::new(spec);
-                let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
-                    path: path.to_path_buf(),
-                    source: e,
-                })?;
+                let text = crate::input_file::read_to_string("--scheme", path)?;
                 let file: SchemeFile =
                     toml::from_str(&text).map_err(|e| fail(e.message().replace('\n', " ")))?;
                 let name = path
@@ -97,6 +101,7 @@ impl Scheme {
                     name,
                     regions: file.regions,
                     uniform_shots: 1,
+                    file: Some(path.to_path_buf()),
                 };
                 scheme.check().map_err(fail)?;
                 Ok(scheme)

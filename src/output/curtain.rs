@@ -38,6 +38,7 @@ pub struct Curtain {
 /// Reads channel `channel` (default the first) of the raw file `path`.
 pub fn read(path: &Path, channel: Option<&str>) -> Result<Curtain> {
     let fail = |why: String| Error::output(path, why);
+    crate::input_file::check("RAW.h5", path)?;
     let f =
         hdf5::File::open(path).map_err(|_| fail("not a lidarsim raw file (not HDF5)".into()))?;
     let get = |name: &str| {

@@ -8,8 +8,12 @@
 //!   refused: `--png /dev/null` never replaces a device node;
 //! * a symbolic link is followed (to any depth, dangling or not): the file is written at
 //!   its target and the link stays a link;
-//! * a target that is the same file as an input (config, profile file) or as another
-//!   output of the same command is refused;
+//! * a target that is the same file as an input or as another output of the same command
+//!   is refused: the same device and inode after following links, so neither a symbolic
+//!   nor a hard link to an input passes. The inputs are every file the command reads
+//!   (config and the files it names, scheme files, partials, raw files and shards:
+//!   [`crate::input_file`]), given to [`Outputs::new`] or, when a command learns of them
+//!   only after declaring its outputs, to [`Outputs::protect`];
 //! * `-` means standard output for text outputs (CSV, JSON); a binary output (HDF5, PNG)
 //!   refuses it;
 //! * each target is locked (`.NAME.lock` beside it, an advisory `flock`): a second run
@@ -30,7 +34,7 @@
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufWriter, Seek, Write};
-use std::os::unix::fs::{FileTypeExt, MetadataExt};
+use std::os::unix::fs::MetadataExt;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -85,18 +89,34 @@ pub struct Outputs {
 }
 
 impl Outputs {
-    /// A new set; `inputs` are the files the command reads (config, profile files), which
-    /// no output may overwrite. Inputs that cannot be inspected are skipped (reading them
-    /// fails with its own message).
+    /// A new set; `inputs` are the files the command reads (config and the files it names,
+    /// scheme files, partials, raw files), which no output may overwrite. Inputs that
+    /// cannot be inspected are skipped (reading them fails with its own message).
     pub fn new<'a>(inputs: impl IntoIterator<Item = &'a Path>) -> Self {
-        let inputs = inputs
-            .into_iter()
-            .filter_map(|p| fs::metadata(p).ok().map(|m| (m.dev(), m.ino(), p.into())))
-            .collect();
         Outputs {
-            inputs,
+            inputs: identify(inputs),
             outputs: Vec::new(),
         }
+    }
+
+    /// Adds inputs the command learnt of after declaring its outputs (the files a stored
+    /// config names, read while combining partials), refusing one that is the target of
+    /// an output already declared: the same device and inode, links followed.
+    pub fn protect<'a>(&mut self, inputs: impl IntoIterator<Item = &'a Path>) -> Result<()> {
+        for (dev, ino, input) in identify(inputs) {
+            for out in &self.outputs {
+                if let Sink::File(s) = &out.sink
+                    && fs::metadata(&s.target).is_ok_and(|m| (m.dev(), m.ino()) == (dev, ino))
+                {
+                    return Err(Error::output(
+                        format!("{} {}", out.option, s.shown.display()),
+                        format!("is the input {}; refusing to overwrite it", input.display()),
+                    ));
+                }
+            }
+            self.inputs.push((dev, ino, input));
+        }
+        Ok(())
     }
 
     /// Declares the output named by command-line `option` (e.g. `--csv`) at `path`,
@@ -398,6 +418,14 @@ fn sibling(target: &Path, prefix: &str, suffix: &str) -> PathBuf {
     target.with_file_name(format!(".{prefix}{name}{suffix}"))
 }
 
+/// (device, inode, path) of each of `inputs` that exists, links followed.
+fn identify<'a>(inputs: impl IntoIterator<Item = &'a Path>) -> Vec<(u64, u64, PathBuf)> {
+    inputs
+        .into_iter()
+        .filter_map(|p| fs::metadata(p).ok().map(|m| (m.dev(), m.ino(), p.into())))
+        .collect()
+}
+
 /// Follows symbolic links at the end of `path` (not in its directories, which the OS
 /// resolves), up to 40 deep like the kernel; a dangling link gives its target.
 fn follow_links(path: &Path) -> io::Result<PathBuf> {
@@ -426,22 +454,7 @@ pub fn parent_dir(path: &Path) -> &Path {
     }
 }
 
-/// "a directory", "a character device", ... for messages.
-fn describe_file_type(t: &fs::FileType) -> &'static str {
-    if t.is_dir() {
-        "a directory"
-    } else if t.is_char_device() {
-        "a character device"
-    } else if t.is_block_device() {
-        "a block device"
-    } else if t.is_fifo() {
-        "a FIFO"
-    } else if t.is_socket() {
-        "a socket"
-    } else {
-        "not a regular file"
-    }
-}
+pub use crate::input_file::describe_file_type;
 
 pub use crate::error::describe_io;
 

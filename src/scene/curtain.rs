@@ -30,13 +30,7 @@ pub const MAX_CELLS: usize = 2_000_000;
 /// The segments of the curtain file `path`.
 pub fn segments(path: &Path) -> Result<Vec<SegmentConfig>> {
     let fail = |why: String| Error::output(path, why);
-    let meta = std::fs::metadata(path).map_err(|e| Error::Io {
-        path: path.to_path_buf(),
-        source: e,
-    })?;
-    if !meta.is_file() {
-        return Err(fail("the curtain is not a regular file".into()));
-    }
+    crate::input_file::check("scene.curtain", path)?;
     let f = hdf5::File::open(path)
         .map_err(|_| fail("cannot open the curtain (not an HDF5 / netCDF-4 file)".into()))?;
     let vector = |name: &str| -> Result<Vec<f64>> {

@@ -396,10 +396,7 @@ pub fn read_partial<T: serde::de::DeserializeOwned>(
     format: &str,
     made_by: &str,
 ) -> Result<T> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = crate::input_file::read_to_string("--combine", path)?;
     let not_one = |e: &dyn std::fmt::Display| {
         Error::output(path, format!("not a partial of `{made_by}` ({e})"))
     };
@@ -486,11 +483,7 @@ impl ShardKind {
 /// is not HDF5 or not a shard.
 pub fn open_shard(path: &Path) -> Result<(hdf5::File, ShardKind)> {
     let fail = |why: &str| Error::output(path, why);
-    match std::fs::metadata(path) {
-        Err(e) => return Err(fail(&crate::error::describe_io(&e))),
-        Ok(m) if !m.is_file() => return Err(fail("not a regular file")),
-        Ok(_) => {}
-    }
+    crate::input_file::check("SHARD.h5", path)?;
     let file = hdf5::File::open(path)
         .map_err(|_| fail("not a lidarsim raw file or product (not HDF5, or unreadable)"))?;
     if file.attr("shard_index").is_err() {

@@ -124,8 +124,9 @@ impl Partial {
 }
 
 /// `validate --combine PART.json ...`: the report of the whole run from the partials of
-/// all its shards, each once.
-pub fn combine(paths: &[PathBuf]) -> Result<Report> {
+/// all its shards, each once; and the files its stored config read (inputs no output may
+/// replace).
+pub fn combine(paths: &[PathBuf]) -> Result<(Report, Vec<PathBuf>)> {
     let parts = paths.iter().map(|p| read(p)).collect::<Result<Vec<_>>>()?;
     let (Some(first_path), Some(first)) = (paths.first(), parts.first()) else {
         return Err(Error::Unsupported(
@@ -160,5 +161,5 @@ pub fn combine(paths: &[PathBuf]) -> Result<Report> {
         sums.add(&parts[i].sums)
             .map_err(|why| Error::output(&paths[i], why))?;
     }
-    v.report(&sums)
+    Ok((v.report(&sums)?, lidar.first().loaded.files_read()))
 }

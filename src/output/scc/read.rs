@@ -45,10 +45,7 @@ pub struct RawRun {
 
 /// Reads `path`, refusing a file that is not a lidarsim raw file of format version 2.
 pub fn read_raw(path: &Path) -> Result<RawRun> {
-    std::fs::metadata(path).map_err(|e| Error::Io {
-        path: path.to_path_buf(),
-        source: e,
-    })?;
+    crate::input_file::check("RAW.h5", path)?;
     let f = hdf5::File::open(path).map_err(|_| {
         bad(
             path,
