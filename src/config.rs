@@ -1406,3 +1406,45 @@ impl ScenarioConfig {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every config key that holds a path is a file the run reads, so it must be in
+    /// [`ScenarioConfig::named_files`] (else no output is kept off it): the config's
+    /// path-typed fields, counted in this source, are the keys it lists plus
+    /// `LoadedConfig::path`.
+    #[test]
+    fn every_path_key_is_a_named_file() {
+        let source = include_str!("config.rs");
+        let path_fields = source
+            .lines()
+            .map(str::trim)
+            .filter(|l| {
+                let l = l.strip_prefix("pub ").unwrap_or(l);
+                l.split_once(": ").is_some_and(|(name, ty)| {
+                    name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+                        && matches!(ty, "PathBuf," | "Option<PathBuf>,")
+                })
+            })
+            .count();
+        let path =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/instruments/caliop_curtain.toml");
+        let loaded = load(
+            &path,
+            &["atmosphere.molecular.model={ file = \"p.txt\" }".into()],
+        )
+        .unwrap();
+        let named: Vec<&str> = loaded.config.named_files().iter().map(|f| f.0).collect();
+        assert_eq!(named, ["atmosphere.molecular.model.file", "scene.curtain"]);
+        assert_eq!(
+            path_fields,
+            named.len() + 1,
+            "a path key missing from named_files"
+        );
+        let read = loaded.files_read();
+        assert_eq!(read[0], path);
+        assert_eq!(read[1], path.parent().unwrap().join("p.txt"));
+    }
+}

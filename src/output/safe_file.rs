@@ -671,6 +671,30 @@ mod tests {
     }
 
     #[test]
+    fn an_input_learnt_late_is_protected_through_any_link() {
+        let d = scratch("protect");
+        let input = d.0.join("profile.txt");
+        fs::write(&input, "profile").unwrap();
+        fs::hard_link(&input, d.0.join("hard")).unwrap();
+        std::os::unix::fs::symlink(&input, d.0.join("soft")).unwrap();
+        for name in ["profile.txt", "hard", "soft"] {
+            let mut outs = Outputs::new([]);
+            outs.add("--json", &d.0.join(name), Stream::Text).unwrap();
+            let e = outs.protect([input.as_path()]).unwrap_err().to_string();
+            assert!(e.contains("--json") && e.contains("is the input"), "{e}");
+        }
+        // an unrelated output passes, and a later output onto the input is refused
+        let mut outs = Outputs::new([]);
+        outs.add("--json", &d.0.join("x.json"), Stream::Text)
+            .unwrap();
+        outs.protect([input.as_path()]).unwrap();
+        assert!(outs.add("--csv", &d.0.join("hard"), Stream::Text).is_err());
+        drop(outs);
+        assert_eq!(fs::read_to_string(&input).unwrap(), "profile");
+        assert_eq!(entries(&d.0), ["hard", "profile.txt", "soft"]);
+    }
+
+    #[test]
     fn a_second_writer_of_the_same_path_is_refused_while_the_first_runs() {
         let d = scratch("lock");
         let target = d.0.join("x.h5");
