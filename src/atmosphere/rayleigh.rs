@@ -24,7 +24,9 @@
 //!   `P(π) = 3(1+γ)/(2(1+2γ))` and `S = 4π/P(π) = (8π/3)(1+2γ)/(1+γ)`,
 //!   `γ = ρn/(2−ρn)`: 8.50 sr at 532 nm. This is what a lidar with a filter wide
 //!   enough to pass the rotational Raman lines measures; the Cabannes line alone
-//!   (very narrow filters) would give ≈ 8.70 sr — not implemented here.
+//!   (filters narrower than [`CABANNES_FILTER_MAX_NM`]) carries [`cabannes_fraction`]
+//!   (0.975) of the backscatter, so 8.71 sr, with [`cabannes_depolarization`] (0.0037):
+//!   `docs/model.md` §4a.
 
 /// Bucholtz (1995) Table 1: wavelength (µm) and depolarization factor ρn (in %).
 const DEPOLARIZATION_TABLE: [(f64, f64); 36] = [
