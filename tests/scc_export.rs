@@ -319,8 +319,9 @@ fn window_in_m(raw: &Path, c: usize, pretrigger: usize) -> (f64, f64) {
         .collect();
     let n = if pretrigger > 0 { pretrigger } else { nb };
     let (mut best, mut run_start) = ((0, 0), None);
-    for i in 0..=n {
-        match (i < n && free[i], run_start) {
+    let then_stop = free[..n].iter().copied().chain(std::iter::once(false));
+    for (i, is_free) in then_stop.enumerate() {
+        match (is_free, run_start) {
             (true, None) => run_start = Some(i),
             (false, Some(s)) => {
                 if i - s >= best.1 - best.0 {
