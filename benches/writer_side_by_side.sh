@@ -37,7 +37,8 @@ run() { # name threads args...
 }
 
 for threads in 1 2; do
-  run orbit "$threads" configs/instruments/caliop_orbit.toml --method shot --profiles 7960
+  run orbit "$threads" configs/instruments/caliop_orbit.toml --method shot --profiles 7960 \
+    --set acquisition.top_altitude_km=40
   run caliop "$threads" configs/instruments/caliop_532.toml --method aggregate --profiles 20000
   run scenario1 "$threads" configs/paper/scenario1.toml --profiles 2000 \
     --set acquisition.accumulation_time_s=1000

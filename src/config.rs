@@ -81,7 +81,7 @@ pub struct InstrumentConfig {
     /// Which polarization the receiver channel sees (`polarization` is accepted too).
     #[serde(default, alias = "polarization")]
     pub channel: Channel,
-    /// Fraction of the other polarization's light a polarization channel sees (model.md §7).
+    /// Fraction of the other polarization's light a polarization channel sees (docs/model.md §4c).
     #[serde(default)]
     pub crosstalk: f64,
     /// Slow drift of the emitted pulse energy (the energy monitor reports it); absent = none.
@@ -101,7 +101,7 @@ pub struct InstrumentConfig {
 }
 
 /// A slow drift of the emitted pulse energy, as a relative factor of time `t` since the
-/// first shot (model.md §7, energy monitor).
+/// first shot (docs/model.md §4d, energy monitor).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 #[serde(tag = "model", rename_all = "lowercase", deny_unknown_fields)]
 pub enum EnergyDriftConfig {
@@ -122,7 +122,7 @@ pub enum EnergyDriftConfig {
     },
 }
 
-/// A photon-counting detector (model.md §7).
+/// A photon-counting detector (docs/model.md §4b).
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct DetectorConfig {
@@ -149,7 +149,7 @@ pub enum Channel {
 
 impl Channel {
     /// The share of a species' backscatter this channel sees, for linear depolarization δ
-    /// and cross-talk x (model.md §7): total 1; a polarization channel `(1−x)` of its own
+    /// and cross-talk x (docs/model.md §4c): total 1; a polarization channel `(1−x)` of its own
     /// polarization and `x` of the other, with `β_∥ = β/(1+δ)` and `β_⊥ = β·δ/(1+δ)`.
     pub fn share(self, depolarization: f64, crosstalk: f64) -> f64 {
         let parallel = 1.0 / (1.0 + depolarization);
@@ -280,7 +280,7 @@ pub struct MolecularConfig {
     pub line: MolecularLine,
 }
 
-/// The part of the molecular return a filter passes (model.md §7).
+/// The part of the molecular return a filter passes (docs/model.md §4a).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum MolecularLine {
@@ -372,7 +372,7 @@ pub struct LayerConfig {
     /// Multiple-scattering factor η_ms multiplying the layer's optical depth (1 = single scattering).
     #[serde(default = "one")]
     pub multiple_scattering: f64,
-    /// Fraction of the track the layer covers (broken cloud, model.md §7); absent = 1.
+    /// Fraction of the track the layer covers (broken cloud, docs/model.md §4f); absent = 1.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cloud_fraction: Option<f64>,
     /// Mean length of the layer's cells along the track, km (with `cloud_fraction`).
@@ -486,7 +486,7 @@ pub enum SegmentAerosol {
     Given(AerosolConfig),
 }
 
-/// A Lambertian surface (model.md §7, `src/surface.rs`).
+/// A Lambertian surface (docs/model.md §4e, `src/surface.rs`).
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SurfaceConfig {
@@ -560,11 +560,11 @@ pub enum BackgroundModel {
     #[default]
     Fixed,
     /// Sunlight reflected by the surface or a cloud top below a space-borne lidar, from
-    /// the solar zenith angle at each profile's time and place (model.md §7).
+    /// the solar zenith angle at each profile's time and place (docs/model.md §4f).
     Solar,
 }
 
-/// Monte Carlo method (interface.md `--method`).
+/// Monte Carlo method (docs/config.md `--method`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {

@@ -1,7 +1,7 @@
 //! Viewing geometry (model.md §3): range ↔ altitude, the range-bin grid, the overlap
 //! function η(r) and the ground-track speed.
 //!
-//! **Spherical Earth** (model.md §7, default): from a platform at radius `P = R+H`, a
+//! **Spherical Earth** (docs/model.md §3, default): from a platform at radius `P = R+H`, a
 //! beam off nadir by φ reaches altitude z at range r with
 //! `(R+z)² = P² + r² − 2rP·cos φ`, so `r(z) = P·cos φ − sqrt((R+z)² − P²·sin²φ)` (the
 //! near intersection); it misses the Earth when `sin φ > R/P`. From a station at radius
@@ -35,7 +35,7 @@ pub fn max_rep_rate_hz(range_m: f64) -> f64 {
 }
 
 /// The largest repetition rate at which no pulse's returns reach another pulse's
-/// recording window (model.md §7, pulses in flight): returns come from ranges
+/// recording window (docs/model.md §3, pulses in flight): returns come from ranges
 /// `returns = (r_a, r_s)` (top of the atmosphere to the surface), the window records
 /// `window = (r_n, r_f)`. Pulse `j−k` is seen in window `j` when `k·T ∈ [B, A]` with
 /// `A = 2(r_s − r_n)/c`, `B = 2(r_a − r_f)/c`; with `B ≤ 0 < A` every window is clean
@@ -116,7 +116,7 @@ impl Geometry {
     }
 
     /// Refuses a space-borne beam that misses the Earth or never reaches the window's
-    /// bottom `bottom_m` (model.md §7: it misses when `sin φ > R/(R+H)`).
+    /// bottom `bottom_m` (docs/model.md §3: it misses when `sin φ > R/(R+H)`).
     fn check_reach(&self, bottom_m: f64, angle_deg: f64, file: &str) -> Result<()> {
         if !self.spherical || self.kind == PlatformKind::Ground || self.sin_angle == 0.0 {
             return Ok(());

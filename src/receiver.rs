@@ -1,4 +1,4 @@
-//! The receiver's channels (model.md §7, interface.md `[[instrument.channels]]`).
+//! The receiver's channels (docs/model.md §4c, docs/config.md `[[instrument.channels]]`).
 //!
 //! A channel is the whole instrument as one detector sees it: `[instrument]` with the
 //! channel's own keys laid over it (`wavelength_nm`, `pulse_energy_j`, efficiencies,

@@ -253,7 +253,7 @@ impl Scenario {
 
     /// Refuses a space-borne repetition rate at which another pulse's returns (from the
     /// top of the atmosphere down to the surface echo) reach the recording window
-    /// (model.md §7, [`crate::geometry::clean_windows_max_rep_rate_hz`]).
+    /// (docs/model.md §3, [`crate::geometry::clean_windows_max_rep_rate_hz`]).
     fn check_pulses_in_flight(&self, file: &str) -> Result<()> {
         let g = &self.geometry;
         if g.kind != crate::config::PlatformKind::Spaceborne {
@@ -345,7 +345,7 @@ impl Scenario {
             .shots_per_profile(self.accumulation_time_s())
     }
 
-    /// The deterministic model: per-bin expectations and truth (interface.md `expect`).
+    /// The deterministic model: per-bin expectations and truth (docs/config.md `expect`).
     pub fn expected(&self) -> Result<ExpectedProfile> {
         let g = &self.geometry;
         let n = g.n_bins;

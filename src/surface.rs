@@ -1,4 +1,4 @@
-//! The surface below a space-borne lidar (model.md §7): a Lambertian reflector of albedo
+//! The surface below a space-borne lidar (docs/model.md §4e): a Lambertian reflector of albedo
 //! ρ at the ground altitude, whose echo lands in the bin that holds it.
 //!
 //! **Echo.** A Lambertian surface lit at local incidence θ reflects the radiance
@@ -6,7 +6,7 @@
 //! `A_beam`, so the received power is `P·T²·ρ·cos θ·A/(π r²)`: in the lidar equation
 //! (Eq. 2) the surface is a backscatter that integrates to `ρ·cos θ/π` sr⁻¹ across it,
 //! and it adds `C·η(r_s)·(ρ cos θ/π)·T²(r_s)/r_s²` counts per shot to the bin holding
-//! the surface range r_s (nadir: cos θ = 1, the form of model.md §7). The beam stops at
+//! the surface range r_s (nadir: cos θ = 1, the form of docs/model.md §4e). The beam stops at
 //! the surface: nothing below it is seen. Specular glint (ocean at nadir) is not
 //! modelled: the ocean's albedo here is its Lambertian equivalent.
 

@@ -248,7 +248,7 @@ fn extreme_off_nadir_60_degrees_follows_the_slant_path() {
     assert!(slant.n_bins() > nadir.n_bins());
 }
 
-/// Earth curvature (model.md §7): from 600 km at 30° off nadir the beam meets the ground
+/// Earth curvature (docs/model.md §3): from 600 km at 30° off nadir the beam meets the ground
 /// at ~704 km (flat Earth: 693 km); the range-altitude mapping inverts itself; nadir is
 /// the flat formula exactly; an angle whose beam misses the Earth is refused with the
 /// limit in the message.

@@ -1,5 +1,5 @@
 //! Receiver channels, the laser's energy (jitter, drift, monitor) and their combination
-//! with dead time (model.md §7, issue 8).
+//! with dead time (docs/model.md §4b–4c, issue 8).
 
 mod common;
 

@@ -1,4 +1,4 @@
-//! The `lidarsim` binary as users call it (interface.md).
+//! The `lidarsim` binary as users call it (docs/config.md).
 
 mod common;
 use std::process::Command;

@@ -1,4 +1,4 @@
-//! Detector dead time (model.md §7): the shot-level sampler against the stationary
+//! Detector dead time (docs/model.md §4b): the shot-level sampler against the stationary
 //! formulas, the solver against the sampler where the rate changes, and `validate`.
 
 mod common;

@@ -1,5 +1,5 @@
 //! The molecular line through the receiver's filter, and depolarization recovered from
-//! simulated parallel and perpendicular counts (model.md §7).
+//! simulated parallel and perpendicular counts (docs/model.md §4a).
 
 mod common;
 

@@ -124,7 +124,7 @@ fn a_ground_run_exports_with_the_scc_layout_and_its_counts() {
         r.read_var_f64("Background_Low").unwrap()[0],
         r.read_var_f64("Background_High").unwrap()[0],
     );
-    assert!(lo < hi && hi > 5_900.0, "{lo} {hi}");
+    same_window((lo, hi), window_in_m(&raw, 0, 0));
     let p = r.read_var_f64("Pressure_at_Lidar_Station").unwrap()[0];
     assert!((p - 1013.25).abs() < 0.01, "{p}");
     python_check(&out);
@@ -286,5 +286,239 @@ fn simulate_writes_scc_for_every_channel() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("platform.kind"));
     assert!(!dir.join("space.nc").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The background window the SCC file must carry for channel `c` of `raw`, worked out
+/// here from the raw file's own variables by the rule of `docs/scc.md`: a bin is
+/// signal-free when its expected signal per shot (the largest over profiles) is 0 or
+/// below 1 % of its expected background (the smallest over profiles) + dark; the window
+/// is the longest run of consecutive signal-free bins (the farthest of equal runs)
+/// among the first `pretrigger` bins when there are any, else among all bins; its
+/// limits are the outer edges of its first and last bins (range ∓ half a bin, m).
+fn window_in_m(raw: &Path, c: usize, pretrigger: usize) -> (f64, f64) {
+    let f = hdf5::File::open(raw).unwrap();
+    let read = |n: &str| f.dataset(n).unwrap().read_raw::<f64>().unwrap();
+    let range = read("range");
+    let nb = range.len();
+    let n_ch = f.dataset("channel").unwrap().shape()[0];
+    let per_profile = |v: Vec<f64>| -> Vec<Vec<f64>> {
+        v.chunks(n_ch * nb)
+            .map(|p| p[c * nb..(c + 1) * nb].to_vec())
+            .collect()
+    };
+    let sig = per_profile(read("expected_signal"));
+    let bkg = per_profile(read("expected_background"));
+    let dark = &per_profile(read("expected_dark"))[0];
+    let free: Vec<bool> = (0..nb)
+        .map(|i| {
+            let s = sig.iter().map(|p| p[i]).fold(f64::MIN, f64::max);
+            let b = bkg.iter().map(|p| p[i]).fold(f64::MAX, f64::min);
+            s == 0.0 || s < 0.01 * (b + dark[i])
+        })
+        .collect();
+    let n = if pretrigger > 0 { pretrigger } else { nb };
+    let (mut best, mut run_start) = ((0, 0), None);
+    let then_stop = free[..n].iter().copied().chain(std::iter::once(false));
+    for (i, is_free) in then_stop.enumerate() {
+        match (is_free, run_start) {
+            (true, None) => run_start = Some(i),
+            (false, Some(s)) => {
+                if i - s >= best.1 - best.0 {
+                    best = (s, i);
+                }
+                run_start = None;
+            }
+            _ => {}
+        }
+    }
+    assert!(best.1 > best.0, "no signal-free bin in {}", raw.display());
+    let half = (range[1] - range[0]) / 2.0;
+    (range[best.0] - half, range[best.1 - 1] + half)
+}
+
+/// `Background_Low/High` equal to the window worked out, to rounding (1 µm).
+fn same_window(got: (f64, f64), want: (f64, f64)) {
+    let ok = (got.0 - want.0).abs() < 1e-6 && (got.1 - want.1).abs() < 1e-6;
+    assert!(ok, "Background_Low/High {got:?}, want {want:?}");
+}
+
+/// A short ground run (no detector): 20 shots per profile, windows to `top_km`.
+fn small_ground_run(dir: &Path, name: &str, extra: &[&str], profiles: usize) -> PathBuf {
+    let raw = dir.join(name);
+    let mut ov = vec![
+        "instrument.channel=\"parallel\"",
+        "acquisition.start_time=\"2024-07-14T21:30:00Z\"",
+        "acquisition.accumulation_time_s=1",
+    ];
+    ov.extend_from_slice(extra);
+    simulate("ground/ground_532_overlap.toml", &raw, &ov, profiles);
+    raw
+}
+
+fn background_of(out: &Path) -> (f64, f64) {
+    let mut r = FileReader::open(out).unwrap();
+    (
+        r.read_var_f64("Background_Low").unwrap()[0],
+        r.read_var_f64("Background_High").unwrap()[0],
+    )
+}
+
+/// The background window holds only signal-free bins, and it is the longest run of them:
+/// on the biaxial ground lidar the bins before the beam enters the field of view (0 to
+/// ~120 m, signal exactly 0) when the window stops at 2 km; the bins above 86 km (no
+/// molecules, no aerosol) when it reaches 100 km, a run far longer than the near one.
+/// Each checked bin by bin against the raw file's `expected_*` (`window_in_m`).
+#[test]
+fn the_background_window_is_the_longest_signal_free_run() {
+    let _serial = serial();
+    let dir = scratch("window");
+    let out = dir.join("out.nc");
+    let near = small_ground_run(&dir, "near.h5", &["acquisition.top_altitude_km=2"], 1);
+    export_scc(&near, &out, &SccOptions::default()).unwrap();
+    let (lo, hi) = background_of(&out);
+    same_window((lo, hi), window_in_m(&near, 0, 0));
+    assert!(lo == 0.0 && hi > 50.0 && hi < 300.0, "{lo} {hi}");
+    let far = small_ground_run(
+        &dir,
+        "far.h5",
+        &[
+            "acquisition.top_altitude_km=100",
+            "instrument.bin_width_s=2e-6",
+        ],
+        1,
+    );
+    export_scc(&far, &out, &SccOptions::default()).unwrap();
+    let (lo, hi) = background_of(&out);
+    same_window((lo, hi), window_in_m(&far, 0, 0));
+    assert!(lo >= 86_000.0 - 300.0 && hi > 99_000.0, "{lo} {hi}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// With no signal-free bin (full overlap from the first bin, a 2 km window at night) the
+/// export is refused: one line naming the file and the channel, saying why and what to
+/// do, and no output.
+#[test]
+fn no_signal_free_bin_is_refused_with_what_to_do() {
+    let _serial = serial();
+    let dir = scratch("nowindow");
+    let raw = small_ground_run(
+        &dir,
+        "full.h5",
+        &[
+            "acquisition.top_altitude_km=2",
+            "instrument.overlap={model=\"full_range\", full_overlap_m=0.001}",
+        ],
+        1,
+    );
+    let out = dir.join("out.nc");
+    let e = export_scc(&raw, &out, &SccOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(!e.contains('\n'), "{e}");
+    for part in [
+        "full.h5",
+        "parallel`",
+        "below 1 %",
+        "Background_Low/High",
+        "acquisition.top_altitude_km",
+        "pre-trigger",
+    ] {
+        assert!(e.contains(part), "{part}: {e}");
+    }
+    assert!(!out.exists());
+    let o = Command::new(env!("CARGO_BIN_EXE_lidarsim"))
+        .arg("export-scc")
+        .arg(&raw)
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.starts_with("lidarsim: error: "), "{err}");
+    assert!(!out.exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Replaces `name` in the raw file by `values` with `shape`.
+fn replace_dataset(raw: &Path, name: &str, shape: &[usize], values: &[f64]) {
+    let f = hdf5::File::open_rw(raw).unwrap();
+    f.unlink(name).unwrap();
+    f.new_dataset::<f64>()
+        .shape(shape)
+        .create(name)
+        .unwrap()
+        .write_raw(values)
+        .unwrap();
+}
+
+/// In a changing scene (`expected_signal` per profile) a bin counts as signal-free only
+/// if it is in every profile: the largest signal over profiles decides. A second
+/// profile whose signal fills the far half of the near run moves the window.
+#[test]
+fn a_changing_scene_takes_the_largest_signal_over_profiles() {
+    let _serial = serial();
+    let dir = scratch("changing");
+    let raw = small_ground_run(&dir, "two.h5", &["acquisition.top_altitude_km=2"], 2);
+    let out = dir.join("out.nc");
+    export_scc(&raw, &out, &SccOptions::default()).unwrap();
+    let (_, hi_static) = background_of(&out);
+    let (nb, sig) = {
+        let f = hdf5::File::open(&raw).unwrap();
+        let ds = f.dataset("expected_signal").unwrap();
+        (ds.shape()[1], ds.read_raw::<f64>().unwrap())
+    };
+    // profile 0 as recorded, profile 1 with signal in bins 5.. of the near run
+    let mut both = sig.clone();
+    let mut second = sig.clone();
+    for v in second.iter_mut().skip(5).take(nb - 5) {
+        *v = v.max(1.0);
+    }
+    both.extend_from_slice(&second);
+    replace_dataset(&raw, "expected_signal", &[2, 1, nb], &both);
+    export_scc(&raw, &out, &SccOptions::default()).unwrap();
+    let (lo, hi) = background_of(&out);
+    same_window((lo, hi), window_in_m(&raw, 0, 0));
+    assert!(hi < hi_static, "{hi} vs {hi_static}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A file with pre-trigger bins (root attribute `pretrigger_bins`, format 3) takes the
+/// window among them, even when a longer signal-free run lies beyond; a count that is
+/// not below the bins is refused.
+#[test]
+fn pretrigger_bins_hold_the_window_when_the_file_has_them() {
+    let _serial = serial();
+    let dir = scratch("pretrigger");
+    let raw = small_ground_run(&dir, "pre.h5", &["acquisition.top_altitude_km=2"], 1);
+    let out = dir.join("out.nc");
+    let set = |n: i64| {
+        let f = hdf5::File::open_rw(&raw).unwrap();
+        if f.attr("pretrigger_bins").is_ok() {
+            f.delete_attr("pretrigger_bins").unwrap();
+        }
+        f.new_attr::<i64>()
+            .create("pretrigger_bins")
+            .unwrap()
+            .write_scalar(&n)
+            .unwrap();
+    };
+    set(5);
+    export_scc(&raw, &out, &SccOptions::default()).unwrap();
+    let (lo, hi) = background_of(&out);
+    same_window((lo, hi), window_in_m(&raw, 0, 5));
+    let res = 299_792_458.0 * 5e-8 / 2.0;
+    assert!((hi - lo - 5.0 * res).abs() < 1e-6, "{lo} {hi}");
+    let nb = hdf5::File::open(&raw)
+        .unwrap()
+        .dataset("range")
+        .unwrap()
+        .shape()[0];
+    set(nb as i64);
+    let e = export_scc(&raw, &out, &SccOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("pretrigger_bins") && e.contains("pre.h5"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -1,4 +1,4 @@
-//! The scene below and around the beam (model.md §7, issue 9): the surface echo, a
+//! The scene below and around the beam (docs/model.md §4e–4f, issue 9): the surface echo, a
 //! molecular profile continued above its top, Earth curvature.
 
 mod common;
@@ -294,7 +294,7 @@ fn a_tabulated_curtain_is_the_scene() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// Pulses in flight (model.md §7): from 600 km a 40 km window at 5 kHz would record the
+/// Pulses in flight (docs/model.md §3): from 600 km a 40 km window at 5 kHz would record the
 /// previous pulse's lower atmosphere and surface echo: refused with the largest clean
 /// rate (3.7 kHz: the pulse period must exceed the window's 268 µs); several pulses in
 /// flight are accepted when the windows stay clean (10 kHz over a 14 km window, as

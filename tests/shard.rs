@@ -1,4 +1,4 @@
-//! Shards and scale-out (interface.md "Shards and scale-out", docs/scale.md): shards
+//! Shards and scale-out (docs/scale.md): shards
 //! merged are the whole run byte for byte, any split gives the whole run's counts, bad
 //! merges are refused naming the file, and `validate --combine` over shards prints the
 //! single run's verdict.

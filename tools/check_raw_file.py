@@ -16,7 +16,7 @@ and with `ncdump -h` (if on PATH), and checks that:
     range_weight`; `expected_counts` is the sum of the three expectations (at most
     that sum for a channel with dead time);
   * the root attributes are readable, and (unless --structure-only) every variable
-    and root attribute named in interface.md is present.
+    and root attribute named in docs/file-format.md is present.
 Prints one line per failed check and a summary; exits 1 if any check failed, 2 if the
 file or a required Python package cannot be opened at all.
 """
@@ -192,7 +192,7 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("file")
     p.add_argument("--structure-only", action="store_true",
-                   help="skip the check for the variables and root attributes interface.md requires")
+                   help="skip the check for the variables and root attributes docs/file-format.md requires")
     p.add_argument("--no-ncdump", action="store_true", help="do not run ncdump -h")
     args = p.parse_args()
 

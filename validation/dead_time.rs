@@ -1,4 +1,4 @@
-//! Dead time: the shot-level sampler against the stationary formulas of model.md §7,
+//! Dead time: the shot-level sampler against the stationary formulas of docs/model.md §4b,
 //! `m = n/(1+nτ)` and `m = n·e^(−nτ)` and their renewal-theory variances, for τ = 3.5 ns
 //! over true rates from 1 kHz to 200 MHz (paralyzable: up to its maximum at n = 1/τ).
 //! Writes `dead_time.md` and `dead_time.png` into the output folder.
@@ -127,7 +127,7 @@ fn report(rows: &[Row]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "# Dead time: recorded rate and variance against model.md §7\n"
+        "# Dead time: recorded rate and variance against docs/model.md §4b\n"
     );
     let _ = writeln!(
         s,

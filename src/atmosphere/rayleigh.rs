@@ -24,7 +24,9 @@
 //!   `P(π) = 3(1+γ)/(2(1+2γ))` and `S = 4π/P(π) = (8π/3)(1+2γ)/(1+γ)`,
 //!   `γ = ρn/(2−ρn)`: 8.50 sr at 532 nm. This is what a lidar with a filter wide
 //!   enough to pass the rotational Raman lines measures; the Cabannes line alone
-//!   (very narrow filters) would give ≈ 8.70 sr — not implemented here.
+//!   (filters narrower than [`CABANNES_FILTER_MAX_NM`]) carries [`cabannes_fraction`]
+//!   (0.975) of the backscatter, so 8.71 sr, with [`cabannes_depolarization`] (0.0037):
+//!   `docs/model.md` §4a.
 
 /// Bucholtz (1995) Table 1: wavelength (µm) and depolarization factor ρn (in %).
 const DEPOLARIZATION_TABLE: [(f64, f64); 36] = [
@@ -153,7 +155,7 @@ mod tests {
         assert!((gamma(rho) - 0.0144).abs() < 2e-4, "{}", gamma(rho));
         assert!((cabannes_depolarization(rho) - 0.0036).abs() < 1e-4);
         assert!((cabannes_fraction(rho) - 0.976).abs() < 2e-3);
-        // the Cabannes lidar ratio: 8.70 sr (field notes)
+        // the Cabannes lidar ratio: 8.71 sr (docs/model.md §4a; She 2001: ≈ 8.7)
         assert!((lidar_ratio_sr(rho) / cabannes_fraction(rho) - 8.70).abs() < 0.02);
     }
     use crate::atmosphere::us76;
@@ -180,7 +182,7 @@ mod tests {
 
     #[test]
     fn cross_section_at_lidar_wavelengths() {
-        // Fit vs field notes: 532 nm fit 5.162e-27 cm², full formula 5.165e-27 cm².
+        // Fit vs the full formula: 532 nm fit 5.162e-27 cm², full formula 5.165e-27 cm².
         assert!(rel(cross_section_m2(532.0), 5.162e-31) < 5e-4);
         assert!(rel(full_formula_m2(532.0), 5.165e-31) < 5e-4);
         // 355 nm: 2.754e-30 m² (fit), 2.755e-30 (full formula) — the brief's ≈ 2.76e-30.
@@ -261,7 +263,7 @@ mod tests {
                 * (extinction_per_m(us76::number_density_m3(z), 532.0)
                     + extinction_per_m(us76::number_density_m3(z + dz), 532.0));
         }
-        // field notes: 0.111 (US76); within 3 % of 0.11.
+        // docs/model.md §4: 0.111 (US76); within 3 % of 0.11.
         assert!(rel(tau, 0.11) < 0.03, "{tau}");
         assert!(rel(tau, 0.111) < 0.01, "{tau}");
     }

@@ -216,7 +216,7 @@ mod tests {
         // Table I: 2.5470e25 m⁻³ at sea level, 1.4474e20 m⁻³ at 86 km (≈ 1.4e20).
         assert!(rel(number_density_m3(0.0), 2.5470e25) < 1e-4);
         assert!(rel(number_density_m3(86_000.0), 1.4474e20) < 1e-3);
-        // field-notes: US76 sea level p/kT = 2.5469e25 m⁻³ (CODATA k_B).
+        // US76 sea level p/kT = 2.5469e25 m⁻³ (CODATA k_B).
         let s = state(0.0).unwrap();
         let n_codata = s.pressure_pa / (crate::constants::BOLTZMANN_J_PER_K * s.temperature_k);
         assert!(rel(n_codata, 2.5469e25) < 1e-4);

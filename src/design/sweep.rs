@@ -1,4 +1,4 @@
-//! Design sweeps (`lidarsim sweep`, interface.md): a grid over any config keys, and per
+//! Design sweeps (`lidarsim sweep`, docs/config.md): a grid over any config keys, and per
 //! grid point metrics of the deterministic model (Eq. 2–4), no Monte Carlo.
 //!
 //! * `snr_at:Zkm` — Eq. 4 S/N of the bin nearest altitude Z at the config's accumulation
@@ -102,7 +102,7 @@ pub enum Metric {
 }
 
 impl Metric {
-    /// Parses a metric name of interface.md, e.g. `snr_at:10km`, `time_to_snr:10@15km`.
+    /// Parses a metric name of docs/config.md, e.g. `snr_at:10km`, `time_to_snr:10@15km`.
     pub fn parse(spec: &str) -> Result<Metric> {
         let fail = || {
             Error::Unsupported(format!(

@@ -1,4 +1,4 @@
-//! Detector dead time (model.md §7): after a recorded count a photon counter is blind
+//! Detector dead time (docs/model.md §4b): after a recorded count a photon counter is blind
 //! for τ. Non-paralyzable: photons in the dead period are lost and do not extend it.
 //! Paralyzable: every arriving photon, recorded or not, restarts it.
 //!
@@ -11,7 +11,7 @@
 //! scene then has no detector stage at all).
 //!
 //! **Model** ([`DeadTime::recorded_means`]). With the rate n(t) piecewise constant per
-//! bin, the mean recorded rate solves (Müller 1973, NIM 112, 47; model.md §7)
+//! bin, the mean recorded rate solves (Müller 1973, NIM 112, 47; docs/model.md §4b)
 //!
 //! ```text
 //! non-paralyzable: m(t) = n(t)·(1 − ∫_{t−τ}^{t} m(s) ds)
@@ -25,7 +25,7 @@
 //! uses the stationary formulas per bin (error O(τ/Δt) at the bin edges).
 //!
 //! **Variance** ([`DeadTime::recorded_variance`]) of a bin's recorded count per shot:
-//! the renewal-theory forms of model.md §7 at the bin's rate, `nΔt/(1+nτ)³` and
+//! the renewal-theory forms of docs/model.md §4b at the bin's rate, `nΔt/(1+nτ)³` and
 //! `mΔt·(1 − 2nτ·e^{−nτ})`, which tend to the Poisson value at low rates.
 
 use rand::Rng;

@@ -7,7 +7,7 @@ pub mod dead_time;
 pub use dead_time::{DeadTime, DeadTimeModel};
 
 /// Count rate above which a photon counter without a dead-time model is out of its
-/// linear range (a non-paralyzable τ = 3.5 ns loses 15 % at 50 MHz; field notes: the
+/// linear range (a non-paralyzable τ = 3.5 ns loses 15 % at 50 MHz; the
 /// non-paralyzable correction is fitted below ~50 MHz).
 pub const LINEAR_RANGE_HZ: f64 = 50e6;
 

@@ -1,10 +1,10 @@
-//! The `expect` outputs: the per-bin CSV of interface.md and a terminal table.
+//! The `expect` outputs: the per-bin CSV of docs/config.md and a terminal table.
 
 use std::io::{self, Write};
 
 use crate::scenario::{ExpectedProfile, Scenario};
 
-/// CSV header: the interface.md columns, then the S/N with an estimated background.
+/// CSV header: the docs/config.md columns, then the S/N with an estimated background.
 pub const CSV_COLUMNS: [&str; 12] = [
     "altitude_m",
     "range_m",

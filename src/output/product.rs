@@ -1,4 +1,4 @@
-//! The onboard product (`lidarsim onboard`, interface.md): one HDF5 group per altitude
+//! The onboard product (`lidarsim onboard`, docs/file-format.md): one HDF5 group per altitude
 //! region of the scheme (`region_0` … from the top), each with its own `profile`,
 //! `channel` and `bin` dimension scales, `altitude`, `time`, `n_shots` and
 //! `counts (profile, channel, bin)` (integer sums, u32), and the region's attributes

@@ -95,7 +95,7 @@ fn poisson_small<R: Rng + ?Sized>(rng: &mut R, mean: f64) -> u64 {
 }
 
 /// One exact Poisson(`shots`·λ_i) draw per bin, added into `acc`: exact when
-/// nothing varies from shot to shot and the detector is linear (model.md §6),
+/// nothing varies from shot to shot and the detector is linear (docs/simulation.md),
 /// since a sum of `shots` independent Poisson(λ_i) is Poisson(`shots`·λ_i).
 /// See [`poisson_u64`] for the algorithms and their precision; O(bins).
 pub fn add_aggregate<R: Rng + ?Sized>(

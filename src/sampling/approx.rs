@@ -1,5 +1,5 @@
 //! The normal approximation to the aggregate Poisson draw, offered only with its
-//! error bound (issue 4, item 4; model.md §6: "approximations are allowed only with
+//! error bound (issue 4, item 4; docs/simulation.md: "approximations are allowed only with
 //! their error measured and reported beside their speed").
 //!
 //! A bin of mean `μ = M·λ` may be drawn as `max(0, round(μ + √μ·g))`, `g` standard

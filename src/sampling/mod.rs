@@ -1,4 +1,4 @@
-//! Photon-count samplers (issue 3; model.md §6).
+//! Photon-count samplers (issue 3; docs/simulation.md).
 //!
 //! Per laser shot and range bin `i` the detected count is Poisson with mean
 //! `λ_i = λ_sig,i + λ_bkg + λ_dc`, independent across bins and shots; a

@@ -1,4 +1,4 @@
-//! The scene along the track (model.md §7): segments of given length, each with its own
+//! The scene along the track (docs/model.md §4f): segments of given length, each with its own
 //! layers, aerosol and surface, and broken layers cut into cells. Each shot sees the
 //! column at its own along-track position `x = v_g·t` (v_g the ground-track speed,
 //! model.md §3; t from the first shot).

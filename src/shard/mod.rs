@@ -1,6 +1,6 @@
 //! Scale-out: a run cut into N shards, each drawn by its own process (a Slurm array task,
 //! a Kubernetes indexed Job's pod), then merged into the file the whole run writes
-//! (interface.md "Shards and scale-out"; `docs/scale.md`).
+//! (`docs/scale.md`).
 //!
 //! Counts depend on (seed, profile, block) only, so shard K of N of a P-profile run
 //! draws exactly the whole run's counts for its profiles `⌊K·P/N⌋ … ⌊(K+1)·P/N⌋ − 1`

@@ -1,4 +1,4 @@
-//! The Monte Carlo run (`lidarsim simulate`, model.md §6): per-bin expectations from the
+//! The Monte Carlo run (`lidarsim simulate`, docs/simulation.md): per-bin expectations from the
 //! deterministic model, Poisson photon counts accumulated over each profile's shots by
 //! the chosen method, streamed into a raw HDF5 file.
 //!

@@ -58,7 +58,7 @@ cleanup() {
     for log in slurmctld.log slurmd.log munged.log; do
       [ -f "$tmp/$log" ] && { echo "--- last lines of $log" >&2; tail -n 15 "$tmp/$log" >&2; }
     done
-    for log in "$tmp"/work/*.shards/*.log; do
+    for log in "$tmp"/jobs/*.shards/*.log; do
       [ -f "$log" ] && { echo "--- $log" >&2; tail -n 5 "$log" >&2; }
     done
   fi
@@ -73,7 +73,7 @@ trap 'exit 129' HUP
 host=$(hostname -s)
 # ports of this cluster, away from the defaults (6817/6818) and from each other run
 port=$((20000 + RANDOM % 20000))
-mkdir -p "$tmp/munge" "$tmp/state" "$tmp/spool" "$tmp/work"
+mkdir -p "$tmp/munge" "$tmp/state" "$tmp/spool" "$tmp/jobs"
 chmod 711 "$tmp/munge"
 
 # --- munge: a key of our own, a socket in the temporary directory
@@ -142,25 +142,25 @@ done
 # --- the jobs, as a user would submit them
 export LIDARSIM=$lidarsim SOURCE_DATE_EPOCH=1700000000
 config=$repo/configs/paper/scenario1.toml
-cd "$tmp/work"
-ids=$("$repo/deploy/slurm/submit.sh" simulate "$config" "$tmp/work/merged.h5" "$tasks" \
+cd "$tmp/jobs"
+ids=$("$repo/deploy/slurm/submit.sh" simulate "$config" "$tmp/jobs/merged.h5" "$tasks" \
   --profiles 10)
 read -r sim_array sim_merge <<<"$ids"
-ids=$("$repo/deploy/slurm/submit.sh" validate "$config" "$tmp/work/verdict.txt" "$tasks" \
+ids=$("$repo/deploy/slurm/submit.sh" validate "$config" "$tmp/jobs/verdict.txt" "$tasks" \
   --realizations 400 --seed 3)
 read -r val_array val_combine <<<"$ids"
 caliop=$repo/configs/instruments/caliop_532.toml
 onboard=(--set acquisition.top_altitude_km=40 --set acquisition.bottom_altitude_km=-2
   --set acquisition.profiles=30 --scheme caliop --scheme uniform:7)
-ids=$("$repo/deploy/slurm/submit.sh" onboard "$caliop" "$tmp/work/product.h5" "$tasks" "${onboard[@]}")
+ids=$("$repo/deploy/slurm/submit.sh" onboard "$caliop" "$tmp/jobs/product.h5" "$tasks" "${onboard[@]}")
 read -r ob_array ob_merge <<<"$ids"
 say "submitted simulate array $sim_array + merge $sim_merge, validate array $val_array + combine $val_combine, onboard array $ob_array + merge $ob_merge"
 
 # the single runs to compare with, meanwhile
-"$lidarsim" simulate "$config" --profiles 10 -o "$tmp/work/whole.h5" 2>/dev/null
-"$lidarsim" validate "$config" --realizations 400 --seed 3 >"$tmp/work/single.txt" 2>/dev/null
-"$lidarsim" onboard "$caliop" "${onboard[@]}" -o "$tmp/work/whole_product.h5" \
-  --report "$tmp/work/whole_product.csv" 2>/dev/null
+"$lidarsim" simulate "$config" --profiles 10 -o "$tmp/jobs/whole.h5" 2>/dev/null
+"$lidarsim" validate "$config" --realizations 400 --seed 3 >"$tmp/jobs/single.txt" 2>/dev/null
+"$lidarsim" onboard "$caliop" "${onboard[@]}" -o "$tmp/jobs/whole_product.h5" \
+  --report "$tmp/jobs/whole_product.csv" 2>/dev/null
 
 deadline=$((SECONDS + timeout_s))
 while [ -n "$(squeue -h -o %i 2>/dev/null)" ]; do
@@ -181,13 +181,13 @@ for job in "$sim_array" "$sim_merge" "$val_array" "$val_combine" "$ob_array" "$o
 done
 say "all jobs COMPLETED: $tasks-task simulate array, merge (afterok), $tasks-task validate array, combine (afterok), $tasks-task onboard array, merge and combine (afterok)"
 
-shards=$(find "$tmp/work/merged.h5.shards" -name 'shard-*.h5' | wc -l)
+shards=$(find "$tmp/jobs/merged.h5.shards" -name 'shard-*.h5' | wc -l)
 [ "$shards" = "$tasks" ] || fail "$shards shard files, not $tasks"
-cmp "$tmp/work/whole.h5" "$tmp/work/merged.h5" || fail "the merged file differs from the single run's"
+cmp "$tmp/jobs/whole.h5" "$tmp/jobs/merged.h5" || fail "the merged file differs from the single run's"
 say "cmp: merged.h5 of $tasks shards is byte-identical to the single run's file"
-cmp "$tmp/work/single.txt" "$tmp/work/verdict.txt" || fail "the combined verdict differs from the single validate's"
-say "cmp: the combined validate table of $tasks partials equals the single run's ($(tail -n 1 "$tmp/work/verdict.txt" | cut -d: -f1))"
-cmp "$tmp/work/whole_product.h5" "$tmp/work/product.h5" || fail "the merged product differs from the single onboard run's"
-cmp "$tmp/work/whole_product.csv" "$tmp/work/product.csv" || fail "the combined report differs from the single onboard run's"
+cmp "$tmp/jobs/single.txt" "$tmp/jobs/verdict.txt" || fail "the combined verdict differs from the single validate's"
+say "cmp: the combined validate table of $tasks partials equals the single run's ($(tail -n 1 "$tmp/jobs/verdict.txt" | cut -d: -f1))"
+cmp "$tmp/jobs/whole_product.h5" "$tmp/jobs/product.h5" || fail "the merged product differs from the single onboard run's"
+cmp "$tmp/jobs/whole_product.csv" "$tmp/jobs/product.csv" || fail "the combined report differs from the single onboard run's"
 say "cmp: product.h5 and product.csv of $tasks onboard shards are byte-identical to the single onboard run's"
 say "PASSED"

@@ -110,7 +110,7 @@ fn per_channel(expected: &[ExpectedProfile], f: impl Fn(&ExpectedProfile) -> Vec
     expected.iter().flat_map(f).collect()
 }
 
-/// The variables of interface.md (format version 2) for every channel of `lidar`:
+/// The variables of docs/file-format.md (format version 2) for every channel of `lidar`:
 /// coordinates, the expectations, the instrument constants and the atmosphere's truth.
 /// The point truth is (bin) when every channel sees one wavelength, (channel, bin) when
 /// the wavelengths differ.
@@ -337,7 +337,7 @@ pub fn geolocation_variables() -> Vec<Variable> {
     ]
 }
 
-/// The root attributes of interface.md: conventions, provenance, the resolved config,
+/// The root attributes of docs/file-format.md: conventions, provenance, the resolved config,
 /// the seed and method, the format version.
 pub fn root_attributes(sc: &Scenario, run: &RunInfo) -> Result<Vec<(String, AttrValue)>> {
     let cfg = &sc.loaded.config;

@@ -22,11 +22,9 @@ pub const ACQUISITION_PHOTON_COUNTING: i32 = 1;
 pub const BACKGROUND_MODE_FAR_RANGE: i32 = 1;
 /// `LR_Input` written: 1, as in every `atmospheric_lidar` parameter example.
 pub const LR_INPUT: i32 = 1;
-/// A far bin is "signal-free" when its expected signal is at most this share of its
-/// expected background + dark counts.
+/// A bin is "signal-free" when its expected signal is below this share of its expected
+/// background + dark counts (or is exactly 0).
 pub const SIGNAL_FREE_SHARE: f64 = 0.01;
-/// Fewest signal-free bins accepted as the background window (else the far 10 %).
-pub const MIN_BACKGROUND_BINS: usize = 10;
 
 /// One SCC channel's parameters.
 #[derive(Debug, Clone, PartialEq)]
@@ -222,7 +220,7 @@ fn channels(path: &Path, raw: &RawRun, opts: &SccOptions) -> Result<Vec<SccChann
                     &format!("channel `{name}` is not a channel of the `config` attribute"),
                 )
             })?;
-            channel(raw, c, cfg, ids[c])
+            channel(path, raw, c, cfg, ids[c])
         })
         .collect()
 }
@@ -238,23 +236,33 @@ fn receiver_channels(path: &Path, raw: &RawRun) -> Result<Vec<ChannelConfig>> {
     Ok(loaded.channels)
 }
 
-fn channel(raw: &RawRun, c: usize, cfg: &ChannelConfig, id: i32) -> Result<SccChannel> {
+fn channel(
+    path: &Path,
+    raw: &RawRun,
+    c: usize,
+    cfg: &ChannelConfig,
+    id: i32,
+) -> Result<SccChannel> {
     let instrument = &cfg.config.instrument;
     let (dead_time_ns, dead_time_type) = dead_time(instrument.detector.as_ref());
     let res = SPEED_OF_LIGHT_M_PER_S * raw.bin_width_s / 2.0;
     let first_bin_start_m = raw.range_m[0] - res / 2.0;
     let bins = c * raw.n_bins..(c + 1) * raw.n_bins;
+    let window = background_bins(
+        &raw.expected_signal[bins.clone()],
+        &raw.expected_noise[bins],
+        raw.pretrigger_bins,
+    )
+    .ok_or_else(|| no_background(path, &cfg.name, raw.pretrigger_bins))?;
     Ok(SccChannel {
         name: cfg.name.clone(),
         id,
         rep_rate_hz: raw.rep_rate_hz.round() as i32,
         wavelength_nm: instrument.wavelength_nm,
         range_resolution_m: res,
-        background_m: background_window(
-            &raw.expected_signal[bins.clone()],
-            &raw.expected_noise[bins],
-            &raw.range_m,
-            res,
+        background_m: (
+            raw.range_m[window.start] - res / 2.0,
+            raw.range_m[window.end - 1] + res / 2.0,
         ),
         dead_time_ns,
         dead_time_type,
@@ -277,20 +285,64 @@ fn dead_time(detector: Option<&DetectorConfig>) -> (f64, i32) {
     }
 }
 
-/// Range window (m) of the far bins free of signal: the longest run at the far end
-/// where the expected signal is at most `SIGNAL_FREE_SHARE` of the expected
-/// background + dark; when fewer than `MIN_BACKGROUND_BINS` qualify, the far 10 % of
-/// the bins (at least one).
-pub fn background_window(signal: &[f64], noise: &[f64], range_m: &[f64], res: f64) -> (f64, f64) {
-    let n = signal.len();
-    let mut b0 = n;
-    while b0 > 0 && signal[b0 - 1] <= SIGNAL_FREE_SHARE * noise[b0 - 1] {
-        b0 -= 1;
+/// Whether a bin is free of signal: its expected signal per shot is below
+/// [`SIGNAL_FREE_SHARE`] of its expected background + dark per shot, or is exactly 0.
+pub fn signal_free(signal: f64, noise: f64) -> bool {
+    signal == 0.0 || signal < SIGNAL_FREE_SHARE * noise
+}
+
+/// The bins of the SCC background window (`Background_Low/High`): the longest run of
+/// consecutive [`signal_free`] bins, the farthest of equally long runs; within the
+/// first `pretrigger_bins` bins (recorded before the pulse) when there are any, else
+/// anywhere in the profile. `None` when no bin qualifies. `signal` is the largest
+/// expected signal over the profiles, `noise` the smallest background + dark.
+pub fn background_bins(
+    signal: &[f64],
+    noise: &[f64],
+    pretrigger_bins: usize,
+) -> Option<std::ops::Range<usize>> {
+    let n = if pretrigger_bins > 0 {
+        pretrigger_bins.min(signal.len())
+    } else {
+        signal.len()
+    };
+    let mut best: Option<std::ops::Range<usize>> = None;
+    let mut start = None;
+    for i in 0..=n {
+        let free = i < n && signal_free(signal[i], noise[i]);
+        match (free, start) {
+            (true, None) => start = Some(i),
+            (false, Some(s)) => {
+                if best.as_ref().is_none_or(|b| i - s >= b.len()) {
+                    best = Some(s..i);
+                }
+                start = None;
+            }
+            _ => {}
+        }
     }
-    if n - b0 < MIN_BACKGROUND_BINS.min(n) {
-        b0 = n - (n / 10).max(1);
-    }
-    (range_m[b0] - res / 2.0, range_m[n - 1] + res / 2.0)
+    best
+}
+
+/// The refusal when a channel has no signal-free bin, with what to do about it.
+fn no_background(path: &Path, channel: &str, pretrigger_bins: usize) -> Error {
+    let share = SIGNAL_FREE_SHARE * 100.0;
+    let reason = if pretrigger_bins > 0 {
+        format!(
+            "channel `{channel}`: none of the {pretrigger_bins} pre-trigger bins has an \
+             expected signal below {share} % of the expected background + dark, so the SCC \
+             background window (Background_Low/High) has no place: check the pre-trigger bins"
+        )
+    } else {
+        format!(
+            "channel `{channel}`: no bin has an expected signal below {share} % of the \
+             expected background + dark, so the SCC background window \
+             (Background_Low/High) has no place: record bins beyond the signal (raise \
+             acquisition.top_altitude_km, e.g. above 86 km where the US76 atmosphere ends) \
+             or pre-trigger bins"
+        )
+    };
+    bad(path, &reason)
 }
 
 fn text_attributes(

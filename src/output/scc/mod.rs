@@ -33,8 +33,12 @@
 //!   input with the netCDF library, which reads both. Not checked by uploading to an SCC.
 //! * `Molecular_Calc` = 4 (US Standard Atmosphere 1976, lidarsim's `us76`), with
 //!   station p and T from US76 at `platform.altitude_km`.
-//! * `Background_Low/High` (range, m): the far bins whose expected signal is at most
-//!   1 % of the expected background + dark, else the far 10 % of the bins.
+//! * `Background_Low/High` (range, m, the unit of the `atmospheric_lidar` examples:
+//!   19–20 km, 50–60 km, 75–105 km, beyond any bin count): the limits of the longest run
+//!   of consecutive bins whose expected signal per shot is below 1 % of the expected
+//!   background + dark (the farthest of equal runs; in a changing scene the largest
+//!   signal and smallest background over the profiles), within the pre-trigger bins when
+//!   the file has `pretrigger_bins`; no such bin is refused with what to do.
 //! * `Trigger_Delay` (ns) = 2·r₀/c with r₀ the range at the start of bin 0, so that bin
 //!   `i` spans `c·Trigger_Delay/2 + [i, i+1)·Raw_Data_Range_Resolution`, with
 //!   `First_Signal_Rangebin` = 0 (0 for a ground run whose window starts at the station).
@@ -57,7 +61,7 @@ mod write;
 
 use std::path::Path;
 
-pub use fields::{SccChannel, SccContent, background_window};
+pub use fields::{SIGNAL_FREE_SHARE, SccChannel, SccContent, background_bins, signal_free};
 pub use read::{RawRun, read_raw};
 pub use write::{SCC_VARIABLES, SccType};
 

@@ -27,10 +27,15 @@ pub struct RawRun {
     pub n_shots: Vec<u64>,
     /// `range(bin)`: bin-centre range, m.
     pub range_m: Vec<f64>,
-    /// `expected_signal(channel, bin)`, counts per shot.
+    /// `expected_signal(channel, bin)`, counts per shot; in a changing scene (where the
+    /// file's `expected_signal` is (profile, channel, bin)) the largest over profiles.
     pub expected_signal: Vec<f64>,
-    /// `expected_background + expected_dark` (channel, bin), counts per shot.
+    /// `expected_background + expected_dark` (channel, bin), counts per shot; in a
+    /// changing scene the smallest background over profiles.
     pub expected_noise: Vec<f64>,
+    /// Root attribute `pretrigger_bins` (bins recorded before the pulse leaves, at the
+    /// start of each profile; a format-3 feature), 0 when the file has none.
+    pub pretrigger_bins: usize,
     /// Root attribute `wavelength_nm`.
     pub wavelength_nm: f64,
     /// Root attribute `rep_rate_hz`.
@@ -75,11 +80,24 @@ pub fn read_raw(path: &Path) -> Result<RawRun> {
             .read_raw::<u64>()
             .map_err(|e| bad(path, &format!("cannot read `n_shots`: {e}")))?,
         range_m: f64s(path, &f, "range")?,
-        expected_signal: f64s(path, &f, "expected_signal")?,
+        expected_signal: over_profiles(
+            path,
+            "expected_signal",
+            f64s(path, &f, "expected_signal")?,
+            (n_profiles, n_channels * n_bins),
+            f64::max,
+        )?,
         expected_noise: sum(
-            &f64s(path, &f, "expected_background")?,
+            &over_profiles(
+                path,
+                "expected_background",
+                f64s(path, &f, "expected_background")?,
+                (n_profiles, n_channels * n_bins),
+                f64::min,
+            )?,
             &f64s(path, &f, "expected_dark")?,
         ),
+        pretrigger_bins: pretrigger_bins(path, &f, n_bins)?,
         wavelength_nm: f64_attr(path, &f, "wavelength_nm")?,
         rep_rate_hz: f64_attr(path, &f, "rep_rate_hz")?,
         bin_width_s: f64_attr(path, &f, "bin_width_s")?,
@@ -174,6 +192,55 @@ fn read_config(path: &Path, f: &hdf5::File) -> Result<toml::Table> {
             &format!("root attribute `config` is not TOML: {first}"),
         )
     })
+}
+
+/// A (channel, bin) variable that is (profile, channel, bin) in a changing scene, folded
+/// over profiles with `fold` (`f64::max` for the signal, `f64::min` for the background);
+/// a (channel, bin) variable as it is. Another length is left for `check_shapes`.
+fn over_profiles(
+    path: &Path,
+    name: &str,
+    values: Vec<f64>,
+    (n_profiles, per_profile): (usize, usize),
+    fold: fn(f64, f64) -> f64,
+) -> Result<Vec<f64>> {
+    if values.iter().any(|x| !x.is_finite()) {
+        return Err(bad(
+            path,
+            &format!("`{name}` holds a value that is not finite"),
+        ));
+    }
+    if n_profiles < 2 || per_profile == 0 || values.len() != n_profiles * per_profile {
+        return Ok(values);
+    }
+    let mut out = values[..per_profile].to_vec();
+    for row in values.chunks_exact(per_profile).skip(1) {
+        for (o, &x) in out.iter_mut().zip(row) {
+            *o = fold(*o, x);
+        }
+    }
+    Ok(out)
+}
+
+/// Root attribute `pretrigger_bins` (format 3: bins recorded before the pulse, at the
+/// start of each profile), 0 when absent; refused unless a whole number below the bins.
+fn pretrigger_bins(path: &Path, f: &hdf5::File, n_bins: usize) -> Result<usize> {
+    let Ok(a) = f.attr("pretrigger_bins") else {
+        return Ok(0);
+    };
+    let n: i64 = a
+        .read_scalar()
+        .map_err(|_| bad(path, "root attribute `pretrigger_bins` is not an integer"))?;
+    match usize::try_from(n) {
+        Ok(n) if n < n_bins => Ok(n),
+        _ => Err(bad(
+            path,
+            &format!(
+                "root attribute `pretrigger_bins` is {n}, not 0 to {}",
+                n_bins.saturating_sub(1)
+            ),
+        )),
+    }
 }
 
 fn sum(a: &[f64], b: &[f64]) -> Vec<f64> {
