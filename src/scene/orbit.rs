@@ -396,8 +396,7 @@ mod tests {
         let o = Orbit::new(705e3, 98.2, 0.0, 0.0, true).unwrap();
         let n = 2.0 * PI / o.period_s();
         let w = EARTH_ROTATION_RAD_PER_S;
-        let expected =
-            (1.0 - 2.0 * (w / n) * 98.2f64.to_radians().cos() + (w / n).powi(2)).sqrt();
+        let expected = (1.0 - 2.0 * (w / n) * 98.2f64.to_radians().cos() + (w / n).powi(2)).sqrt();
         let ratio = o.along_track_m(1.0) / o.ground_speed_m_per_s();
         assert!((ratio - expected).abs() < 1e-6, "{ratio} vs {expected}");
         assert!((ratio - 1.012).abs() < 0.0005, "{ratio}");

@@ -365,7 +365,8 @@ impl SceneModel {
                 runs.iter()
                     .map(|&(col, _)| {
                         let (albedo, path) = self.reflectors[col][channel];
-                        let l = sun::reflected_radiance(albedo, irradiance / (au * au), zenith, path);
+                        let l =
+                            sun::reflected_radiance(albedo, irradiance / (au * au), zenith, path);
                         // the fixed radiance, if any, is a floor (night sky)
                         (l + floor) * factor
                     })
