@@ -42,8 +42,9 @@
 //! a 2·10⁶-step midpoint sum and against the summed great-circle lengths between
 //! successive sub-satellite points). Over a non-rotating Earth (`ω_E = 0`) `s = v_g·t`
 //! with `v_g = R_E·n` (model.md §3, [`ground_track_speed_m_per_s`]); the Earth's rotation
-//! changes the ground speed by up to `ω_E·R_E·cos i ≈ 0.46 km/s` (a sun-synchronous
-//! orbit's track over the rotating Earth is ~1 % longer than `v_g·t` at low latitudes).
+//! changes the ground speed by about `ω_E·R_E·|cos i|` (up to 0.46 km/s for an
+//! equatorial orbit; for a sun-synchronous one, i = 98.2°, ~70 m/s: its track over the
+//! rotating Earth is 1.2 % longer than `v_g·t` at the equator, 1.0 % at 60°).
 
 use crate::constants::{EARTH_GM_M3_PER_S2, EARTH_RADIUS_M, EARTH_ROTATION_RAD_PER_S};
 use crate::geometry::ground_track_speed_m_per_s;
