@@ -540,7 +540,9 @@ pub struct BackgroundConfig {
     /// Efficiencies applied to the background.
     #[serde(default)]
     pub efficiency: BackgroundEfficiency,
-    /// Solar model: two-way transmission of the sunlight (sun → scene → instrument); absent = 1.
+    /// Solar model: a stated two-way transmission of the sunlight (sun → scene →
+    /// instrument), whatever the angle; absent = the slant path through the modelled
+    /// atmosphere (`crate::scene::sun::SunlightPath`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub transmission: Option<f64>,
     /// Solar model: albedo of an optically thick cloud top (column optical depth ≥ 1); absent = 0.7.

@@ -1,6 +1,7 @@
 //! The instrument: the signal constant of Eq. 2, the sky background of Eq. 3 and the
 //! dark counts, all as expected counts per shot per bin (model.md §1).
 
+use crate::atmosphere::Atmosphere;
 use crate::config::{BackgroundEfficiency, Channel, ScenarioConfig};
 use crate::constants::{PLANCK_J_S, SPEED_OF_LIGHT_M_PER_S};
 
@@ -33,21 +34,22 @@ pub struct Instrument {
 
 /// The sky radiance the instrument sees, photons m⁻² s⁻¹ sr⁻¹ nm⁻¹: the fixed
 /// `background.radiance`; with the solar model and a fixed `solar_zenith_deg` also the
-/// sunlight reflected below (at 1 AU, `crate::scene::sun::reflected_radiance`). Along an
-/// orbit the solar part changes from profile to profile and is added by the scene
-/// (`crate::simulate::scene`), not here.
-pub fn sky_radiance(cfg: &ScenarioConfig) -> f64 {
+/// sunlight reflected below (at 1 AU, `crate::scene::sun::reflected_radiance`, through
+/// `atmosphere` along the sun's slant path). Along an orbit the solar part changes from
+/// profile to profile and is added by the scene (`crate::simulate::scene`), not here.
+pub fn sky_radiance(cfg: &ScenarioConfig, atmosphere: &Atmosphere) -> f64 {
     let b = &cfg.background;
     let floor = b.radiance.unwrap_or(0.0);
     match (b.model, b.solar_zenith_deg) {
         (crate::config::BackgroundModel::Solar, Some(zenith)) => {
-            let f =
-                crate::scene::sun::solar_spectral_irradiance_photons(cfg.instrument.wavelength_nm);
-            let sun = crate::scene::sun::reflected_radiance(
-                crate::surface::albedo_below(cfg),
+            use crate::scene::sun;
+            let f = sun::solar_spectral_irradiance_photons(cfg.instrument.wavelength_nm);
+            let reflector = crate::surface::reflector_below(cfg);
+            let sun = sun::reflected_radiance(
+                reflector.albedo,
                 if f.is_finite() { f } else { 0.0 },
                 zenith,
-                b.transmission.unwrap_or(1.0),
+                sun::SunlightPath::of(cfg, atmosphere, reflector.altitude_m),
             );
             floor + sun
         }
@@ -66,8 +68,8 @@ pub fn solid_angle_sr(fov_rad: f64) -> f64 {
 }
 
 impl Instrument {
-    /// Derives the Eq. 2–3 figures from `cfg`.
-    pub fn from_config(cfg: &ScenarioConfig) -> Self {
+    /// Derives the Eq. 2–3 figures from `cfg` (the sunlight through `atmosphere`).
+    pub fn from_config(cfg: &ScenarioConfig, atmosphere: &Atmosphere) -> Self {
         let i = &cfg.instrument;
         let signal_constant = i.optical_efficiency
             * i.pulse_energy_j
@@ -101,7 +103,7 @@ impl Instrument {
             pulse_energy_jitter: i.pulse_energy_jitter,
             channel: i.channel,
             signal_constant,
-            background_per_bin: sky_radiance(cfg) * background_per_radiance,
+            background_per_bin: sky_radiance(cfg, atmosphere) * background_per_radiance,
             background_per_radiance,
             dark_per_bin: i.dark_count_rate_hz * i.bin_width_s,
             dead_time: i

@@ -198,7 +198,6 @@ impl Scenario {
         }
         let channel_name = loaded.channels[0].name.clone();
         let cfg = &loaded.config;
-        let instrument = Instrument::from_config(cfg);
         let geometry = Geometry::from_config(cfg, &file)?;
         let bins = geometry.n_bins as f64;
         crate::resources::require_memory(
@@ -206,6 +205,7 @@ impl Scenario {
             bins * MODEL_BYTES_PER_BIN,
         )?;
         let mut atmosphere = Atmosphere::from_config(&loaded)?;
+        let instrument = Instrument::from_config(cfg, &atmosphere);
         // at least four slabs per bin, so that the piecewise representation resolves every bin
         let lowest = cfg.acquisition.bottom_altitude_km * 1e3;
         atmosphere.grid_m = atmosphere

@@ -21,21 +21,49 @@ pub struct Surface {
     pub altitude_m: f64,
 }
 
-/// The albedo under a column: an optically thick cloud's top (`cloud_albedo`), else the
-/// surface's (land when the scene has none).
-pub fn albedo_below(cfg: &ScenarioConfig) -> f64 {
-    let thick_cloud = cfg.atmosphere.layers.iter().any(|l| {
-        l.kind == crate::config::LayerKind::Cloud
-            && l.extinction_per_km * (l.top_km - l.base_km) >= 1.0
-    });
-    if thick_cloud {
-        return cfg.background.cloud_albedo.unwrap_or(DEFAULT_CLOUD_ALBEDO);
-    }
-    cfg.surface
-        .as_ref()
-        .map_or(crate::config::SurfaceKind::Land.albedo(), |s| {
-            Surface::from_config(s).albedo
+/// What reflects sunlight under a column (model.md §7 "Daylight seen from above").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reflector {
+    /// Its albedo ρ.
+    pub albedo: f64,
+    /// Its altitude (the surface, or the thick cloud's top), m: the sunlight crosses
+    /// the atmosphere above it (`crate::scene::sun::SunlightPath::above`).
+    pub altitude_m: f64,
+}
+
+/// The reflector under a column: the top of the highest optically thick cloud (optical
+/// depth ≥ 1) with `cloud_albedo`, else the surface (land at 0 m when the scene has
+/// none).
+pub fn reflector_below(cfg: &ScenarioConfig) -> Reflector {
+    let thick_cloud_top_km = cfg
+        .atmosphere
+        .layers
+        .iter()
+        .filter(|l| {
+            l.kind == crate::config::LayerKind::Cloud
+                && l.extinction_per_km * (l.top_km - l.base_km) >= 1.0
         })
+        .map(|l| l.top_km)
+        .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.max(t))));
+    if let Some(top_km) = thick_cloud_top_km {
+        return Reflector {
+            albedo: cfg.background.cloud_albedo.unwrap_or(DEFAULT_CLOUD_ALBEDO),
+            altitude_m: top_km * 1e3,
+        };
+    }
+    cfg.surface.as_ref().map_or(
+        Reflector {
+            albedo: crate::config::SurfaceKind::Land.albedo(),
+            altitude_m: 0.0,
+        },
+        |s| {
+            let surface = Surface::from_config(s);
+            Reflector {
+                albedo: surface.albedo,
+                altitude_m: surface.altitude_m,
+            }
+        },
+    )
 }
 
 /// Albedo of an optically thick cloud top at visible wavelengths (liquid stratocumulus

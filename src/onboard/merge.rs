@@ -180,9 +180,14 @@ fn region_spec(
             .map_err(unreadable(&f.path))
     };
     let altitude = g.dataset("altitude").map_err(unreadable(&f.path))?;
+    let channels = g
+        .dataset("channel")
+        .and_then(|c| c.read_raw::<hdf5::types::VarLenUnicode>())
+        .map_err(unreadable(&f.path))?;
     Ok(RegionSpec {
         first_profile: 0,
         profiles,
+        channels: channels.iter().map(|c| c.as_str().to_string()).collect(),
         altitude_m: altitude.read_raw::<f64>().map_err(unreadable(&f.path))?,
         shots: f.regions[k].shots,
         bounds: (

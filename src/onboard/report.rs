@@ -3,7 +3,7 @@
 //! that changes along the track, the averaging bias.
 //!
 //! Its sums are exact, so they do not depend on the order of the profiles: integer sums
-//! of the downlinked counts (first channel) for the empirical S/N, and exact sums
+//! of the downlinked counts (each region's first channel) for the empirical S/N, and exact sums
 //! ([`ExactSum`]) of the averaging biases. The single run and the combined partials of
 //! its shards ([`super::partial`]) add the same terms and write the same report, byte for
 //! byte.
@@ -16,7 +16,7 @@ use super::{RegionLayout, Scheme};
 use crate::scenario::ExpectedProfile;
 use crate::validate::exact::{ExactSum, decimal};
 
-/// The sums of one downlinked bin (first channel) over the region's profiles.
+/// The sums of one downlinked bin (the region's first channel) over the region's profiles.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct BinSums {
     /// Downlinked profiles.
@@ -113,8 +113,9 @@ pub struct ReportInput<'a> {
     pub scene_changes: bool,
     /// Every scheme, its layout and its sums.
     pub schemes: Vec<(&'a Scheme, &'a [RegionLayout], &'a SchemeSums)>,
-    /// The first channel's expectations per shot (the first column of the scene).
-    pub expected: &'a ExpectedProfile,
+    /// Every channel's expectations per shot (the first column of the scene); a
+    /// region's row reports its first channel.
+    pub expected: &'a [ExpectedProfile],
     /// Shots per second.
     pub rep_rate_hz: f64,
     /// Channels of the instrument.
@@ -162,22 +163,34 @@ fn bias_median(scene_changes: bool, sums: &[BinSums]) -> String {
     format!("{:e}", median(affected).max(0.0))
 }
 
-/// Writes the report: one row per scheme and region (interface.md columns).
+/// The downlink of a layout, bit s⁻¹: every region's bins of each channel it holds,
+/// `Σ_regions bins·channels·word_bits·f_L/shots`.
+pub fn data_rate_bps(
+    regions: &[RegionLayout],
+    channels: usize,
+    word_bits: u32,
+    rep_rate_hz: f64,
+) -> f64 {
+    regions
+        .iter()
+        .map(|g| {
+            (g.bins * g.channel_indices(channels).len()) as f64 * f64::from(word_bits) * rep_rate_hz
+                / f64::from(g.shots)
+        })
+        .sum()
+}
+
+/// Writes the report: one row per scheme and region (interface.md columns); a region's
+/// S/N columns are those of its first channel.
 pub fn write_report(w: &mut dyn Write, r: &ReportInput) -> std::io::Result<()> {
     writeln!(
         w,
         "scheme,region,altitude_min_km,altitude_max_km,vertical_resolution_m,shots_averaged,bins,snr_eq4_median,snr_empirical_median,data_rate_bps,averaging_bias_median"
     )?;
-    let e = r.expected;
     for &(scheme, regions, sums) in &r.schemes {
-        let rate: f64 = regions
-            .iter()
-            .map(|g| {
-                (g.bins * r.channels) as f64 * f64::from(r.word_bits) * r.rep_rate_hz
-                    / f64::from(g.shots)
-            })
-            .sum();
+        let rate = data_rate_bps(regions, r.channels, r.word_bits, r.rep_rate_hz);
         for (k, (g, bins)) in regions.iter().zip(&sums.regions).enumerate() {
+            let e = &r.expected[g.first_channel()];
             let rest = (e.background + e.dark) * g.merge as f64 * f64::from(g.shots);
             let empirical = median(bins.iter().map(|s| s.snr(rest)).collect());
             let (lo, hi, res) = match &g.region {

@@ -99,9 +99,15 @@ impl NativeRun {
         let sc = lidar.first();
         let g = &sc.geometry;
         let native_vertical = g.bin_range_m * g.local_cos_at(0.0);
+        let wavelengths: Vec<f64> = lidar
+            .channels
+            .iter()
+            .map(|c| c.instrument.wavelength_nm)
+            .collect();
+        let altitude = |i| g.bin_centre_altitude_m(i);
         let layouts = schemes
             .iter()
-            .map(|s| s.layout(g.n_bins, &|i| g.bin_centre_altitude_m(i), native_vertical))
+            .map(|s| s.channel_layout(&wavelengths, g.n_bins, &altitude, native_vertical))
             .collect::<Result<_>>()?;
         Ok(NativeRun {
             seed,
@@ -196,10 +202,12 @@ impl NativeRun {
         })
     }
 
-    /// The first scheme's regions within `shots`: profiles, coordinates and bounds.
+    /// The first scheme's regions within `shots`: profiles, channels, coordinates and
+    /// bounds.
     fn region_specs(&self, shots: &Range<u64>) -> Vec<RegionSpec> {
         let g = &self.lidar.first().geometry;
         let e = &self.expected[0];
+        let names = self.lidar.channel_names();
         self.layouts[0]
             .iter()
             .map(|r| {
@@ -221,6 +229,11 @@ impl NativeRun {
                 RegionSpec {
                     first_profile: profiles.start,
                     profiles: profiles.len(),
+                    channels: r
+                        .channel_indices(names.len())
+                        .iter()
+                        .map(|&c| names[c].clone())
+                        .collect(),
                     altitude_m,
                     shots: r.shots,
                     bounds,
@@ -240,7 +253,7 @@ impl NativeRun {
                 .zip(sums)
                 .map(|((s, l), x)| (s, l.as_slice(), x))
                 .collect(),
-            expected: &self.expected[0],
+            expected: &self.expected,
             rep_rate_hz: self.rep_rate_hz,
             channels: self.lidar.channels.len(),
             word_bits,
@@ -334,10 +347,11 @@ impl Draw {
         }
     }
 
-    /// The true signal shot `p` saw (first channel, its column), in a changing scene.
-    fn truth(&self, p: u64) -> Option<&[f64]> {
+    /// What shot `p` saw (every channel's expectations in its column), in a changing
+    /// scene.
+    fn truth(&self, p: u64) -> Option<&[ExpectedProfile]> {
         let s = self.scene.as_ref()?;
-        Some(&s.expected[s.column_of_shot(p)][0].signal)
+        Some(&s.expected[s.column_of_shot(p)])
     }
 }
 
@@ -362,10 +376,12 @@ impl SchemeRun {
         }
     }
 
-    /// Adds one shot's expected signal (first channel, per native bin) to the truth sums,
-    /// closing each region's profile after its shots with its averaging biases.
-    fn add_truth(&mut self, signal: &[f64]) {
+    /// Adds one shot's expected signal (each region's first channel, per native bin) to
+    /// the truth sums, closing each region's profile after its shots with its averaging
+    /// biases.
+    fn add_truth(&mut self, truth: &[ExpectedProfile]) {
         for (k, r) in self.averager.regions().iter().enumerate() {
+            let signal = &truth[r.first_channel()].signal;
             let (sums, shots) = &mut self.truth[k];
             for (j, s) in sums.iter_mut().enumerate() {
                 let bins = r.first_bin + j * r.merge..r.first_bin + (j + 1) * r.merge;
@@ -392,11 +408,11 @@ impl SchemeRun {
     fn add_shot(
         &mut self,
         native: &[u64],
-        truth: Option<&[f64]>,
+        truth: Option<&[ExpectedProfile]>,
         mut emit: impl FnMut(usize, &[u64]) -> Result<()>,
     ) -> Result<()> {
-        if let Some(signal) = truth {
-            self.add_truth(signal);
+        if let Some(truth) = truth {
+            self.add_truth(truth);
         }
         let SchemeRun { averager, sums, .. } = self;
         let mut emitted = Ok(());

@@ -33,6 +33,19 @@ pub struct Scheme {
     /// the scheme's identity.
     #[serde(skip)]
     pub file: Option<std::path::PathBuf>,
+    /// Channels with a layout of their own (built-in schemes only: `caliop`'s 1064 nm
+    /// channel); every other channel takes `regions`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub channel_regions: Vec<ChannelRegions>,
+}
+
+/// The regions of the channels at one wavelength, from the top down.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChannelRegions {
+    /// The channels' wavelength, nm.
+    pub wavelength_nm: f64,
+    /// Their regions, from the top down.
+    pub regions: Vec<Region>,
 }
 
 #[derive(Deserialize)]
@@ -41,8 +54,10 @@ struct SchemeFile {
     regions: Vec<Region>,
 }
 
-/// CALIOP's onboard averaging on its 30 m native grid (interface.md; Hunt et al. 2009,
-/// J. Atmos. Oceanic Technol. 26, 1214): 583 bins.
+/// CALIOP's onboard averaging of its 532 nm channels on its 30 m native grid
+/// (interface.md; Hunt et al. 2009, J. Atmos. Oceanic Technol. 26, 1214, Table 2;
+/// Winker et al. 2009, J. Atmos. Oceanic Technol. 26, 2310, Table 1; the CALIPSO Data
+/// Products Catalog, PC-SCI-503, Lidar Level 1B, altitude regions): 583 bins.
 pub fn caliop_regions() -> Vec<Region> {
     let r = |top_km, bottom_km, vertical_resolution_m, shots_averaged| Region {
         top_km,
@@ -59,6 +74,26 @@ pub fn caliop_regions() -> Vec<Region> {
     ]
 }
 
+/// CALIOP's onboard averaging of its 1064 nm channel (same sources as
+/// [`caliop_regions`]): nothing above 30.1 km, 60 m from −0.5 to 8.2 km (not 30 m), the
+/// 532 nm layout elsewhere: 55 + 200 + 145 + 5 = 405 bins. With the 532 nm channels'
+/// 583 bins twice, 16-bit words and 20.16 shots s⁻¹ the downlink is 315 kbit/s, CALIOP's
+/// 316 kbit/s (model.md §7).
+pub fn caliop_1064_regions() -> Vec<Region> {
+    let r = |top_km, bottom_km, vertical_resolution_m, shots_averaged| Region {
+        top_km,
+        bottom_km,
+        vertical_resolution_m,
+        shots_averaged,
+    };
+    vec![
+        r(30.1, 20.2, 180.0, 5),
+        r(20.2, 8.2, 60.0, 3),
+        r(8.2, -0.5, 60.0, 1),
+        r(-0.5, -2.0, 300.0, 1),
+    ]
+}
+
 impl Scheme {
     /// `none`, `uniform:N`, `caliop`, or a TOML file's path.
     pub fn parse(spec: &str) -> Result<Scheme> {
@@ -69,12 +104,17 @@ impl Scheme {
                 regions: vec![],
                 uniform_shots: 1,
                 file: None,
+                channel_regions: vec![],
             }),
             "caliop" => Ok(Scheme {
                 name: "caliop".into(),
                 regions: caliop_regions(),
                 uniform_shots: 1,
                 file: None,
+                channel_regions: vec![ChannelRegions {
+                    wavelength_nm: 1064.0,
+                    regions: caliop_1064_regions(),
+                }],
             }),
             _ if spec.starts_with("uniform:") => {
                 let n: u32 = spec["uniform:".len()..]
@@ -87,6 +127,7 @@ impl Scheme {
                     regions: vec![],
                     uniform_shots: n,
                     file: None,
+                    channel_regions: vec![],
                 })
             }
             _ => {
@@ -102,6 +143,7 @@ impl Scheme {
                     regions: file.regions,
                     uniform_shots: 1,
                     file: Some(path.to_path_buf()),
+                    channel_regions: vec![],
                 };
                 scheme.check().map_err(fail)?;
                 Ok(scheme)
@@ -152,11 +194,108 @@ impl Scheme {
                 bins: n_bins,
                 shots: self.uniform_shots,
                 region: None,
+                channels: None,
             }]);
         }
+        self.regions_layout(
+            &self.regions,
+            None,
+            n_bins,
+            bin_altitude_m,
+            native_vertical_m,
+        )
+    }
+
+    /// The layout of every channel, the channels at `wavelengths_nm` (one per channel,
+    /// in order): each channel takes its own regions ([`Scheme::channel_regions`], else
+    /// [`Scheme::regions`]); a region that several channels share is one region listing
+    /// them ([`RegionLayout::channels`]; `None` when it holds every channel). Regions in
+    /// order of their first native bin (from the top), then of their resolution. A scheme
+    /// without channel regions gives [`Scheme::layout`].
+    pub fn channel_layout(
+        &self,
+        wavelengths_nm: &[f64],
+        n_bins: usize,
+        bin_altitude_m: &dyn Fn(usize) -> f64,
+        native_vertical_m: f64,
+    ) -> Result<Vec<RegionLayout>> {
+        let own = |w: f64| {
+            self.channel_regions
+                .iter()
+                .position(|c| (c.wavelength_nm - w).abs() < 1e-6)
+        };
+        let groups: Vec<Option<usize>> = wavelengths_nm.iter().map(|&w| own(w)).collect();
+        if groups.iter().all(Option::is_none) {
+            return self.layout(n_bins, bin_altitude_m, native_vertical_m);
+        }
+        let base = self.layout(n_bins, bin_altitude_m, native_vertical_m)?;
+        let mut out: Vec<RegionLayout> = Vec::new();
+        let mut kinds: Vec<Option<usize>> = groups.clone();
+        kinds.sort();
+        kinds.dedup();
+        for kind in kinds {
+            let channels: Vec<usize> = (0..groups.len()).filter(|&c| groups[c] == kind).collect();
+            let laid = match kind {
+                None => base.clone(),
+                Some(k) => {
+                    // starting where the common layout's region of the same top starts,
+                    // so that shared regions fall on the same native bins
+                    let regions = &self.channel_regions[k].regions;
+                    let start = regions.first().and_then(|first| {
+                        base.iter()
+                            .find(|b| {
+                                b.region
+                                    .as_ref()
+                                    .is_some_and(|r| (r.top_km - first.top_km).abs() < 1e-9)
+                            })
+                            .map(|b| b.first_bin)
+                    });
+                    self.regions_layout(regions, start, n_bins, bin_altitude_m, native_vertical_m)?
+                }
+            };
+            for r in laid {
+                let same = |o: &&mut RegionLayout| {
+                    (o.first_bin, o.merge, o.bins, o.shots)
+                        == (r.first_bin, r.merge, r.bins, r.shots)
+                };
+                match out.iter_mut().find(same) {
+                    Some(o) => {
+                        let held = o.channels.get_or_insert_with(Vec::new);
+                        held.extend(&channels);
+                        held.sort_unstable();
+                    }
+                    None => out.push(RegionLayout {
+                        channels: Some(channels.clone()),
+                        ..r
+                    }),
+                }
+            }
+        }
+        for r in &mut out {
+            if r.channels
+                .as_ref()
+                .is_some_and(|c| c.len() == wavelengths_nm.len())
+            {
+                r.channels = None;
+            }
+        }
+        out.sort_by_key(|r| (r.first_bin, r.merge));
+        Ok(out)
+    }
+
+    /// `regions` laid on the native grid (see [`Scheme::layout`]), every channel; the
+    /// first starting at native bin `start` if given, else at the first bin below its top.
+    fn regions_layout(
+        &self,
+        regions: &[Region],
+        start: Option<usize>,
+        n_bins: usize,
+        bin_altitude_m: &dyn Fn(usize) -> f64,
+        native_vertical_m: f64,
+    ) -> Result<Vec<RegionLayout>> {
         let top_bin = |top_m: f64| (0..n_bins).find(|&i| bin_altitude_m(i) < top_m);
-        let mut out = Vec::with_capacity(self.regions.len());
-        for (k, r) in self.regions.iter().enumerate() {
+        let mut out = Vec::with_capacity(regions.len());
+        for (k, r) in regions.iter().enumerate() {
             let merge = (r.vertical_resolution_m / native_vertical_m)
                 .round()
                 .max(1.0) as usize;
@@ -166,7 +305,7 @@ impl Scheme {
                     let p: &RegionLayout = prev;
                     p.first_bin + p.merge * p.bins
                 }
-                None => top_bin(r.top_km * 1e3).ok_or_else(|| {
+                None => start.or_else(|| top_bin(r.top_km * 1e3)).ok_or_else(|| {
                     Error::Unsupported(format!(
                         "scheme {}: the window does not reach {} km",
                         self.name, r.top_km
@@ -180,7 +319,7 @@ impl Scheme {
                     self.name,
                     r.top_km,
                     r.bottom_km,
-                    self.regions.last().map_or(r.bottom_km, |l| l.bottom_km)
+                    regions.last().map_or(r.bottom_km, |l| l.bottom_km)
                 )));
             }
             out.push(RegionLayout {
@@ -189,6 +328,7 @@ impl Scheme {
                 bins,
                 shots: r.shots_averaged,
                 region: Some(r.clone()),
+                channels: None,
             });
         }
         Ok(out)
@@ -208,4 +348,24 @@ pub struct RegionLayout {
     pub shots: u32,
     /// The scheme's region (None for `none` and `uniform:N`).
     pub region: Option<Region>,
+    /// The channels it holds, in order (indices into the instrument's channels); `None`:
+    /// every channel.
+    pub channels: Option<Vec<usize>>,
+}
+
+impl RegionLayout {
+    /// The channels it holds among `n_channels`.
+    pub fn channel_indices(&self, n_channels: usize) -> Vec<usize> {
+        self.channels
+            .clone()
+            .unwrap_or_else(|| (0..n_channels).collect())
+    }
+
+    /// The first channel it holds (its report row's channel).
+    pub fn first_channel(&self) -> usize {
+        self.channels
+            .as_ref()
+            .and_then(|c| c.first().copied())
+            .unwrap_or(0)
+    }
 }

@@ -82,6 +82,7 @@ mod tests {
             bins: 1,
             shots,
             region: None,
+            channels: None,
         }
     }
 

@@ -1,6 +1,7 @@
 //! The onboard product (`lidarsim onboard`, docs/file-format.md): one HDF5 group per altitude
 //! region of the scheme (`region_0` … from the top), each with its own `profile`,
-//! `channel` and `bin` dimension scales, `altitude`, `time`, `n_shots` and
+//! `channel` (the channels the region holds: all of them but where a channel has a layout
+//! of its own, as CALIOP's 1064 nm) and `bin` dimension scales, `altitude`, `time`, `n_shots` and
 //! `counts (profile, channel, bin)` (integer sums, u32), and the region's attributes
 //! `altitude_min_km`, `altitude_max_km`, `vertical_resolution_m`, `shots_averaged`.
 //! Readable as netCDF-4 (groups with dimensions of their own).
@@ -31,7 +32,7 @@ const TIME_BLOCK: usize = 64 * 1024;
 /// What the product's root holds besides its regions.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ProductHeader {
-    /// Channel names (each region's `channel` coordinate).
+    /// Every channel's name (a region holds those of [`RegionSpec::channels`]).
     pub channels: Vec<String>,
     /// CF units of `time`.
     pub time_units: String,
@@ -46,6 +47,8 @@ pub struct RegionSpec {
     pub first_profile: usize,
     /// Downlinked profiles in the file.
     pub profiles: usize,
+    /// The channels it holds (its `channel` coordinate).
+    pub channels: Vec<String>,
     /// Bin-centre altitude of each downlinked bin, m.
     pub altitude_m: Vec<f64>,
     /// Shots summed per profile.
@@ -61,6 +64,7 @@ pub type Times<'a> = dyn FnMut(usize, Range<usize>) -> Result<Vec<f64>> + 'a;
 /// One region's `counts` being filled, chunk by chunk.
 struct RegionCounts {
     ds: Dataset,
+    channels: usize,
     filling: Filling,
     written: usize,
     profiles: usize,
@@ -70,7 +74,6 @@ struct RegionCounts {
 pub struct ProductWriter {
     file: File,
     regions: Vec<RegionCounts>,
-    channels: usize,
     spare: Vec<Vec<u8>>,
     display: std::path::PathBuf,
 }
@@ -104,10 +107,11 @@ impl ProductWriter {
                 let values = times(k, rows.clone())?;
                 time.write_slice(&values[..], rows).map_err(fail)?;
             }
-            let row_elems = header.channels.len() * r.altitude_m.len();
+            let row_elems = r.channels.len() * r.altitude_m.len();
             let chunk_rows = ds.chunk().map_or(1, |c| c[0]);
             out.push(RegionCounts {
                 ds,
+                channels: r.channels.len(),
                 filling: Filling::new(4, chunk_rows, row_elems, r.profiles),
                 written: 0,
                 profiles: r.profiles,
@@ -116,7 +120,6 @@ impl ProductWriter {
         Ok(ProductWriter {
             file,
             regions: out,
-            channels: header.channels.len(),
             spare: Vec::new(),
             display: display.to_path_buf(),
         })
@@ -132,7 +135,7 @@ impl ProductWriter {
         if row >= r.profiles {
             return Ok(());
         }
-        debug_assert_eq!(sums.len() % self.channels, 0);
+        debug_assert_eq!(sums.len() % r.channels.max(1), 0);
         let clamped: Vec<u64> = sums.iter().map(|&c| c.min(u64::from(u32::MAX))).collect();
         let done = r
             .filling
@@ -190,7 +193,7 @@ fn region_layout(
     header: &ProductHeader,
 ) -> hdf5::Result<(Dataset, Dataset)> {
     let text = |ds: &Dataset, k: &str, v: &str| hdf5_ds::write_str_attr(ds, k, v);
-    let [profile, channel, bin] = dimension_scales(g, r, &header.channels)?;
+    let [profile, channel, bin] = dimension_scales(g, r, &r.channels)?;
     let bins = r.altitude_m.len();
     let altitude = create_var::<f64>(g, "altitude", &[bins])?;
     altitude.write_raw(&r.altitude_m)?;
@@ -207,7 +210,7 @@ fn region_layout(
         n_shots.write_slice(&vec![r.shots; end - start][..], start..end)?;
     }
     hdf5_ds::attach_scales(&n_shots, &[&profile])?;
-    let c = header.channels.len();
+    let c = r.channels.len();
     let counts = g
         .new_dataset::<u32>()
         .shape((r.profiles, c, bins))

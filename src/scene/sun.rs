@@ -27,9 +27,34 @@
 //! 1-nm spectrum swings by ±10 % around these values), 300–2000 nm, at 1 AU.
 //!
 //! **Daylight radiance** seen looking down on a Lambertian reflector of albedo ρ
-//! (model.md §7): `L = ρ·F_λ·cos θ_s/π · T`, with T the two-way (sun → ground → sensor)
-//! transmission; 0 when the sun is below the horizon.
+//! (model.md §7–8): `L = ρ·E↓/π · exp(−τ)`, with `E↓` the solar irradiance reaching the
+//! reflector and `exp(−τ)` the direct transmission back up to the nadir view; 0 when
+//! the sun is below the horizon (θ_s ≥ 90°). Sunlight reaches the reflector along its
+//! slant path (model.md §8 "Sunlight through the atmosphere"), μ = cos θ_s:
+//!
+//! ```text
+//! E↓ = F_λ·μ·[ exp(−τ/μ)  +  ½·exp(−τ_abs/μ)·(1 − exp(−τ_sca/μ)) ]
+//!            direct beam      diffuse skylight
+//! ```
+//!
+//! τ = τ_sca + τ_abs is the modelled atmosphere's optical depth above the reflector at
+//! the channel's wavelength ([`SunlightPath::above`]): molecules (Rayleigh), the
+//! background aerosol and every aerosol or cloud layer above the reflector scatter
+//! (single-scattering albedo 1, their full extinction, no multiple-scattering factor);
+//! ozone absorbs. The diffuse term is the rule of the simple clear-sky models: of the
+//! light scattered out of the direct beam, half reaches the ground (Rayleigh scattering
+//! is symmetric forward/backward), attenuated by the absorbers along the slant path
+//! (Bird & Hulstrom 1981, *A simplified clear sky model for direct and diffuse
+//! insolation on horizontal surfaces*, SERI/TR-642-761, Eq. 8–10; Iqbal 1983, *An
+//! Introduction to Solar Radiation*, §7.4). Stated limits: it neglects multiple
+//! scattering between the ground and the sky and the forward peak of aerosol and cloud
+//! scattering (Bird & Hulstrom take 0.84 of the aerosol's scattered light forward: this
+//! rule's ½ gives less diffuse light under thick aerosol), takes the plane-parallel air
+//! mass `1/μ` (at 85° the spherical air mass is 10.3, not 11.5: Kasten & Young 1989),
+//! and brings the reflected light up along the direct path only.
 
+use crate::atmosphere::{Atmosphere, ozone};
+use crate::config::ScenarioConfig;
 use crate::constants::{PLANCK_J_S, SPEED_OF_LIGHT_M_PER_S};
 use std::f64::consts::PI;
 
@@ -114,25 +139,86 @@ pub fn earth_sun_distance_au(unix_time_s: f64) -> f64 {
     solar_coordinates(julian_century(unix_time_s)).distance_au
 }
 
-/// Daylight radiance seen looking down on a Lambertian reflector (model.md §7),
+/// How sunlight reaches a reflector and comes back to a nadir view (module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SunlightPath {
+    /// A stated two-way transmission (`background.transmission`), whatever the angle.
+    Fixed(f64),
+    /// Through the modelled atmosphere above the reflector: its scattering and
+    /// absorbing optical depths at the channel's wavelength.
+    Slant {
+        /// τ_sca: molecules, aerosol and clouds above the reflector.
+        scattering_depth: f64,
+        /// τ_abs: ozone above the reflector.
+        absorbing_depth: f64,
+    },
+}
+
+impl SunlightPath {
+    /// The path of a config's sunlight to a reflector at `reflector_m`: the stated
+    /// `background.transmission` if given, else [`SunlightPath::above`] in `atmosphere`.
+    pub fn of(cfg: &ScenarioConfig, atmosphere: &Atmosphere, reflector_m: f64) -> SunlightPath {
+        match cfg.background.transmission {
+            Some(t) => SunlightPath::Fixed(t),
+            None => SunlightPath::above(atmosphere, reflector_m),
+        }
+    }
+
+    /// The sunlight path above altitude `reflector_m` in `atmosphere` (module docs):
+    /// its slabs' total extinction, ozone taken apart as the absorber.
+    pub fn above(atmosphere: &Atmosphere, reflector_m: f64) -> SunlightPath {
+        let top = atmosphere.top_m();
+        let sigma_o3 = atmosphere.ozone_cross_section_m2.unwrap_or(0.0);
+        let mut scattering_depth = 0.0;
+        if top > reflector_m {
+            for slab in atmosphere.slabs(reflector_m, top) {
+                let mid = 0.5 * (slab.z_lo + slab.z_hi);
+                let absorbing = sigma_o3 * ozone::number_density_m3(mid);
+                scattering_depth += (slab.optics.alpha_total - absorbing) * (slab.z_hi - slab.z_lo);
+            }
+        }
+        SunlightPath::Slant {
+            scattering_depth,
+            absorbing_depth: sigma_o3 * ozone::column_m2(reflector_m, ozone::TOP_ALTITUDE_M),
+        }
+    }
+
+    /// The factor `E↓·exp(−τ)/(F_λ·μ)` by which the atmosphere scales the reflected
+    /// sunlight at `cos_zenith` = μ > 0 (module docs), or the fixed transmission.
+    pub fn transmission(&self, cos_zenith: f64) -> f64 {
+        match *self {
+            SunlightPath::Fixed(t) => t,
+            SunlightPath::Slant {
+                scattering_depth: sca,
+                absorbing_depth: abs,
+            } => {
+                let direct = (-(sca + abs) / cos_zenith).exp();
+                let diffuse = 0.5 * (-abs / cos_zenith).exp() * (1.0 - (-sca / cos_zenith).exp());
+                (direct + diffuse) * (-(sca + abs)).exp()
+            }
+        }
+    }
+}
+
+/// Daylight radiance seen looking down on a Lambertian reflector (model.md §7–8),
 /// photons m⁻² s⁻¹ sr⁻¹ nm⁻¹ (the unit of the irradiance, per steradian):
-/// `L = ρ·F_λ·cos θ_s/π · T` for |θ_s| < 90°, 0 otherwise (NaN for a NaN angle).
+/// `L = ρ·F_λ·cos θ_s/π · T(cos θ_s)` for |θ_s| < 90°, 0 otherwise (NaN for a NaN angle),
+/// with `T` the sunlight's path ([`SunlightPath::transmission`]).
 ///
 /// `albedo` is ρ, `solar_irradiance_photons_m2_s_nm` the top-of-atmosphere F_λ (for the
 /// day of year: [`solar_spectral_irradiance_photons`] divided by
-/// [`earth_sun_distance_au`]²), `two_way_transmission` the product of the transmissions
-/// down along the sun's slant path and up to the sensor.
+/// [`earth_sun_distance_au`]²).
 pub fn reflected_radiance(
     albedo: f64,
     solar_irradiance_photons_m2_s_nm: f64,
     solar_zenith_deg: f64,
-    two_way_transmission: f64,
+    path: SunlightPath,
 ) -> f64 {
     if solar_zenith_deg.abs() >= 90.0 {
         return 0.0;
     }
     let cos_zenith = solar_zenith_deg.to_radians().cos();
-    albedo * solar_irradiance_photons_m2_s_nm * cos_zenith / PI * two_way_transmission
+    albedo * solar_irradiance_photons_m2_s_nm * cos_zenith / PI * path.transmission(cos_zenith)
 }
 
 /// ASTM E-490-00a at 1 AU averaged over 10 nm around each node: (nm, W m⁻² nm⁻¹).
@@ -330,12 +416,18 @@ mod tests {
     #[test]
     fn radiance_follows_lambert_and_is_zero_at_night() {
         let f = 5.0e18;
-        let l = reflected_radiance(0.3, f, 60.0, 0.8);
+        let l = reflected_radiance(0.3, f, 60.0, SunlightPath::Fixed(0.8));
         assert!((l - 0.3 * f * 0.5 / PI * 0.8).abs() < 1e-6 * l);
         // model.md: ~1e17–1e18 for land and cloud at moderate sun
         assert!(l > 1e17 && l < 1e18);
-        assert_eq!(reflected_radiance(0.3, f, 90.0, 0.8), 0.0);
-        assert_eq!(reflected_radiance(0.3, f, 120.0, 0.8), 0.0);
-        assert!((reflected_radiance(1.0, PI, 0.0, 1.0) - 1.0).abs() < 1e-12);
+        assert_eq!(
+            reflected_radiance(0.3, f, 90.0, SunlightPath::Fixed(0.8)),
+            0.0
+        );
+        assert_eq!(
+            reflected_radiance(0.3, f, 120.0, SunlightPath::Fixed(0.8)),
+            0.0
+        );
+        assert!((reflected_radiance(1.0, PI, 0.0, SunlightPath::Fixed(1.0)) - 1.0).abs() < 1e-12);
     }
 }

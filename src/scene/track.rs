@@ -21,6 +21,26 @@ use rand::Rng;
 use crate::config::{LayerConfig, ScenarioConfig, SegmentAerosol};
 use crate::error::{Error, Result, compact};
 use crate::sampling::stream_rng;
+use crate::scene::orbit::Orbit;
+
+/// How far along the track a time is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AlongTrack {
+    /// `x = v·t` at a constant ground speed, m s⁻¹ (a run without an orbit).
+    Speed(f64),
+    /// The length of the orbit's Earth-fixed ground track ([`Orbit::along_track_m`]).
+    Orbit(Orbit),
+}
+
+impl AlongTrack {
+    /// Distance from the first shot at `t_s` seconds after it, m.
+    pub fn at(&self, t_s: f64) -> f64 {
+        match self {
+            AlongTrack::Speed(v) => v * t_s,
+            AlongTrack::Orbit(o) => o.along_track_m(t_s),
+        }
+    }
+}
 
 /// Seed offset of the cloud-cell streams.
 const CELL_STREAM: u64 = 0xC311_5EED_0000_0001;
@@ -48,7 +68,7 @@ struct Stretch {
 /// The track of a run: where each shot is and which column it sees.
 #[derive(Debug, Clone)]
 pub struct Track {
-    speed_m_per_s: f64,
+    along: AlongTrack,
     rep_rate_hz: f64,
     shots_per_profile: u64,
     stretches: Vec<Stretch>,
@@ -80,18 +100,17 @@ impl Track {
             || (0..n_segments(cfg)).any(|i| i > 0 || segment_layers(cfg, i).iter().any(is_broken))
     }
 
-    /// The track of a run of `profiles` profiles of `shots_per_profile` shots at ground
-    /// speed `speed_m_per_s`; broken layers' cells are drawn from `seed`.
+    /// The track of a run of `profiles` profiles of `shots_per_profile` shots laid
+    /// along `along`; broken layers' cells are drawn from `seed`.
     pub fn new(
         cfg: &ScenarioConfig,
         seed: u64,
-        speed_m_per_s: f64,
+        along: AlongTrack,
         shots_per_profile: u64,
         profiles: u64,
     ) -> Result<Track> {
         let rep_rate_hz = cfg.instrument.rep_rate_hz;
-        let run_length_m =
-            speed_m_per_s * (profiles as f64 * shots_per_profile as f64) / rep_rate_hz;
+        let run_length_m = along.at((profiles as f64 * shots_per_profile as f64) / rep_rate_hz);
         let lengths: Vec<f64> = match &cfg.scene {
             Some(s) if !s.segments.is_empty() => {
                 s.segments.iter().map(|g| g.length_km * 1e3).collect()
@@ -125,7 +144,7 @@ impl Track {
             })
             .collect::<Result<_>>()?;
         Ok(Track {
-            speed_m_per_s,
+            along,
             rep_rate_hz,
             shots_per_profile,
             stretches,
@@ -149,7 +168,7 @@ impl Track {
     /// Along-track distance of shot `shot` of profile `profile` from the first shot, m.
     pub fn position_m(&self, profile: u64, shot: u64) -> f64 {
         let n = profile as f64 * self.shots_per_profile as f64 + shot as f64;
-        self.speed_m_per_s * n / self.rep_rate_hz
+        self.along.at(n / self.rep_rate_hz)
     }
 
     /// The column seen at along-track position `x_m`.
@@ -312,7 +331,7 @@ mod tests {
     #[test]
     fn runs_follow_the_cells_and_columns_drop_absent_layers() {
         let c = cfg(&[]);
-        let track = Track::new(&c, 3, 7000.0, 100, 50).unwrap();
+        let track = Track::new(&c, 3, AlongTrack::Speed(7000.0), 100, 50).unwrap();
         assert!(Track::is_changing(&c));
         assert_eq!(track.columns().len(), 2);
         let mut seen = [0u64; 2];

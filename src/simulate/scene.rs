@@ -25,7 +25,7 @@ use crate::sampling::{self, CountSink, SHOT_BLOCK, ShotCounts, ShotSampler};
 use crate::scenario::{ExpectedProfile, Lidar, Scenario};
 use crate::scene::orbit::Orbit;
 use crate::scene::sun;
-use crate::scene::track::{Column, MAX_COLUMNS, Track};
+use crate::scene::track::{AlongTrack, Column, MAX_COLUMNS, Track};
 
 /// Memory kept per bin of each column and channel for its expectations (13 f64 and
 /// more); `shot` adds its sampler's tables ([`sampling::table_bytes_bound`]).
@@ -116,8 +116,9 @@ pub struct SceneModel {
     shots: u64,
     /// The sun, for a solar background.
     sunlight: Option<Sunlight>,
-    /// Per column: the albedo below (surface or thick cloud top), for the solar background.
-    albedo: Vec<f64>,
+    /// Per column, per channel: the albedo below (surface or thick cloud top) and the
+    /// sunlight's path to it and back, for the solar background.
+    reflectors: Vec<Vec<(f64, sun::SunlightPath)>>,
     /// Per channel: the instrument's background counts per unit radiance, and the solar
     /// irradiance at its wavelength at 1 AU (photons s⁻¹ m⁻² nm⁻¹).
     channel_sun: Vec<(f64, f64)>,
@@ -132,7 +133,6 @@ pub struct Sunlight {
     /// Unix time of the first shot, s.
     start_unix_s: f64,
     profile_time_s: f64,
-    transmission: f64,
     /// The fixed radiance added under the sun (night sky).
     floor: f64,
 }
@@ -155,7 +155,6 @@ impl Sunlight {
             fixed_zenith_deg: b.solar_zenith_deg,
             start_unix_s,
             profile_time_s: first.shots_per_profile() as f64 / first.instrument.rep_rate_hz,
-            transmission: b.transmission.unwrap_or(1.0),
             floor: b.radiance.unwrap_or(0.0),
         }))
     }
@@ -204,8 +203,14 @@ impl SceneModel {
             .iter()
             .map(|c| with_curtain(&c.loaded))
             .collect::<Result<_>>()?;
-        let speed = crate::geometry::ground_track_speed_m_per_s(first.geometry.platform_altitude_m);
-        let track = Track::new(&configs[0], seed, speed, shots, profiles)?;
+        // with an orbit, the length of the track the file's latitudes and longitudes describe
+        let along = match super::orbit_of(lidar)? {
+            Some(o) => AlongTrack::Orbit(o),
+            None => AlongTrack::Speed(crate::geometry::ground_track_speed_m_per_s(
+                first.geometry.platform_altitude_m,
+            )),
+        };
+        let track = Track::new(&configs[0], seed, along, shots, profiles)?;
         let all = track.columns();
         if all.len() > MAX_COLUMNS {
             return Err(Error::Unsupported(format!(
@@ -230,10 +235,7 @@ impl SceneModel {
         )?;
         let mut expected = Vec::with_capacity(all.len());
         let mut samplers = Vec::with_capacity(all.len());
-        let albedo = all
-            .iter()
-            .map(|&c| crate::surface::albedo_below(&track.column_config(&configs[0], c)))
-            .collect();
+        let mut reflectors = Vec::with_capacity(all.len());
         let solar = lidar.first().loaded.config.background.model == BackgroundModel::Solar;
         for &col in &all {
             let channels = lidar
@@ -242,6 +244,17 @@ impl SceneModel {
                 .zip(&configs)
                 .map(|(c, cfg)| column_scenario(&track, c, cfg, col))
                 .collect::<Result<Vec<Scenario>>>()?;
+            let below = crate::surface::reflector_below(&track.column_config(&configs[0], col));
+            reflectors.push(
+                channels
+                    .iter()
+                    .map(|c| {
+                        let cfg = &c.loaded.config;
+                        let path = sun::SunlightPath::of(cfg, &c.atmosphere, below.altitude_m);
+                        (below.albedo, path)
+                    })
+                    .collect(),
+            );
             let e: Vec<ExpectedProfile> = channels
                 .iter()
                 .map(Scenario::expected)
@@ -287,7 +300,7 @@ impl SceneModel {
             samplers,
             shots,
             sunlight: Sunlight::of(lidar)?,
-            albedo,
+            reflectors,
             channel_sun,
             dead: lidar
                 .channels
@@ -298,18 +311,28 @@ impl SceneModel {
     }
 
     /// An upper bound of the solar background counts per shot per bin of any channel:
-    /// the brightest albedo under an overhead sun at perihelion (0 without the sun).
+    /// the brightest albedo under an overhead sun at perihelion, with no atmosphere or
+    /// the stated transmission (0 without the sun).
     pub fn brightest_background(&self) -> f64 {
-        let Some(sunlight) = &self.sunlight else {
+        if self.sunlight.is_none() {
             return 0.0;
+        }
+        let brightest = |ch: usize| {
+            self.reflectors
+                .iter()
+                .map(|r| {
+                    let path = match r[ch].1 {
+                        sun::SunlightPath::Fixed(t) => sun::SunlightPath::Fixed(t),
+                        sun::SunlightPath::Slant { .. } => sun::SunlightPath::Fixed(1.0),
+                    };
+                    sun::reflected_radiance(r[ch].0, 1.04, 0.0, path)
+                })
+                .fold(0.0, f64::max)
         };
-        let albedo = self.albedo.iter().fold(0.0f64, |m, &a| m.max(a));
         self.channel_sun
             .iter()
-            .map(|&(factor, irradiance)| {
-                factor
-                    * sun::reflected_radiance(albedo, irradiance * 1.04, 0.0, sunlight.transmission)
-            })
+            .enumerate()
+            .map(|(ch, &(factor, irradiance))| factor * irradiance * brightest(ch))
             .fold(0.0, f64::max)
     }
 
@@ -325,8 +348,10 @@ impl SceneModel {
 
     /// Background counts per shot per bin of each run of profile `p`, channel `channel`:
     /// the channel's fixed background, or the sunlight reflected below each run's
-    /// column, `ρ·F_λ/d²·cos θ_s/π·T` (model.md §7) times the instrument's factor, plus
-    /// the fixed radiance's background as a floor.
+    /// column, `ρ·F_λ/d²·cos θ_s/π·T(θ_s)` (model.md §7–8, T along the sun's slant path
+    /// through the column's atmosphere at the channel's wavelength,
+    /// [`sun::SunlightPath`]) times the instrument's factor, plus the fixed radiance's
+    /// background as a floor.
     pub fn run_backgrounds(&self, channel: usize, p: u64, runs: &[(usize, u64)]) -> Vec<f64> {
         match &self.sunlight {
             None => runs
@@ -339,12 +364,9 @@ impl SceneModel {
                 let floor = sunlight.floor;
                 runs.iter()
                     .map(|&(col, _)| {
-                        let l = sun::reflected_radiance(
-                            self.albedo[col],
-                            irradiance / (au * au),
-                            zenith,
-                            sunlight.transmission,
-                        );
+                        let (albedo, path) = self.reflectors[col][channel];
+                        let l =
+                            sun::reflected_radiance(albedo, irradiance / (au * au), zenith, path);
                         // the fixed radiance, if any, is a floor (night sky)
                         (l + floor) * factor
                     })

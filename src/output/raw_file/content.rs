@@ -330,7 +330,7 @@ pub fn geolocation_variables() -> Vec<Variable> {
         ),
         profile(
             GEOLOCATION[2],
-            "distance along the ground track from the first shot to the profile centre",
+            "distance along the Earth-fixed ground track from the first shot to the profile centre",
             "m",
             &[],
         ),
