@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod cli;
+pub mod reference;
 
 use std::path::{Path, PathBuf};
 
@@ -26,55 +27,16 @@ pub fn lidar(rel: &str, overrides: &[&str]) -> Lidar {
     Lidar::load(&config_path(rel), &ov).unwrap_or_else(|e| panic!("{rel}: {e}"))
 }
 
-/// Brute-force signal of every bin, independent of the slab machinery: midpoint rule
-/// with steps of at most `step_m` (a whole number of steps per bin) on the point
-/// optics, T² accumulated by the same midpoint rule from where the beam enters the atmosphere.
+/// Brute-force signal of every bin, independent of the code under test: the midpoint
+/// rule with steps of at most `step_m` on the point optics of [`reference`] (own
+/// geometry, US76, Bucholtz Rayleigh, AFGL ozone, Elterman aerosol, overlap), T² by the
+/// same rule, times the signal constant computed from the config's values.
 pub fn brute_force_signal(sc: &Scenario, step_m: f64) -> Vec<f64> {
-    let g = &sc.geometry;
-    let entry = match g.kind {
-        lidarsim::config::PlatformKind::Spaceborne => {
-            g.range_at_altitude(sc.atmosphere.top_m()).max(0.0)
-        }
-        lidarsim::config::PlatformKind::Ground => 0.0,
-    };
-    let mut tau = 0.0;
-    // optics along the beam, zero below the surface (the beam stops there)
-    let optics = |r: f64| {
-        let z = g.altitude_at_range(r);
-        if z >= 0.0 {
-            sc.atmosphere.optics_at(z)
-        } else {
-            Default::default()
-        }
-    };
-    let integrate = |a: f64, b: f64, tau: &mut f64| -> f64 {
-        if b <= a {
-            return 0.0;
-        }
-        let n = ((b - a) / step_m).ceil().max(1.0) as usize;
-        let h = (b - a) / n as f64;
-        let mut sum = 0.0;
-        for k in 0..n {
-            let rm = a + (k as f64 + 0.5) * h;
-            let o = optics(rm);
-            let eta = sc.path.overlap().eta(rm);
-            sum += eta * o.beta_channel * (-2.0 * (*tau + o.alpha_effective * 0.5 * h)).exp()
-                / (rm * rm)
-                * h;
-            *tau += o.alpha_effective * h;
-        }
-        sc.instrument.signal_constant * sum
-    };
-    integrate(
-        entry.min(g.first_bin_range_m),
-        g.first_bin_range_m,
-        &mut tau,
-    );
-    (0..g.n_bins)
-        .map(|i| {
-            let (a, b) = g.bin_range_bounds(i);
-            integrate(a.max(entry), b, &mut tau)
-        })
+    let c = reference::signal_constant(&sc.loaded.config);
+    reference::brute_force(sc, step_m)
+        .integral
+        .iter()
+        .map(|i| c * i)
         .collect()
 }
 
