@@ -79,7 +79,11 @@ fn ozone_in_the_two_way_transmission_is_the_afgl_column_times_the_cross_section(
 #[test]
 fn the_ozone_column_is_the_afgl_tables_column() {
     let du = r::ozone_column_m2(0.0, 60_000.0) / r::DOBSON_M2;
-    assert!(rel(ozone::column_du(), du) < 1e-4, "{} vs {du}", ozone::column_du());
+    assert!(
+        rel(ozone::column_du(), du) < 1e-4,
+        "{} vs {du}",
+        ozone::column_du()
+    );
     for (lo, hi) in [(0.0, 15_000.0), (15_000.0, 30_000.0), (22_000.0, 60_000.0)] {
         let col = r::ozone_column_m2(lo, hi);
         assert!(rel(ozone::column_m2(lo, hi), col) < 1e-4, "{lo}–{hi}");
@@ -216,7 +220,12 @@ fn sky_light_is_halved_in_each_polarization_channel() {
 /// (Cabannes line); the 532/1064 ratio is ≈ 16.7 (λ⁻⁴·⁰⁸), here to 1e-4.
 #[test]
 fn signal_constant_and_molecular_backscatter_follow_their_formulas() {
-    for (wl, filter) in [("355", "0.5"), ("532", "0.5"), ("1064", "0.5"), ("532", "0.1")] {
+    for (wl, filter) in [
+        ("355", "0.5"),
+        ("532", "0.5"),
+        ("1064", "0.5"),
+        ("532", "0.1"),
+    ] {
         let sc = scenario(
             "paper/scenario6.toml",
             &[
@@ -229,10 +238,8 @@ fn signal_constant_and_molecular_backscatter_follow_their_formulas() {
         assert!(rel(sc.instrument.signal_constant, r::signal_constant(cfg)) < 1e-12);
         let e = sc.expected().unwrap();
         let wl_nm: f64 = wl.parse().unwrap();
-        let (s_mol, _) = r::molecular_lidar_ratio_and_depolarization(
-            r::rayleigh_rho_n(wl_nm),
-            filter == "0.1",
-        );
+        let (s_mol, _) =
+            r::molecular_lidar_ratio_and_depolarization(r::rayleigh_rho_n(wl_nm), filter == "0.1");
         for i in (0..e.n_bins()).step_by(7) {
             let z = e.altitude_m[i];
             if !(0.0..86_000.0).contains(&z) {

@@ -8,6 +8,80 @@ use std::path::{Path, PathBuf};
 
 use lidarsim::scenario::{Lidar, Scenario};
 
+/// Where every skip is recorded, one line each, so that it shows after the harness
+/// (which hides a passing test's output): `.ci/run` empties it before the tests and
+/// prints it after them.
+pub fn skip_log_path() -> PathBuf {
+    Path::new(env!("CARGO_TARGET_TMPDIR")).join("skipped-tests.log")
+}
+
+fn record_skip(line: &str) {
+    use std::io::Write;
+    eprintln!("{line}");
+    if let Ok(mut f) = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(skip_log_path())
+    {
+        let _ = writeln!(f, "{line}");
+    }
+}
+
+/// Whether this is a CI run (`CI=true`, set by CI services and by `.ci/run`'s caller),
+/// where every test must run.
+pub fn in_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| v == "true")
+}
+
+/// A check that cannot run here: under `CI=true` a failure (CI installs everything the
+/// tests need), elsewhere a loud line on stderr and in [`skip_log_path`]. The caller
+/// returns after it.
+pub fn skip(test: &str, reason: &str) {
+    assert!(
+        !in_ci(),
+        "{test}: cannot run here ({reason}), and CI=true requires it to"
+    );
+    record_skip(&format!("SKIPPED {test}: {reason}"));
+}
+
+/// A check that cannot run here for a reason documented as acceptable in CI too
+/// (`why_acceptable` says why, e.g. a privilege an unprivileged container lacks):
+/// never fails, always recorded in [`skip_log_path`].
+pub fn skip_acceptable_in_ci(test: &str, reason: &str, why_acceptable: &str) {
+    record_skip(&format!(
+        "SKIPPED {test}: {reason} (acceptable in CI: {why_acceptable})"
+    ));
+}
+
+/// Whether `python3` imports every module of `modules`; under `CI=true` a missing one
+/// fails (`.ci/run` installs them in a venv), elsewhere it is a recorded skip.
+pub fn python_has(test: &str, modules: &[&str]) -> bool {
+    let o = std::process::Command::new("python3")
+        .args(["-c", &format!("import {}", modules.join(", "))])
+        .output();
+    match o {
+        Ok(o) if o.status.success() => true,
+        Ok(o) => {
+            skip(
+                test,
+                &format!(
+                    "python3 cannot import {}: {}",
+                    modules.join(", "),
+                    String::from_utf8_lossy(&o.stderr)
+                        .lines()
+                        .last()
+                        .unwrap_or("")
+                ),
+            );
+            false
+        }
+        Err(e) => {
+            skip(test, &format!("no python3 ({e})"));
+            false
+        }
+    }
+}
+
 /// Path of a shipped config, e.g. `config_path("paper/scenario1.toml")`.
 pub fn config_path(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -42,8 +42,8 @@ const US76_LAYERS: [(f64, f64); 7] = [
 ];
 /// Table 8: M/M0 at 80.0, 80.5, …, 86.0 km geometric.
 const US76_MW_RATIO: [f64; 13] = [
-    1.0, 0.999996, 0.999989, 0.999971, 0.999941, 0.999909, 0.999870, 0.999829, 0.999786,
-    0.999741, 0.999694, 0.999641, 0.999579,
+    1.0, 0.999996, 0.999989, 0.999971, 0.999941, 0.999909, 0.999870, 0.999829, 0.999786, 0.999741,
+    0.999694, 0.999641, 0.999579,
 ];
 
 /// US76 (temperature K, pressure Pa) at geometric altitude `z_m` (−5 to 86 km).
@@ -220,7 +220,10 @@ pub const OZONE_CROSS_SECTION_M2: [f64; 48] = [
 
 /// The table's value for the bin holding `wavelength_nm` (0 beyond 840 nm).
 pub fn ozone_cross_section_m2(wavelength_nm: f64) -> f64 {
-    assert!(wavelength_nm >= 360.0, "{wavelength_nm} nm: not in the table");
+    assert!(
+        wavelength_nm >= 360.0,
+        "{wavelength_nm} nm: not in the table"
+    );
     let k = ((wavelength_nm - 360.0) / 10.0).floor() as usize;
     OZONE_CROSS_SECTION_M2.get(k).copied().unwrap_or(0.0)
 }
@@ -317,7 +320,11 @@ pub fn range_at_altitude(cfg: &ScenarioConfig, z: f64) -> f64 {
     let (h, phi) = (p.altitude_km * 1e3, p.off_nadir_deg.to_radians());
     let down = p.kind == PlatformKind::Spaceborne;
     if !p.earth_curvature || p.off_nadir_deg == 0.0 {
-        return if down { (h - z) / phi.cos() } else { (z - h) / phi.cos() };
+        return if down {
+            (h - z) / phi.cos()
+        } else {
+            (z - h) / phi.cos()
+        };
     }
     let big = EARTH_RADIUS_M + h;
     let reach = ((EARTH_RADIUS_M + z).powi(2) - (big * phi.sin()).powi(2)).sqrt();
@@ -379,8 +386,12 @@ pub fn lens_area(a: f64, b: f64, d: f64) -> f64 {
     if d <= (a - b).abs() {
         return PI * a.min(b).powi(2);
     }
-    let alpha = ((d * d + a * a - b * b) / (2.0 * d * a)).clamp(-1.0, 1.0).acos();
-    let beta = ((d * d + b * b - a * a) / (2.0 * d * b)).clamp(-1.0, 1.0).acos();
+    let alpha = ((d * d + a * a - b * b) / (2.0 * d * a))
+        .clamp(-1.0, 1.0)
+        .acos();
+    let beta = ((d * d + b * b - a * a) / (2.0 * d * b))
+        .clamp(-1.0, 1.0)
+        .acos();
     a * a * (alpha - alpha.sin() * alpha.cos()) + b * b * (beta - beta.sin() * beta.cos())
 }
 
@@ -472,7 +483,8 @@ impl RefAtmosphere {
         for l in &self.cfg.atmosphere.layers {
             if z_m >= l.base_km * 1e3 && z_m < l.top_km * 1e3 {
                 let reference = l.reference_wavelength_nm.unwrap_or(wl);
-                let ext = l.extinction_per_km * 1e-3
+                let ext = l.extinction_per_km
+                    * 1e-3
                     * (reference / wl).powf(l.angstrom_exponent.unwrap_or(0.0));
                 assert!(l.lidar_ratio_sr_by_wavelength.is_empty());
                 let _ = LayerKind::Cloud;
