@@ -101,9 +101,8 @@ fn names(text: &str) -> Vec<String> {
         if ident(quoted) {
             out.push(quoted.to_string());
         }
-        let mut words =
-            quoted.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '='));
-        while let Some(w) = words.next() {
+        let words = quoted.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '='));
+        for w in words {
             if let Some(name) = w.strip_suffix('=').filter(|n| ident(n)) {
                 out.push(name.to_string());
             } else if ident(w) && quoted.contains(&format!("{w} =")) {
