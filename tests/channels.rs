@@ -361,10 +361,22 @@ fn three_channels_in_one_file() {
     assert_eq!(f.dataset("beta_mol").unwrap().shape(), vec![3, bins]);
     assert_eq!(f.dataset("expected_counts").unwrap().shape(), vec![3, bins]);
     let beta: Vec<f64> = f.dataset("beta_mol").unwrap().read_raw().unwrap();
-    // Rayleigh: β_mol ∝ λ^-4 (about 16× less at 1064 nm)
+    // Rayleigh: β_mol = N·σ(λ)/S_mol, about 16× less at 1064 nm; from this test's
+    // Bucholtz formulas: the 532-nm channels' 37-pm etalon passes the Cabannes line, the
+    // 1064-nm channel's 450-pm filter the whole line (within 1e-4: a 1 % error fails)
+    use common::reference as r;
     let k = bins - 100;
     let ratio = beta[k] / beta[2 * bins + k];
-    assert!((14.0..18.0).contains(&ratio), "{ratio}");
+    let beta_of = |wl: f64, cabannes: bool| {
+        let (s, _) = r::molecular_lidar_ratio_and_depolarization(r::rayleigh_rho_n(wl), cabannes);
+        r::rayleigh_cross_section_m2(wl) / s
+    };
+    let expected = beta_of(532.0, true) / beta_of(1064.0, false);
+    assert!(
+        (ratio / expected - 1.0).abs() < 1e-4,
+        "{ratio} vs {expected}"
+    );
+    assert!((15.5..17.5).contains(&expected), "{expected}");
     let single = dir.join("s.h5");
     let o = lidarsim(&[
         "simulate",

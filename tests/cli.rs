@@ -101,17 +101,51 @@ fn bad_input_is_one_clear_line_and_exit_2() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("/no/such/file.toml"));
 }
 
+/// Every entry under `dir` (recursively), with its size.
+fn listing(dir: &std::path::Path) -> Vec<(std::path::PathBuf, u64)> {
+    let mut out = vec![];
+    for e in std::fs::read_dir(dir).unwrap() {
+        let e = e.unwrap();
+        let m = e.metadata().unwrap();
+        out.push((e.path(), m.len()));
+        if m.is_dir() {
+            out.extend(listing(&e.path()));
+        }
+    }
+    out.sort();
+    out
+}
+
+/// A CSV that cannot be written (its directory missing, its parent a file, the path a
+/// directory): exit 2, one `lidarsim: error:` line naming the path, nothing on stdout,
+/// and the directory exactly as before (no partial file, no lock, nothing created).
 #[test]
 fn unwritable_csv_leaves_nothing_behind() {
+    let dir = scratch_dir("unwritable-csv");
+    std::fs::write(dir.join("a-file"), b"keep me").unwrap();
+    std::fs::create_dir_all(dir.join("a-dir")).unwrap();
+    std::fs::write(dir.join("a-dir/inside"), b"and me").unwrap();
+    let before = listing(&dir);
     let cfg = config_path("paper/scenario1.toml");
-    let out = lidarsim(&[
-        "expect",
-        cfg.to_str().unwrap(),
-        "--csv",
-        "/nonexistent-dir/x.csv",
-    ]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent-dir/x.csv"));
+    for target in ["missing-dir/x.csv", "a-file/x.csv", "a-dir"] {
+        let path = dir.join(target);
+        let out = lidarsim(&[
+            "expect",
+            cfg.to_str().unwrap(),
+            "--csv",
+            path.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{target}: {err}");
+        assert_eq!(err.lines().count(), 1, "{target}: {err}");
+        assert!(err.starts_with("lidarsim: error: "), "{target}: {err}");
+        assert!(err.contains(path.to_str().unwrap()), "{target}: {err}");
+        assert!(out.stdout.is_empty(), "{target}");
+        assert_eq!(listing(&dir), before, "{target} left something behind");
+    }
+    assert_eq!(std::fs::read(dir.join("a-file")).unwrap(), b"keep me");
+    assert_eq!(std::fs::read(dir.join("a-dir/inside")).unwrap(), b"and me");
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]

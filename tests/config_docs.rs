@@ -51,11 +51,140 @@ fn every_config_key_is_documented() {
     assert!(all.len() > 40, "{all:?}");
     // the keys of a wavelength map are wavelengths, not names
     all.retain(|k| !k.contains("lidar_ratio_sr_by_wavelength."));
+    let documented = documented_keys(&doc);
+    let mut missing = vec![];
     for key in &all {
-        let leaf = key.rsplit('.').next().unwrap();
-        assert!(
-            doc.contains(&format!("`{leaf}`")),
-            "docs/config.md lacks `{leaf}` ({key})"
-        );
+        if !documented.contains(&canonical(key)) {
+            missing.push(format!("{key} (as {})", canonical(key)));
+        }
     }
+    assert!(
+        missing.is_empty(),
+        "docs/config.md lacks, under its section's header, the keys:\n{}",
+        missing.join("\n")
+    );
+}
+
+/// A key of a table that docs/config.md documents by reference ("as `[[atmosphere.layers]]`",
+/// "any other `[instrument]` key"), under the key it refers to.
+fn canonical(key: &str) -> String {
+    for (from, to) in [
+        ("scene.segments.layers.", "atmosphere.layers."),
+        ("scene.segments.aerosol.", "atmosphere.aerosol."),
+        ("scene.segments.surface.", "surface."),
+    ] {
+        if let Some(rest) = key.strip_prefix(from) {
+            return format!("{to}{rest}");
+        }
+    }
+    if let Some(rest) = key.strip_prefix("instrument.channels.")
+        && !["name", "polarization", "crosstalk"].contains(&rest)
+    {
+        return format!("instrument.{rest}");
+    }
+    key.to_string()
+}
+
+/// Words in backticks, and `word =` inside them (inline tables), of a text.
+fn names(text: &str) -> Vec<String> {
+    let ident = |w: &str| {
+        !w.is_empty()
+            && w.chars().next().unwrap().is_ascii_lowercase()
+            && w.chars()
+                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
+    };
+    let mut out = vec![];
+    for (k, quoted) in text.split('`').enumerate() {
+        if k % 2 == 0 {
+            continue;
+        }
+        if ident(quoted) {
+            out.push(quoted.to_string());
+        }
+        let words = quoted.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '='));
+        for w in words {
+            if let Some(name) = w.strip_suffix('=').filter(|n| ident(n)) {
+                out.push(name.to_string());
+            } else if ident(w) && quoted.contains(&format!("{w} =")) {
+                out.push(w.to_string());
+            }
+        }
+    }
+    out
+}
+
+/// Full dotted keys documented in docs/config.md: each table row's backticked names in
+/// its first column, under the section whose header (`## `[instrument]``, `[[…]]`, or a
+/// line opening with `` `[instrument.detector]` ``) it stands in; a row's inline-table keys
+/// (`{ model = …, per_hour = … }`) under the row's key; for a table keyed by `model`,
+/// its `keys` column under the same section.
+fn documented_keys(doc: &str) -> std::collections::HashSet<String> {
+    let mut keys = std::collections::HashSet::new();
+    let mut section: Option<String> = None;
+    let mut by_model = false;
+    for line in doc.lines() {
+        let header = line.starts_with("## ") || line.starts_with("### ");
+        let opener = line.starts_with("`[");
+        if header || opener {
+            section = if line.contains("Top level") {
+                Some(String::new())
+            } else if let Some(start) = line.find("`[") {
+                let rest = &line[start + 1..];
+                let end = rest.find('`').unwrap();
+                Some(
+                    rest[..end]
+                        .trim_matches(|c| c == '[' || c == ']')
+                        .to_string(),
+                )
+            } else {
+                None
+            };
+            continue;
+        }
+        let Some(sec) = &section else { continue };
+        if !line.starts_with('|') || line.starts_with("|---") {
+            continue;
+        }
+        let cells: Vec<&str> = line.split('|').map(str::trim).collect();
+        if cells.len() < 3 {
+            continue;
+        }
+        let full = |name: &str| {
+            if sec.is_empty() {
+                name.to_string()
+            } else {
+                format!("{sec}.{name}")
+            }
+        };
+        if cells[1] == "key" || cells[1] == "model" {
+            by_model = cells[1] == "model";
+            if by_model {
+                keys.insert(full("model"));
+            }
+            continue;
+        }
+        if by_model {
+            for n in names(cells[2]) {
+                keys.insert(full(&n));
+            }
+            continue;
+        }
+        let first = names(cells[1]);
+        for n in &first {
+            keys.insert(full(n));
+            for inner in names(&cells[2..].join("|")) {
+                keys.insert(full(&format!("{n}.{inner}")));
+            }
+        }
+    }
+    keys
+}
+
+#[test]
+fn a_key_counts_only_under_its_own_section() {
+    let doc = "## `[instrument]`\n\n| key | meaning |\n|---|---|\n| `model` | x |\n\n## `[atmosphere.molecular]`\n\n| key | meaning |\n|---|---|\n| `grid_m` | y |\n";
+    let k = documented_keys(doc);
+    assert!(k.contains("instrument.model") && k.contains("atmosphere.molecular.grid_m"));
+    assert!(!k.contains("atmosphere.molecular.model"), "{k:?}");
+    assert!(!k.contains("instrument.grid_m"));
 }

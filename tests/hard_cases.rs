@@ -705,7 +705,8 @@ fn ten_million_shots_in_one_profile() {
 /// A window one bin tall: the model has one finite bin, both methods write (profiles, 1)
 /// files with the right mean, and the samplers handle a single bin on every path.
 /// False alarm: 2 file mean z-tests + 12 sampler z-tests at |z| < 5 (5.7e-7) and one
-/// two-sample chi-square at p > 1e-6: 9e-6.
+/// two-sample chi-square at p > 1e-6: 9e-6. Power: the file totals, and the sampler
+/// totals from λ = 2.5 up, reject a mean 1 % off either way.
 #[test]
 fn a_window_of_one_bin() {
     // ΔR = 299.792458 m: a 200 m window and an exactly one-bin window both give one bin
@@ -749,6 +750,11 @@ fn a_window_of_one_bin() {
         let sum = raw.counts.iter().sum::<u64>() as f64;
         let z = z_sum(sum, 2000.0 * mu);
         assert!(z.abs() < 5.0, "{method}: z {z:.2}");
+        // power: the same total rejects a mean 1 % off either way
+        for f in [0.99, 1.01] {
+            let z = z_sum(sum, f * 2000.0 * mu);
+            assert!(z.abs() > 5.0, "{method}: no power at {f} (z {z:.2})");
+        }
         hists.push(histogram(raw.column(0)));
     }
     let (stat, df, p) = chi2_two_sample(&hists[0], &hists[1]);
@@ -779,6 +785,13 @@ fn a_window_of_one_bin() {
                 "λ {l}, {choice:?} ({}): z {z:.2}",
                 s.strategy()
             );
+            // power where the total resolves 1 % (λ ≥ 2.5: ≥ 5e5 counts, 7 sd)
+            if l >= 2.5 {
+                for f in [0.99, 1.01] {
+                    let z = z_sum(acc[0] as f64, f * shots as f64 * l);
+                    assert!(z.abs() > 5.0, "λ {l}, {choice:?}: no power at {f}");
+                }
+            }
         }
     }
 }
@@ -788,7 +801,8 @@ fn a_window_of_one_bin() {
 /// 100,000 bins of 15 cm (Δt = 1 ns over a 15 km window): the model is finite with bins
 /// ΔR apart, both methods write (2, 100000) files holding the model's expectations, and
 /// the counts follow M·λ: per-profile totals and 50 groups of 2000 bins (summed over the
-/// two profiles) per method, |z| < 5.5. False alarm: 2 × 52 × 3.8e-8 = 4e-6.
+/// two profiles) per method, |z| < 5.5. False alarm: 2 × 52 × 3.8e-8 = 4e-6. Power:
+/// each profile's total rejects a mean off by 11 standard errors either way (< 2 %).
 #[test]
 fn a_profile_of_100_000_bins() {
     // ΔR = 0.149896229 m; top = 99,999.5 ΔR so that ceil(window/ΔR) = 100,000
@@ -832,6 +846,14 @@ fn a_profile_of_100_000_bins() {
             let row = &raw.counts[p * 100_000..(p + 1) * 100_000];
             let z = z_sum(row.iter().sum::<u64>() as f64, m * lam.iter().sum::<f64>());
             assert!(z.abs() < 5.5, "{method} profile {p}: z {z:.2}");
+            // power: the total rejects a mean off by max(1 %, 11 sd) either way
+            let mu = m * lam.iter().sum::<f64>();
+            let d = (11.0 / mu.sqrt()).max(0.01);
+            assert!(d < 0.02, "{method}: the total resolves only {d:.4}");
+            for f in [1.0 - d, 1.0 + d] {
+                let z = z_sum(row.iter().sum::<u64>() as f64, f * mu);
+                assert!(z.abs() > 5.5, "{method} profile {p}: no power at {f}");
+            }
         }
         for g in 0..50 {
             let bins = g * 2000..(g + 1) * 2000;
@@ -959,7 +981,8 @@ fn a_layer_thinner_than_a_bin() {
 /// 60° off nadir over a flat Earth (the paper's geometry): ceil(40 km/(ΔR cos 60°)) = 267 bins, bin-centre altitudes ΔR·cos 60° =
 /// 149.9 m apart (ranges ΔR apart), T² to every bin the square of the nadir T² to the same
 /// altitude, and both Monte Carlo methods give every bin's mean over 400 profiles within
-/// |z| < 5.5 of M·λ_i. False alarm: 2 × 267 × 3.8e-8 = 2e-5.
+/// |z| < 5.5 of M·λ_i, and their total. False alarm: 2 × 268 × 3.8e-8 = 2e-5. Power:
+/// the total rejects a mean 1 % off either way.
 #[test]
 fn sixty_degrees_off_nadir() {
     let ov = strings(&[
@@ -1003,6 +1026,16 @@ fn sixty_degrees_off_nadir() {
             let sum: u64 = raw.column(i).iter().sum();
             let z = z_sum(sum as f64, 400.0 * m * l);
             assert!(z.abs() < 5.5, "{method} bin {i}: z {z:.2}");
+        }
+        // power: the total over every bin rejects a mean 1 % off either way
+        let all = raw.counts.iter().sum::<u64>() as f64;
+        let want = 400.0 * m * lam.iter().sum::<f64>();
+        assert!(z_sum(all, want).abs() < 5.5);
+        for f in [0.99, 1.01] {
+            assert!(
+                z_sum(all, f * want).abs() > 5.5,
+                "{method}: no power at {f}"
+            );
         }
     }
     std::fs::remove_dir_all(&dir).ok();

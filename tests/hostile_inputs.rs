@@ -1161,7 +1161,11 @@ fn every_hostile_case_is_refused_cleanly() {
     let mut failures = Vec::new();
     for (n, case) in cases.iter().enumerate() {
         match run_case(case, n) {
-            None => eprintln!("skipped here: {}", case.name),
+            None => common::skip_acceptable_in_ci(
+                &format!("hostile case {}", case.name),
+                "its preparation (mknod, mount or a resource limit) is not permitted here",
+                "it needs a privilege an unprivileged CI container lacks; docs/hostile-inputs.md shows its outcome where permitted",
+            ),
             Some(o) => {
                 if let Err(why) = judge(case, &o) {
                     failures.push(format!("{}: {why}", case.name));

@@ -80,40 +80,61 @@ fn downlinked_counts_sum_the_native_counts_exactly() {
     assert!(downlinked[..4].iter().all(|&c| c > 0), "{downlinked:?}");
 }
 
-/// One region of the averaged product of a stationary scene, as a realization source.
+/// One region of the averaged product of a stationary scene, as a realization source:
+/// the native shots drawn and averaged by `src/onboard`'s [`Averager`] (the code under
+/// test), or, to show the check's power, by a deliberately wrong sum written here that
+/// drops one native bin of each merged bin.
 struct Averaged {
     sampler: ShotSampler,
-    first: usize,
-    merge: usize,
-    bins: usize,
-    shots: u64,
-    /// Native bins summed per downlinked bin (`merge` right, `merge − 1` a wrong sum).
-    take: usize,
+    layout: Vec<lidarsim::onboard::RegionLayout>,
+    region: usize,
+    /// `None`: the Averager; `Some(take)`: the wrong sum of `take < merge` native bins.
+    wrong_take: Option<usize>,
 }
 
 impl RealizationSource for Averaged {
     fn draw(&self, p: u64, counts: &mut [u64]) {
-        for s in 0..self.shots {
+        let r = &self.layout[self.region];
+        let shots = u64::from(r.shots);
+        let mut avg = Averager::new(self.layout.clone(), self.sampler.bins());
+        let mut emitted = 0;
+        for s in 0..shots {
             let mut native = vec![0u64; self.sampler.bins()];
-            shot_profile(&self.sampler, 21, p * self.shots + s, 1, &mut native);
-            let span = &native[self.first..self.first + self.merge * self.bins];
-            for (c, chunk) in counts.iter_mut().zip(span.chunks_exact(self.merge)) {
-                *c += chunk[..self.take].iter().sum::<u64>();
+            shot_profile(&self.sampler, 21, p * shots + s, 1, &mut native);
+            match self.wrong_take {
+                None => avg.add_shot(&native, |k, sums| {
+                    if k == self.region {
+                        counts.copy_from_slice(sums);
+                        emitted += 1;
+                    }
+                }),
+                Some(take) => {
+                    let span = &native[r.first_bin..r.first_bin + r.merge * r.bins];
+                    for (c, chunk) in counts.iter_mut().zip(span.chunks_exact(r.merge)) {
+                        *c += chunk[..take].iter().sum::<u64>();
+                    }
+                }
             }
+        }
+        if self.wrong_take.is_none() {
+            assert_eq!(emitted, 1, "one averaged profile per {shots} shots");
         }
     }
 }
 
-/// On a stationary scene without dead time the averaged product has the law of a
-/// direct simulation at the coarse resolution: region 0 of the CALIOP scheme (300 m, 15
-/// shots) against Poisson(15·Σλ over the merged bins), CONSISTENT for the mean,
-/// variance and S/N (false-alarm rate < 2e-3); a sum that drops one native bin of ten is
-/// rejected (the CALIOP-like instrument at night, 2,000 averaged profiles).
+/// On a stationary scene without dead time the averaged product of `src/onboard`'s
+/// Averager has the law of a direct simulation at the coarse resolution: region 0 of the
+/// CALIOP scheme (300 m, 15 shots) against Poisson(M·Σλ over the merged bins) written
+/// here, CONSISTENT for the mean, variance and S/N (false-alarm rate < 2e-3); the same
+/// check rejects a sum that drops one native bin of ten (a 10 % bias), so it has the
+/// power to see a wrong average (the CALIOP-like instrument at night, 2,000 averaged
+/// profiles).
 #[test]
 fn an_averaged_stationary_scene_has_the_coarse_law() {
     let sc = caliop_native("0");
     let e = sc.expected().unwrap();
-    let r = layout(&sc, "caliop")[0].clone();
+    let full = layout(&sc, "caliop");
+    let r = full[0].clone();
     let sampler = ShotSampler::new(&e.total_per_shot());
     let models: Vec<BinModel> = (0..r.bins)
         .map(|j| {
@@ -126,17 +147,16 @@ fn an_averaged_stationary_scene_has_the_coarse_law() {
     let alt: Vec<f64> = (0..r.bins)
         .map(|j| e.altitude_m[r.first_bin + j * r.merge])
         .collect();
-    let source = |take| Averaged {
+    let source = |wrong_take| Averaged {
         sampler: sampler.clone(),
-        first: r.first_bin,
-        merge: r.merge,
-        bins: r.bins,
-        shots: u64::from(r.shots),
-        take,
+        layout: full.clone(),
+        region: 0,
+        wrong_take,
     };
-    let (_, checks) = validate::validate_source(&source(r.merge), &models, &alt, 2000, &[]);
+    let (_, checks) = validate::validate_source(&source(None), &models, &alt, 2000, &[]);
     assert!(checks.iter().all(|c| c.pass), "{checks:#?}");
-    let (_, checks) = validate::validate_source(&source(r.merge - 1), &models, &alt, 2000, &[]);
+    let (_, checks) =
+        validate::validate_source(&source(Some(r.merge - 1)), &models, &alt, 2000, &[]);
     assert!(
         !checks[0].pass,
         "a wrong sum was not rejected: {:#?}",

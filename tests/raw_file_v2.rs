@@ -6,7 +6,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use common::config_path;
+use common::{config_path, reference};
 use hdf5::types::VarLenUnicode;
 
 fn scratch(name: &str) -> PathBuf {
@@ -114,30 +114,75 @@ fn the_layout_is_format_version_2() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// The file's truth against this test's own calculation (`tests/common/reference.rs`:
+/// own geometry, optics and T² by quadrature; C from the config's values): the lidar
+/// constant, the range weight `1/a − 1/b`, the bin-averaged attenuated backscatter
+/// `∫βT²/r² / ∫1/r²`, the expected signal, T² at bin centres, each within 1e-3 (a 1 %
+/// error in any of them fails); and the total is signal + background + dark.
 #[test]
-fn expected_signal_is_lidar_constant_times_attenuated_backscatter_times_range_weight() {
+fn expected_signal_attenuated_backscatter_and_range_weight_match_an_independent_calculation() {
     let dir = scratch("truth");
     let out = dir.join("s3.h5");
     simulate("paper/scenario3.toml", &out, &["--profiles", "2"]);
     let f = hdf5::File::open(&out).unwrap();
+    let sc = common::scenario("paper/scenario3.toml", &[]);
+    let cfg = &sc.loaded.config;
+    let c_ref = reference::signal_constant(cfg);
     let c = f64s(&f, "lidar_constant")[0];
-    let (s, ab, rw) = (
+    assert!((c / c_ref - 1.0).abs() < 1e-12, "C {c} vs {c_ref}");
+    let brute = reference::brute_force(&sc, 0.05);
+    let bins = reference::bins(cfg);
+    let (s, ab, rw, t2) = (
         f64s(&f, "expected_signal"),
         f64s(&f, "attenuated_backscatter"),
         f64s(&f, "range_weight"),
+        f64s(&f, "t2"),
     );
-    for i in 0..s.len() {
-        let model = c * ab[i] * rw[i];
+    assert_eq!(s.len(), bins.len());
+    let close = |x: f64, y: f64, tol: f64| (x - y).abs() <= tol * y.abs();
+    let mut checked = 0;
+    for (i, &(a, b)) in bins.iter().enumerate() {
+        let weight = 1.0 / a - 1.0 / b;
         assert!(
-            (model - s[i]).abs() <= 1e-12 * s[i].abs().max(1e-300),
-            "bin {i}: {model} vs {}",
+            close(rw[i], weight, 1e-9),
+            "range weight, bin {i}: {} vs {weight}",
+            rw[i]
+        );
+        assert!(
+            close(brute.range_weight[i], weight, 1e-6),
+            "the test's own quadrature"
+        );
+        let signal = c_ref * brute.integral[i];
+        if signal < 1e-12 {
+            continue;
+        }
+        checked += 1;
+        assert!(
+            close(s[i], signal, 1e-3),
+            "signal, bin {i}: {} vs {signal}",
             s[i]
         );
+        let averaged = brute.integral[i] / weight;
+        assert!(
+            close(ab[i], averaged, 1e-3),
+            "attenuated backscatter, bin {i}: {} vs {averaged}",
+            ab[i]
+        );
+        if brute.t2_centre[i] > 1e-6 {
+            assert!(
+                close(t2[i], brute.t2_centre[i], 1e-3),
+                "T², bin {i}: {} vs {}",
+                t2[i],
+                brute.t2_centre[i]
+            );
+        }
     }
+    // 86 km of atmosphere in 300 m bins
+    assert!(checked > 280, "{checked}");
     let total: Vec<f64> = f64s(&f, "expected_counts");
-    let (b, d) = (f64s(&f, "expected_background"), f64s(&f, "expected_dark"));
+    let (bk, d) = (f64s(&f, "expected_background"), f64s(&f, "expected_dark"));
     for i in 0..s.len() {
-        assert!((total[i] - (s[i] + b[i] + d[i])).abs() <= 1e-12 * total[i]);
+        assert!((total[i] - (s[i] + bk[i] + d[i])).abs() <= 1e-12 * total[i]);
     }
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -334,44 +334,92 @@ fn more_profiles_than_a_column_block_and_a_row_larger_than_a_chunk() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// A copy of `ds` in `into`, written by HDF5 through its own filters (same chunks,
+/// A dataset in `into` holding `values` (built by the test, not read back from the
+/// writer's file), written by HDF5 through its own filters (the chunks of `like`,
 /// shuffle, deflate 1).
 fn hdf5_pipeline_copy<T: hdf5::H5Type>(
-    ds: &hdf5::Dataset,
+    like: &hdf5::Dataset,
+    values: &[T],
     into: &hdf5::File,
     name: &str,
 ) -> hdf5::Dataset {
-    let v: Vec<T> = ds.read_raw().unwrap();
     let c = into
         .new_dataset::<T>()
-        .shape(ds.shape())
-        .chunk(ds.chunk().unwrap())
+        .shape(like.shape())
+        .chunk(like.chunk().unwrap())
         .shuffle()
         .deflate(1)
         .create(name)
         .unwrap();
-    c.write_raw(&v).unwrap();
+    c.write_raw(values).unwrap();
     c
 }
 
-/// The writer's stored chunks inflate to exactly the bytes HDF5's own pipeline (shuffle,
-/// then deflate) produces from the same data: same layout, only the deflate encoder
-/// differs.
+/// The bytes HDF5's shuffle filter makes of one chunk, built here from the values:
+/// byte k of element e at `k·N + e` (N elements a chunk, C order, little-endian), for
+/// every element inside the dataset's extent (`None` for the edge chunk's padding).
+fn shuffled_chunk(
+    shape: &[usize],
+    chunk_dims: &[usize],
+    offset: &[u64],
+    elem: usize,
+    value_le: &dyn Fn(usize) -> Vec<u8>,
+) -> Vec<Option<u8>> {
+    let n: usize = chunk_dims.iter().product();
+    let mut out = vec![None; n * elem];
+    for e in 0..n {
+        // the element's index in the chunk, then in the dataset
+        let mut rem = e;
+        let mut flat = 0;
+        let mut inside = true;
+        for d in 0..shape.len() {
+            let stride: usize = chunk_dims[d + 1..].iter().product();
+            let idx = offset[d] as usize + rem / stride;
+            rem %= stride;
+            inside &= idx < shape[d];
+            flat = flat * shape[d] + idx.min(shape[d] - 1);
+        }
+        if inside {
+            for (k, byte) in value_le(flat).into_iter().enumerate() {
+                out[k * n + e] = Some(byte);
+            }
+        }
+    }
+    out
+}
+
+/// The writer's stored chunks inflate to the shuffled bytes of the values, built in the
+/// test from the values it wrote (`shuffled_chunk`), and HDF5's own pipeline (shuffle,
+/// then deflate), fed the same values, lays them out alike: same layout, only the
+/// deflate encoder differs.
 #[test]
 fn stored_chunks_unpack_to_hdf5s_own_shuffled_bytes() {
     let dir = scratch("layout");
     let s = spec(70, 1, 2500, CountWidth::U32, false);
     let ours = dir.join("ours.h5");
     write_all(&ours, &s, &(0..70).collect::<Vec<_>>());
+    let n = s.counts_per_profile();
+    let data: Vec<Profile> = (0..70).map(|p| profile(&s, p)).collect();
+    let counts: Vec<u32> = (0..70 * n)
+        .map(|k| u32::try_from(data[k / n].counts[k % n]).unwrap())
+        .collect();
+    let truth_a: Vec<f64> = (0..70 * n).map(|k| truth(k / n, k % n, 0)).collect();
     let f = hdf5::File::open(&ours).unwrap();
     let theirs = hdf5::File::create(dir.join("theirs.h5")).unwrap();
     for (name, elem) in [("counts", 4), ("truth_a", 8)] {
         let ds = f.dataset(name).unwrap();
         let chunk_dims = ds.chunk().unwrap();
-        let copy = if elem == 4 {
-            hdf5_pipeline_copy::<u32>(&ds, &theirs, name)
+        assert_eq!(ds.shape(), vec![70, 1, 2500]);
+        let (copy, value_le): (_, Box<dyn Fn(usize) -> Vec<u8>>) = if elem == 4 {
+            (
+                hdf5_pipeline_copy::<u32>(&ds, &counts, &theirs, name),
+                Box::new(|k| counts[k].to_le_bytes().to_vec()),
+            )
         } else {
-            hdf5_pipeline_copy::<f64>(&ds, &theirs, name)
+            (
+                hdf5_pipeline_copy::<f64>(&ds, &truth_a, &theirs, name),
+                Box::new(|k| truth_a[k].to_le_bytes().to_vec()),
+            )
         };
         let (a, b) = (common::chunk_info(&ds), common::chunk_info(&copy));
         assert_eq!(a.len(), b.len());
@@ -381,9 +429,16 @@ fn stored_chunks_unpack_to_hdf5s_own_shuffled_bytes() {
             let mine = chunk::inflate(&common::raw_chunk(&ds, oa, *sa)).unwrap();
             let hdf5s = chunk::inflate(&common::raw_chunk(&copy, ob, *sb)).unwrap();
             assert_eq!(mine.len(), chunk_dims.iter().product::<usize>() * elem);
+            let want = shuffled_chunk(&ds.shape(), &chunk_dims, oa, elem, &value_le);
+            assert!(want.iter().filter(|w| w.is_some()).count() >= elem * 2500);
+            for (k, (byte, w)) in mine.iter().zip(&want).enumerate() {
+                if let Some(w) = w {
+                    assert_eq!(byte, w, "{name} chunk at {oa:?}: shuffled byte {k}");
+                }
+            }
             assert!(
                 mine == hdf5s,
-                "{name} chunk at {oa:?}: shuffled bytes differ"
+                "{name} chunk at {oa:?}: shuffled bytes differ from HDF5's"
             );
         }
     }
@@ -426,7 +481,8 @@ fn noise_planes_are_stored_and_read_back_through_hdf5s_filters() {
     let want: Vec<u64> = (0..s.n_profiles * n).map(|k| noisy(k / n, k % n)).collect();
     assert!(back == want, "counts read back through HDF5's filters");
     let theirs = hdf5::File::create(dir.join("theirs.h5")).unwrap();
-    let copy = hdf5_pipeline_copy::<u32>(&ds, &theirs, "counts");
+    let want32: Vec<u32> = want.iter().map(|&c| u32::try_from(c).unwrap()).collect();
+    let copy = hdf5_pipeline_copy::<u32>(&ds, &want32, &theirs, "counts");
     let (a, b) = (common::chunk_info(&ds), common::chunk_info(&copy));
     for (k, ((oa, _, sa), (ob, _, sb))) in a.iter().zip(&b).enumerate() {
         let mine = common::raw_chunk(&ds, oa, *sa);

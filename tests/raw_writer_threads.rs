@@ -107,12 +107,10 @@ fn one_and_two_threads_write_the_same_bytes() {
 /// `tools/check_raw_file.py` (h5py, xarray with h5netcdf, netCDF4 and `ncdump` where
 /// installed), when its Python modules are.
 fn python_check(path: &Path) {
-    let has = Command::new("python3")
-        .args(["-c", "import numpy, h5py, xarray, h5netcdf"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !has {
-        println!("skipped: numpy, h5py, xarray or h5netcdf not installed");
+    if !common::python_has(
+        "raw_writer_threads: tools/check_raw_file.py",
+        &["numpy", "h5py", "xarray", "h5netcdf", "netCDF4"],
+    ) {
         return;
     }
     let ncdump = Command::new("ncdump").arg("-h").output().is_ok();
@@ -120,6 +118,10 @@ fn python_check(path: &Path) {
     let mut cmd = Command::new("python3");
     cmd.arg(tool).arg(path);
     if !ncdump {
+        common::skip(
+            "raw_writer_threads: ncdump's view in tools/check_raw_file.py",
+            "ncdump (Debian: netcdf-bin) not installed",
+        );
         cmd.arg("--no-ncdump");
     }
     let o = cmd.output().unwrap();

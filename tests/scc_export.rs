@@ -133,13 +133,7 @@ fn a_ground_run_exports_with_the_scc_layout_and_its_counts() {
 
 /// netCDF4-python's view of the file (`tools/check_scc_file.py`), when installed.
 fn python_check(out: &Path) {
-    let has = Command::new("python3")
-        .args(["-c", "import netCDF4"])
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false);
-    if !has {
-        println!("skipped: netCDF4-python not installed");
+    if !common::python_has("scc_export: tools/check_scc_file.py", &["netCDF4"]) {
         return;
     }
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/check_scc_file.py");

@@ -4,8 +4,11 @@
 //! and checks the merged file and the combined verdict against single runs (docs/scale.md).
 //!
 //! It runs where `slurmctld` is installed and this is root; elsewhere it says plainly
-//! that it is skipped and passes, unless `LIDARSIM_REQUIRE_SLURM=1` (set by `.ci/run`,
-//! which installs Slurm) makes a skip a failure.
+//! that it is skipped (`common::skip`: recorded where `.ci/run` prints it) and passes,
+//! unless `LIDARSIM_REQUIRE_SLURM=1` or `CI=true` (`.ci/run` installs Slurm there) makes
+//! a skip a failure.
+
+mod common;
 
 use std::io::Write;
 use std::path::Path;
@@ -25,7 +28,7 @@ fn skip(why: &str) {
         !required,
         "slurm test cannot run ({why}) but LIDARSIM_REQUIRE_SLURM=1"
     );
-    let _ = writeln!(std::io::stderr(), "slurm test SKIPPED: {why}");
+    common::skip("slurm cluster test", why);
 }
 
 #[test]

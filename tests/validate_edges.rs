@@ -115,8 +115,9 @@ fn many_sparse_bins_keep_the_false_alarm_rate_and_the_power() {
 /// At the fewest realizations `validate` accepts, the simulator's own counts are
 /// CONSISTENT for 300 seeds of scenario 1 (night) and 300 of scenario 4 (day): with a
 /// false-alarm rate of 2e-3 per run, 4 or more INCONSISTENT in 300 runs has
-/// probability 3.4e-3 — this test's own false-alarm rate, per scenario. Fewer
-/// realizations are refused.
+/// probability 3.4e-3 — this test's own false-alarm rate, per scenario. Power at the
+/// same size: a sampler 1 % high is INCONSISTENT on the mean for every one of 5 seeds.
+/// Fewer realizations are refused.
 #[test]
 fn the_fewest_realizations_keep_the_false_alarm_rate() {
     for (cfg, ov) in [
@@ -144,6 +145,27 @@ fn the_fewest_realizations_keep_the_false_alarm_rate() {
             inconsistent < 4,
             "{cfg}: {inconsistent} of 300 seeds INCONSISTENT"
         );
+        // power at the same size: a sampler whose signal and background are 1 % high is
+        // INCONSISTENT on the mean for each of 5 seeds
+        let mut high = e.clone();
+        high.signal.iter_mut().for_each(|s| *s *= 1.01);
+        high.background *= 1.01;
+        high.dark *= 1.01;
+        for seed in 0..5u64 {
+            let source = SimulatorSource::new(&high, ResolvedMethod::Aggregate, 0.0, seed, shots);
+            let (_, checks) = validate::validate_source(
+                &source,
+                &models,
+                &e.altitude_m,
+                MIN_REALIZATIONS,
+                &e.background_bin_indices,
+            );
+            let mean = checks.iter().find(|c| c.statistic == "mean").unwrap();
+            assert!(
+                !mean.pass,
+                "{cfg}, seed {seed}: a 1 % bias passed: {mean:#?}"
+            );
+        }
         let opts = validate::ValidateOptions {
             realizations: MIN_REALIZATIONS - 1,
             method: None,

@@ -3,7 +3,10 @@
 //! Every statistical check uses a fixed seed, so the suite is deterministic;
 //! the false-alarm rate stated beside each check is the probability that a
 //! *correct* sampler fails it for a random seed (normal approximation for the
-//! z-tests: P(|z| > 5) = 5.7e-7; chi-square p-value threshold 1e-6).
+//! z-tests: P(|z| > 5) = 5.7e-7; chi-square p-value threshold 1e-6). Beside it each
+//! check shows its power on the same draws: the same statistic rejects a model whose
+//! mean is off by 1 % (or the 10–15 standard errors the draws resolve, stated) and whose
+//! variance is off by 10 % (`assert_poisson_moments`, `assert_poisson_fit`).
 
 use rand_pcg::Pcg64Mcg;
 use statrs::distribution::{ChiSquared, ContinuousCDF, Discrete, Poisson as PoissonPmf};
@@ -99,20 +102,61 @@ fn chi_square_poisson(hist: &[u64], lambda: f64) -> (f64, usize, f64) {
     (stat, df, p)
 }
 
-fn assert_poisson_moments(hist: &[u64], lambda: f64, what: &str) {
+/// z-scores of the sample mean and variance of `hist` against a model of mean `mean`
+/// and variance `var`, their standard errors those of Poisson(λ) draws.
+fn moment_z_against(hist: &[u64], lambda: f64, mean: f64, var: f64) -> (f64, f64) {
+    let (zm, zv) = moment_z(hist, lambda);
+    let n: f64 = hist.iter().sum::<u64>() as f64;
+    let sd_mean = (lambda / n).sqrt();
+    let sd_var = ((lambda + 2.0 * lambda * lambda) / n).sqrt();
+    (zm - (mean - lambda) / sd_mean, zv - (var - lambda) / sd_var)
+}
+
+/// The moment z-tests pass on `hist` (false alarm 5.7e-7 each) and have power: the same
+/// statistics reject, on the same draws, a model whose mean is off by
+/// `δm = max(1 %, 10/√(nλ))` and one whose variance is off by
+/// `δv = max(10 %, 10·sd(s²)/λ)`, either way (with |z| < 5 on the right model, a shift
+/// of 10 standard errors always rejects; a sampler off by that much fails with
+/// probability > 1 − 1e-6). Returns (δm, δv), the sizes it is shown to catch.
+fn assert_poisson_moments(hist: &[u64], lambda: f64, what: &str) -> (f64, f64) {
     let (zm, zv) = moment_z(hist, lambda);
     assert!(
         zm.abs() < Z_MAX && zv.abs() < Z_MAX,
         "{what}: λ={lambda}: z_mean={zm:.2}, z_var={zv:.2}"
     );
+    let n: f64 = hist.iter().sum::<u64>() as f64;
+    let dm = (10.0 / (n * lambda).sqrt()).max(0.01);
+    let dv = (10.0 * ((lambda + 2.0 * lambda * lambda) / n).sqrt() / lambda).max(0.1);
+    for sign in [-1.0, 1.0] {
+        let (zm, _) = moment_z_against(hist, lambda, lambda * (1.0 + sign * dm), lambda);
+        let (_, zv) = moment_z_against(hist, lambda, lambda, lambda * (1.0 + sign * dv));
+        assert!(
+            zm.abs() > Z_MAX && zv.abs() > Z_MAX,
+            "{what}: λ={lambda}: no power at a mean off by {dm:.3} (z {zm:.1}) or a variance off by {dv:.3} (z {zv:.1})"
+        );
+    }
+    (dm, dv)
 }
 
-fn assert_poisson_fit(hist: &[u64], lambda: f64, what: &str) {
+/// The chi-square test passes on `hist` (false alarm 1e-6) and has power: on the same
+/// draws it rejects Poisson(λ·(1 ± δ)), `δ = max(1 %, 15/√(nλ))` (noncentrality ≈
+/// nλδ² ≥ 225). Returns δ.
+fn assert_poisson_fit(hist: &[u64], lambda: f64, what: &str) -> f64 {
     let (stat, df, p) = chi_square_poisson(hist, lambda);
     assert!(
         p > P_MIN,
         "{what}: λ={lambda}: chi2={stat:.1}, df={df}, p={p:.2e}"
     );
+    let n: f64 = hist.iter().sum::<u64>() as f64;
+    let d = (15.0 / (n * lambda).sqrt()).max(0.01);
+    for sign in [-1.0, 1.0] {
+        let (stat, df, p) = chi_square_poisson(hist, lambda * (1.0 + sign * d));
+        assert!(
+            p < P_MIN,
+            "{what}: λ={lambda}: no power at a mean off by {d:.3}: chi2={stat:.1}, df={df}, p={p:.2e}"
+        );
+    }
+    d
 }
 
 /// Shots so that a λ gets ≥ ~2e6 (shot, bin) samples and ≥ ~2e4 counts.
@@ -295,6 +339,8 @@ fn alias_table_realises_weights() {
 /// Mean and variance of single-shot per-bin counts against Poisson, for every
 /// λ in LAMBDAS, through the dense and the sparse path (and Auto).
 /// False alarm: 2 z-tests × 7 non-trivial λ × 3 paths = 42 checks at 5.7e-7 → 2.4e-5.
+/// Power (`assert_poisson_moments`, on the same draws): a 10 % variance change at every
+/// λ, a 1 % mean bias from λ = 0.5 up (below, 10/√(nλ): 7 % at λ = 1e-4 and 0.01).
 #[test]
 fn shot_moments_all_paths() {
     const BINS: usize = 100;
@@ -322,14 +368,20 @@ fn shot_moments_all_paths() {
                 assert_eq!(s.strategy().kind, StrategyKind::Empty);
                 continue;
             }
-            assert_poisson_moments(&hist, l, &what);
+            let (dm, dv) = assert_poisson_moments(&hist, l, &what);
+            assert!(dv <= 0.1 + 1e-12, "{what}: λ={l}: resolves only {dv:.3}");
+            if l >= 0.5 {
+                assert!(dm <= 0.01 + 1e-12, "{what}: λ={l}: resolves only {dm:.3}");
+            }
         }
     }
 }
 
 /// Chi-square goodness of fit of single-shot counts, both paths, a few λ
 /// (incl. the sparse total drawn by Ahrens–Dieter: 100 bins × 3 = 300 > TOTAL_TABLE_MAX).
-/// False alarm: 12 tests at 1e-6 → 1.2e-5.
+/// False alarm: 12 tests at 1e-6 → 1.2e-5. Power (`assert_poisson_fit`): each rejects
+/// a mean 1 % off from λ = 3 up (below, 15/√(nλ): 1.5 % at λ = 0.5, 2.7 % at 0.15,
+/// 11 % at 0.01).
 #[test]
 fn shot_chi_square() {
     const BINS: usize = 100;
@@ -349,7 +401,9 @@ fn shot_chi_square() {
 /// A non-uniform λ vector (lidar-like, a few strong bins): every bin's total
 /// over many shots against its Poisson mean, through Auto (hybrid), dense and
 /// sparse. Checks that placement puts each count in the right bin.
-/// False alarm: 3 paths × 64 bins z-tests at 5.7e-7 → 1.1e-4.
+/// False alarm: 3 paths × 64 bins z-tests at 5.7e-7 → 1.1e-4. Power: the strong bins'
+/// totals (1.25e6 counts) reject a mean 1 % off either way (z ≈ 11) and the
+/// neighbouring bin's mean (a count put in the wrong bin).
 #[test]
 fn shot_per_bin_means_nonuniform() {
     let lambda: Vec<f64> = (0..64)
@@ -380,6 +434,13 @@ fn shot_per_bin_means_nonuniform() {
                 z.abs() < Z_MAX,
                 "{choice:?} bin {i}: λ={l}, got {a}, expected {mu:.1} (z={z:.2})"
             );
+            // power: a strong bin 1 % off, or a count in the neighbouring bin's place
+            if l >= 25.0 {
+                for wrong in [1.01 * mu, 0.99 * mu, lambda[i + 1] * shots as f64] {
+                    let z = (a as f64 - wrong) / wrong.sqrt();
+                    assert!(z.abs() > Z_MAX, "{choice:?} bin {i}: no power (z={z:.2})");
+                }
+            }
         }
     }
     assert_eq!(
@@ -425,7 +486,10 @@ fn wrong_sampler_is_rejected() {
 /// step-envelope rejection (DENSE_ALIAS_MAX), sparse total table ↔ Ahrens–Dieter
 /// (TOTAL_TABLE_MAX), and the Auto dense ↔ sparse split (found from the sampler
 /// itself).
-/// False alarm: 8 tests at 1e-6 → 8e-6.
+/// False alarm: 8 tests at 1e-6 → 8e-6. Power (`assert_poisson_fit`, on the same
+/// draws): each rejects a mean off by max(1 %, 15/√(nλ)) either way: 1 % at the
+/// DENSE_ALIAS_MAX and TOTAL_TABLE_MAX switches, 13 % at DENSE_TABLE_MAX = 0.07 (4000
+/// shots of 50 bins).
 #[test]
 fn continuity_at_switch_points() {
     let eps = 1e-9;
@@ -573,8 +637,11 @@ fn stream_rng_distinct_streams() {
 // ---------------------------------------------------------------- aggregate
 
 /// Mean and variance of poisson_u64 for means across every regime
-/// (inversion, Ahrens–Dieter, the 2^50 chunking), 20k–200k draws each.
-/// False alarm: 2 × 15 z-tests at 5.7e-7 → 1.7e-5.
+/// (inversion, Ahrens–Dieter, the 2^50 chunking), 2·10⁶ draws below μ = 1, 3·10⁴ above.
+/// False alarm: 2 × 15 z-tests at 5.7e-7 → 1.7e-5. Power, shown on the same draws
+/// (rejected either way): a variance off by max(10 %, 10 sd) — 10 % from μ = 0.01 up,
+/// 71 % at μ = 1e-4; a mean off by max(1 %, 10/√(nμ)) — 1 % at μ = 0.5 and from μ = 100
+/// up, 3.3 % at μ = 3, 71 % at μ = 1e-4.
 #[test]
 fn aggregate_moments() {
     let mut rng = stream_rng(6000, 0, 0);
@@ -598,7 +665,7 @@ fn aggregate_moments() {
         3e16,
     ];
     for (j, &mu) in means.iter().enumerate() {
-        let n: usize = if mu < 1.0 { 200_000 } else { 20_000 };
+        let n: usize = if mu < 1.0 { 2_000_000 } else { 30_000 };
         let mut rng = stream_rng(6001, j as u64, 0);
         let (mut s1, mut s2) = (0.0f64, 0.0f64);
         for _ in 0..n {
@@ -610,17 +677,41 @@ fn aggregate_moments() {
         let nf = n as f64;
         let mean = s1 / nf + mu.floor();
         let var = s2 / nf - (s1 / nf) * (s1 / nf);
-        let zm = (mean - mu) / (mu / nf).sqrt();
-        let zv = (var - mu) / ((mu + 2.0 * mu * mu) / nf).sqrt();
+        let (sd_m, sd_v) = ((mu / nf).sqrt(), ((mu + 2.0 * mu * mu) / nf).sqrt());
+        let zm = (mean - mu) / sd_m;
+        let zv = (var - mu) / sd_v;
         assert!(
             zm.abs() < Z_MAX && zv.abs() < Z_MAX,
             "μ={mu:e}: mean {mean}, var {var} (z {zm:.2}, {zv:.2})"
         );
+        // power on the same draws: a mean off by max(1 %, 10 sd) and a variance off by
+        // max(10 %, 10 sd) are rejected either way
+        let dm = (10.0 * sd_m / mu).max(0.01);
+        let dv = (10.0 * sd_v / mu).max(0.1);
+        for sign in [-1.0, 1.0] {
+            let zm = (mean - mu * (1.0 + sign * dm)) / sd_m;
+            let zv = (var - mu * (1.0 + sign * dv)) / sd_v;
+            assert!(zm.abs() > Z_MAX && zv.abs() > Z_MAX, "μ={mu:e}: no power");
+        }
+        if mu >= 0.01 {
+            assert!(
+                dv <= 0.1 + 1e-12,
+                "μ={mu:e}: the variance resolves only {dv:.3}"
+            );
+        }
+        if mu >= 100.0 || mu == 0.5 {
+            assert!(
+                dm <= 0.01 + 1e-12,
+                "μ={mu:e}: the mean resolves only {dm:.3}"
+            );
+        }
     }
 }
 
 /// Chi-square of poisson_u64 around its inversion ↔ Ahrens–Dieter switch and
-/// for a few small means. False alarm: 5 tests at 1e-6 → 5e-6.
+/// for a few small means. False alarm: 5 tests at 1e-6 → 5e-6. Power
+/// (`assert_poisson_fit`): a mean 1 % off is rejected at μ ≈ 12 and 50 (1.9 % at μ = 2,
+/// 11 % at μ = 0.01).
 #[test]
 fn aggregate_chi_square() {
     let e = 1e-9;
@@ -655,7 +746,9 @@ fn aggregate_chi_square() {
 
 /// aggregate_profile against the shot path: same law for the profile totals.
 /// 64 bins × 2000 profiles of 1000 shots: per-bin mean and variance of the
-/// aggregate totals vs Poisson(Mλ). False alarm: 2 × 64 × 2 z-tests → 1.5e-4.
+/// aggregate totals vs Poisson(Mλ). False alarm: 2 × 64 × 2 z-tests and 2 × 2 pooled
+/// ones (Σz/8) → 1.5e-4. Power: the pooled z-tests reject, on the same draws, every
+/// bin's mean 1 % off and every bin's variance 10 % off, either way.
 #[test]
 fn aggregate_profile_law() {
     let lambda: Vec<f64> = (0..64)
@@ -680,15 +773,37 @@ fn aggregate_profile_law() {
             }
         }
         let n = profiles as f64;
+        // pooled over the bins: Σz/√64, for the right model and for models 1 % off in
+        // the mean or 10 % off in the variance (the shift of each bin's z, pooled)
+        let (mut pool_m, mut pool_v, mut shift_m, mut shift_v) = (0.0, 0.0, 0.0, 0.0);
         for i in 0..64 {
             let mu = lambda[i] * shots as f64;
             let mean = s1[i] / n;
             let var = s2[i] / n - mean * mean;
-            let zm = (mean - mu) / (mu / n).sqrt();
-            let zv = (var - mu) / ((mu + 2.0 * mu * mu) / n).sqrt();
+            let (sd_m, sd_v) = ((mu / n).sqrt(), ((mu + 2.0 * mu * mu) / n).sqrt());
+            let zm = (mean - mu) / sd_m;
+            let zv = (var - mu) / sd_v;
             assert!(
                 zm.abs() < Z_MAX && zv.abs() < Z_MAX,
                 "path {path} bin {i}: z {zm:.2} {zv:.2}"
+            );
+            pool_m += zm / 8.0;
+            pool_v += zv / 8.0;
+            shift_m += 0.01 * mu / sd_m / 8.0;
+            shift_v += 0.1 * mu / sd_v / 8.0;
+        }
+        assert!(
+            pool_m.abs() < Z_MAX && pool_v.abs() < Z_MAX,
+            "path {path}: pooled z {pool_m:.2} {pool_v:.2}"
+        );
+        for sign in [-1.0, 1.0] {
+            assert!(
+                (pool_m - sign * shift_m).abs() > Z_MAX,
+                "path {path}: no power at 1 % ({shift_m:.1})"
+            );
+            assert!(
+                (pool_v - sign * shift_v).abs() > Z_MAX,
+                "path {path}: no power at 10 % ({shift_v:.1})"
             );
         }
     }

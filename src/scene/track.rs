@@ -306,18 +306,38 @@ mod tests {
         crate::config::load(path, &ov).unwrap().config
     }
 
-    /// Over 20,000 km of a layer with f = 0.3 and 5 km cells the cloudy fraction is 0.3
-    /// (sd ≈ 0.3·0.7·sqrt(2·5/20,000)… ≈ 0.007: within 0.03), the mean cloudy cell is
-    /// 5 km (within 10 %), and the same seed gives the same cells.
+    /// Over 200,000 km of a layer with f = 0.3 and 5 km cells (cloudy and clear lengths
+    /// exponential, means L = 5 km and L(1−f)/f = 11.67 km; ~12,000 cycles) the cloudy
+    /// fraction is 0.3 within 5 sd, sd = sqrt(Var(C(1−f) − fG)/n)/E[C+G] with the
+    /// exponentials' variances (≈ 0.0027), and the mean cloudy cell is 5 km within 5 sd
+    /// (sd = 5 km/√n, n cells). False alarm: 2 × 5.7e-7 (normal approximation to sums
+    /// of ~12,000 cycles). Power, on the same draws: a fraction 10 % off (0.33 or 0.27) and
+    /// a mean cell 10 % off are rejected; and the same seed gives the same cells.
     #[test]
     fn broken_cloud_has_its_fraction_and_cell_length() {
         let c = cfg(&[]);
-        let len = 20_000e3;
+        let len = 200_000e3;
         let cells = draw_cells(&c.atmosphere.layers[0], 7, 0, 0, 0.0, len);
         let covered: f64 = cells.iter().map(|(a, b)| b - a).sum();
-        assert!((covered / len - 0.3).abs() < 0.03, "{}", covered / len);
+        let (f, cell, gap) = (0.3, 5e3, 5e3 * 0.7 / 0.3);
+        let cycles = len / (cell + gap);
+        let sd_f = ((1.0 - f) * (1.0 - f) * cell * cell + f * f * gap * gap).sqrt()
+            / (cell + gap)
+            / cycles.sqrt();
+        let fraction_ok = |want: f64| (covered / len - want).abs() < 5.0 * sd_f;
+        assert!(fraction_ok(f), "{} (sd {sd_f})", covered / len);
+        assert!(
+            !fraction_ok(1.1 * f) && !fraction_ok(0.9 * f),
+            "no power (sd {sd_f})"
+        );
         let mean = covered / cells.len() as f64;
-        assert!((mean / 5e3 - 1.0).abs() < 0.1, "{mean}");
+        let sd_m = cell / (cells.len() as f64).sqrt();
+        let cell_ok = |want: f64| (mean - want).abs() < 5.0 * sd_m;
+        assert!(cell_ok(cell), "{mean} (sd {sd_m})");
+        assert!(
+            !cell_ok(1.1 * cell) && !cell_ok(0.9 * cell),
+            "no power (sd {sd_m})"
+        );
         assert_eq!(
             cells,
             draw_cells(&c.atmosphere.layers[0], 7, 0, 0, 0.0, len)

@@ -2,10 +2,85 @@
 #![allow(dead_code)]
 
 pub mod cli;
+pub mod reference;
 
 use std::path::{Path, PathBuf};
 
 use lidarsim::scenario::{Lidar, Scenario};
+
+/// Where every skip is recorded, one line each, so that it shows after the harness
+/// (which hides a passing test's output): `.ci/run` empties it before the tests and
+/// prints it after them.
+pub fn skip_log_path() -> PathBuf {
+    Path::new(env!("CARGO_TARGET_TMPDIR")).join("skipped-tests.log")
+}
+
+fn record_skip(line: &str) {
+    use std::io::Write;
+    eprintln!("{line}");
+    if let Ok(mut f) = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(skip_log_path())
+    {
+        let _ = writeln!(f, "{line}");
+    }
+}
+
+/// Whether this is a CI run (`CI=true`, set by CI services and by `.ci/run`'s caller),
+/// where every test must run.
+pub fn in_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| v == "true")
+}
+
+/// A check that cannot run here: under `CI=true` a failure (CI installs everything the
+/// tests need), elsewhere a loud line on stderr and in [`skip_log_path`]. The caller
+/// returns after it.
+pub fn skip(test: &str, reason: &str) {
+    assert!(
+        !in_ci(),
+        "{test}: cannot run here ({reason}), and CI=true requires it to"
+    );
+    record_skip(&format!("SKIPPED {test}: {reason}"));
+}
+
+/// A check that cannot run here for a reason documented as acceptable in CI too
+/// (`why_acceptable` says why, e.g. a privilege an unprivileged container lacks):
+/// never fails, always recorded in [`skip_log_path`].
+pub fn skip_acceptable_in_ci(test: &str, reason: &str, why_acceptable: &str) {
+    record_skip(&format!(
+        "SKIPPED {test}: {reason} (acceptable in CI: {why_acceptable})"
+    ));
+}
+
+/// Whether `python3` imports every module of `modules`; under `CI=true` a missing one
+/// fails (`.ci/run` installs them in a venv), elsewhere it is a recorded skip.
+pub fn python_has(test: &str, modules: &[&str]) -> bool {
+    let o = std::process::Command::new("python3")
+        .args(["-c", &format!("import {}", modules.join(", "))])
+        .output();
+    match o {
+        Ok(o) if o.status.success() => true,
+        Ok(o) => {
+            skip(
+                test,
+                &format!(
+                    "python3 cannot import {}: {}",
+                    modules.join(", "),
+                    String::from_utf8_lossy(&o.stderr)
+                        .lines()
+                        .last()
+                        .unwrap_or("")
+                ),
+            );
+            false
+        }
+        Err(e) => {
+            skip(test, &format!("no python3 ({e})"));
+            false
+        }
+    }
+}
 
 /// Path of a shipped config, e.g. `config_path("paper/scenario1.toml")`.
 pub fn config_path(rel: &str) -> PathBuf {
@@ -26,55 +101,16 @@ pub fn lidar(rel: &str, overrides: &[&str]) -> Lidar {
     Lidar::load(&config_path(rel), &ov).unwrap_or_else(|e| panic!("{rel}: {e}"))
 }
 
-/// Brute-force signal of every bin, independent of the slab machinery: midpoint rule
-/// with steps of at most `step_m` (a whole number of steps per bin) on the point
-/// optics, T² accumulated by the same midpoint rule from where the beam enters the atmosphere.
+/// Brute-force signal of every bin, independent of the code under test: the midpoint
+/// rule with steps of at most `step_m` on the point optics of [`reference`] (own
+/// geometry, US76, Bucholtz Rayleigh, AFGL ozone, Elterman aerosol, overlap), T² by the
+/// same rule, times the signal constant computed from the config's values.
 pub fn brute_force_signal(sc: &Scenario, step_m: f64) -> Vec<f64> {
-    let g = &sc.geometry;
-    let entry = match g.kind {
-        lidarsim::config::PlatformKind::Spaceborne => {
-            g.range_at_altitude(sc.atmosphere.top_m()).max(0.0)
-        }
-        lidarsim::config::PlatformKind::Ground => 0.0,
-    };
-    let mut tau = 0.0;
-    // optics along the beam, zero below the surface (the beam stops there)
-    let optics = |r: f64| {
-        let z = g.altitude_at_range(r);
-        if z >= 0.0 {
-            sc.atmosphere.optics_at(z)
-        } else {
-            Default::default()
-        }
-    };
-    let integrate = |a: f64, b: f64, tau: &mut f64| -> f64 {
-        if b <= a {
-            return 0.0;
-        }
-        let n = ((b - a) / step_m).ceil().max(1.0) as usize;
-        let h = (b - a) / n as f64;
-        let mut sum = 0.0;
-        for k in 0..n {
-            let rm = a + (k as f64 + 0.5) * h;
-            let o = optics(rm);
-            let eta = sc.path.overlap().eta(rm);
-            sum += eta * o.beta_channel * (-2.0 * (*tau + o.alpha_effective * 0.5 * h)).exp()
-                / (rm * rm)
-                * h;
-            *tau += o.alpha_effective * h;
-        }
-        sc.instrument.signal_constant * sum
-    };
-    integrate(
-        entry.min(g.first_bin_range_m),
-        g.first_bin_range_m,
-        &mut tau,
-    );
-    (0..g.n_bins)
-        .map(|i| {
-            let (a, b) = g.bin_range_bounds(i);
-            integrate(a.max(entry), b, &mut tau)
-        })
+    let c = reference::signal_constant(&sc.loaded.config);
+    reference::brute_force(sc, step_m)
+        .integral
+        .iter()
+        .map(|i| c * i)
         .collect()
 }
 

@@ -1,0 +1,581 @@
+//! Independent references for the physics tests: every formula here is written from its
+//! published source and calls nothing in `lidarsim` but the config values it reads (the
+//! inputs). A test that compares the simulator with these fails on a 1 % error in the
+//! simulator's geometry, molecular optics, ozone, aerosol profile, overlap or T².
+#![allow(dead_code)]
+
+use lidarsim::config::{
+    ExtinctionSource, LayerKind, MolecularLine, MolecularModel, OverlapConfig, PlatformKind,
+    ScenarioConfig,
+};
+use lidarsim::scenario::Scenario;
+
+/// Speed of light, m s⁻¹ (SI definition).
+pub const C_M_PER_S: f64 = 299_792_458.0;
+/// Planck constant, J s (SI definition).
+pub const H_J_S: f64 = 6.626_070_15e-34;
+/// Mean Earth radius R1, m (IUGG; Moritz 2000, Geodetic Reference System 1980).
+pub const EARTH_RADIUS_M: f64 = 6_371_008.8;
+/// One Dobson unit, molecules m⁻² (2.6867e16 cm⁻²... = 2.6867e20 m⁻²).
+pub const DOBSON_M2: f64 = 2.686_7e20;
+
+// ---------------------------------------------------------------------------------------
+// U.S. Standard Atmosphere 1976 (NOAA-S/T 76-1562), from its defining equations: the
+// geopotential layers of Table 4, hydrostatic pressure (Eqs. 33a/33b), N = N_A·P/(R*·T),
+// and the molecular-weight ratio M/M0 of Table 8 between 80 and 86 km.
+// ---------------------------------------------------------------------------------------
+
+const US76_R_STAR: f64 = 8.31432e3; // J kmol⁻¹ K⁻¹
+const US76_M0: f64 = 28.9644; // kg kmol⁻¹
+const US76_G0: f64 = 9.80665; // m s⁻²
+const US76_R0: f64 = 6_356_766.0; // m, Earth radius of the geopotential conversion
+const US76_NA: f64 = 6.022169e26; // kmol⁻¹
+/// (base geopotential altitude m', lapse rate K/m') of Table 4.
+const US76_LAYERS: [(f64, f64); 7] = [
+    (0.0, -6.5e-3),
+    (11_000.0, 0.0),
+    (20_000.0, 1.0e-3),
+    (32_000.0, 2.8e-3),
+    (47_000.0, 0.0),
+    (51_000.0, -2.8e-3),
+    (71_000.0, -2.0e-3),
+];
+/// Table 8: M/M0 at 80.0, 80.5, …, 86.0 km geometric.
+const US76_MW_RATIO: [f64; 13] = [
+    1.0, 0.999996, 0.999989, 0.999971, 0.999941, 0.999909, 0.999870, 0.999829, 0.999786, 0.999741,
+    0.999694, 0.999641, 0.999579,
+];
+
+/// US76 (temperature K, pressure Pa) at geometric altitude `z_m` (−5 to 86 km).
+pub fn us76_t_p(z_m: f64) -> (f64, f64) {
+    let h = US76_R0 * z_m / (US76_R0 + z_m);
+    let gmr = US76_G0 * US76_M0 / US76_R_STAR;
+    let (mut t_b, mut p_b) = (288.15, 101_325.0);
+    let mut k = 0;
+    loop {
+        let (h_b, l) = US76_LAYERS[k];
+        let h_top = US76_LAYERS.get(k + 1).map_or(f64::INFINITY, |x| x.0);
+        let dh = h.min(h_top) - h_b;
+        let (t, p) = if l == 0.0 {
+            (t_b, p_b * (-gmr * dh / t_b).exp())
+        } else {
+            let t = t_b + l * dh;
+            (t, p_b * (t_b / t).powf(gmr / l))
+        };
+        if h <= h_top {
+            // molecular temperature T_M = T·M0/M → kinetic T between 80 and 86 km
+            let mw = if z_m > 80_000.0 {
+                let x = (z_m - 80_000.0) / 500.0;
+                let i = (x.floor() as usize).min(11);
+                let f = x - i as f64;
+                US76_MW_RATIO[i] + f * (US76_MW_RATIO[i + 1] - US76_MW_RATIO[i])
+            } else {
+                1.0
+            };
+            return (t * mw, p);
+        }
+        t_b = t;
+        p_b = p;
+        k += 1;
+    }
+}
+
+/// US76 number density, m⁻³ (zero above 86 km).
+pub fn us76_number_density_m3(z_m: f64) -> f64 {
+    if z_m > 86_000.0 {
+        return 0.0;
+    }
+    let (t, p) = us76_t_p(z_m);
+    US76_NA * p / (US76_R_STAR * t)
+}
+
+// ---------------------------------------------------------------------------------------
+// Rayleigh scattering: Bucholtz (1995), Appl. Opt. 34, 2765, Eq. 8 with Table 3 (fit
+// coefficients) and Table 1 (depolarization ρn); the lidar ratio from the phase function
+// P(π) = 3(1+γ)/(2(1+2γ)); the Cabannes line after She (2001), Appl. Opt. 40, 4875.
+// ---------------------------------------------------------------------------------------
+
+/// Rayleigh cross-section per molecule, m² (Bucholtz Eq. 8, λ in µm, σ in cm²).
+pub fn rayleigh_cross_section_m2(wavelength_nm: f64) -> f64 {
+    let l = wavelength_nm / 1000.0;
+    let (a, b, c, d) = if l <= 0.5 {
+        (3.01577e-28, 3.55212, 1.35579, 0.11563)
+    } else {
+        (4.01061e-28, 3.99668, 1.10298e-3, 2.71393e-2)
+    };
+    a * l.powf(-(b + c * l + d / l)) * 1e-4
+}
+
+/// ρn of Bucholtz Table 1 at the lidar wavelengths the shipped configs use.
+pub fn rayleigh_rho_n(wavelength_nm: f64) -> f64 {
+    match wavelength_nm.round() as i64 {
+        355 => 0.03010,  // 0.350 and 0.360 µm rows
+        532 => 0.02842,  // 0.500 and 0.550 µm rows
+        1064 => 0.02730, // 1.000 µm row (the table's end)
+        _ => panic!("no Bucholtz Table 1 value transcribed for {wavelength_nm} nm"),
+    }
+}
+
+/// (lidar ratio sr, linear depolarization) of the molecular backscatter a filter passes.
+pub fn molecular_lidar_ratio_and_depolarization(rho_n: f64, cabannes: bool) -> (f64, f64) {
+    let gamma = rho_n / (2.0 - rho_n);
+    let s_whole = 8.0 * std::f64::consts::PI / 3.0 * (1.0 + 2.0 * gamma) / (1.0 + gamma);
+    if !cabannes {
+        return (s_whole, gamma);
+    }
+    // anisotropy ε = γ²/a² from ρn (She 2001 Eq. 4); the Cabannes line keeps the
+    // isotropic part and 1/4 of the anisotropic backscatter: (45 + 7ε/4)/(45 + 7ε)
+    let eps = 45.0 * rho_n / (6.0 - 7.0 * rho_n);
+    let share = (45.0 + 7.0 * eps / 4.0) / (45.0 + 7.0 * eps);
+    (s_whole / share, 3.0 * eps / (180.0 + 4.0 * eps))
+}
+
+/// Share of a species' backscatter (linear depolarization δ) a channel sees: total 1;
+/// parallel `(1−x)·1/(1+δ) + x·δ/(1+δ)`, perpendicular the converse (cross-talk x).
+pub fn channel_share(polarization: &str, delta: f64, crosstalk: f64) -> f64 {
+    let (par, perp) = (1.0 / (1.0 + delta), delta / (1.0 + delta));
+    match polarization {
+        "total" => 1.0,
+        "parallel" => (1.0 - crosstalk) * par + crosstalk * perp,
+        "perpendicular" => (1.0 - crosstalk) * perp + crosstalk * par,
+        p => panic!("polarization {p}"),
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Ozone: AFGL U.S. Standard profile (Anderson et al. 1986, AFGL-TR-86-0110, Table 1f),
+// and the Chappuis-band cross-section of Serdyuchenko et al. (2014) at 233 K in 10-nm
+// bin averages as tabulated by Bruneton (2017, precomputed_atmospheric_scattering,
+// atmosphere/demo/demo.cc, kOzoneCrossSection, 360–830 nm).
+// ---------------------------------------------------------------------------------------
+
+/// (km, ppmv, air number density cm⁻³) of AFGL Table 1f.
+pub const AFGL_OZONE: [(f64, f64, f64); 38] = [
+    (0.0, 2.66e-2, 2.548e19),
+    (1.0, 2.93e-2, 2.313e19),
+    (2.0, 3.24e-2, 2.094e19),
+    (3.0, 3.32e-2, 1.891e19),
+    (4.0, 3.39e-2, 1.704e19),
+    (5.0, 3.77e-2, 1.532e19),
+    (6.0, 4.11e-2, 1.373e19),
+    (7.0, 5.01e-2, 1.228e19),
+    (8.0, 5.97e-2, 1.094e19),
+    (9.0, 9.17e-2, 9.719e18),
+    (10.0, 1.31e-1, 8.602e18),
+    (11.0, 2.15e-1, 7.589e18),
+    (12.0, 3.10e-1, 6.489e18),
+    (13.0, 3.85e-1, 5.546e18),
+    (14.0, 5.03e-1, 4.739e18),
+    (15.0, 6.51e-1, 4.050e18),
+    (16.0, 8.70e-1, 3.462e18),
+    (17.0, 1.19, 2.960e18),
+    (18.0, 1.59, 2.530e18),
+    (19.0, 2.03, 2.163e18),
+    (20.0, 2.58, 1.849e18),
+    (21.0, 3.03, 1.575e18),
+    (22.0, 3.65, 1.342e18),
+    (23.0, 4.17, 1.144e18),
+    (24.0, 4.63, 9.765e17),
+    (25.0, 5.12, 8.337e17),
+    (27.5, 5.80, 5.640e17),
+    (30.0, 6.55, 3.830e17),
+    (32.5, 7.37, 2.524e17),
+    (35.0, 7.84, 1.761e17),
+    (37.5, 7.80, 1.238e17),
+    (40.0, 7.30, 8.310e16),
+    (42.5, 6.20, 5.803e16),
+    (45.0, 5.25, 4.090e16),
+    (47.5, 4.10, 2.920e16),
+    (50.0, 3.10, 2.136e16),
+    (55.0, 1.80, 1.181e16),
+    (60.0, 1.10, 6.426e15),
+];
+
+/// Ozone number density, m⁻³: log-linear between the AFGL levels, the surface value
+/// below 0, nothing above 60 km.
+pub fn ozone_number_density_m3(z_m: f64) -> f64 {
+    if z_m > 60_000.0 {
+        return 0.0;
+    }
+    let n = |k: usize| AFGL_OZONE[k].1 * 1e-6 * AFGL_OZONE[k].2 * 1e6;
+    let z_km = z_m / 1e3;
+    if z_km <= 0.0 {
+        return n(0);
+    }
+    let k = AFGL_OZONE.iter().position(|r| r.0 >= z_km).unwrap();
+    let (z0, z1) = (AFGL_OZONE[k - 1].0, AFGL_OZONE[k].0);
+    let f = (z_km - z0) / (z1 - z0);
+    (n(k - 1).ln() + f * (n(k).ln() - n(k - 1).ln())).exp()
+}
+
+/// Bruneton's kOzoneCrossSection (m²), bins [360 + 10k, 370 + 10k) nm, k = 0..47.
+pub const OZONE_CROSS_SECTION_M2: [f64; 48] = [
+    1.18e-27, 2.182e-28, 2.818e-28, 6.636e-28, 1.527e-27, 2.763e-27, 5.52e-27, 8.451e-27,
+    1.582e-26, 2.316e-26, 3.669e-26, 4.924e-26, 7.752e-26, 9.016e-26, 1.48e-25, 1.602e-25,
+    2.139e-25, 2.755e-25, 3.091e-25, 3.5e-25, 4.266e-25, 4.672e-25, 4.398e-25, 4.701e-25,
+    5.019e-25, 4.305e-25, 3.74e-25, 3.215e-25, 2.662e-25, 2.238e-25, 1.852e-25, 1.473e-25,
+    1.209e-25, 9.423e-26, 7.455e-26, 6.566e-26, 5.105e-26, 4.15e-26, 4.228e-26, 3.237e-26,
+    2.451e-26, 2.801e-26, 2.534e-26, 1.624e-26, 1.465e-26, 2.078e-26, 1.383e-26, 7.105e-27,
+];
+
+/// The table's value for the bin holding `wavelength_nm` (0 beyond 840 nm).
+pub fn ozone_cross_section_m2(wavelength_nm: f64) -> f64 {
+    assert!(
+        wavelength_nm >= 360.0,
+        "{wavelength_nm} nm: not in the table"
+    );
+    let k = ((wavelength_nm - 360.0) / 10.0).floor() as usize;
+    OZONE_CROSS_SECTION_M2.get(k).copied().unwrap_or(0.0)
+}
+
+/// Ozone column between two altitudes, m⁻², by the midpoint rule at 1 m steps.
+pub fn ozone_column_m2(z_lo_m: f64, z_hi_m: f64) -> f64 {
+    let n = ((z_hi_m - z_lo_m).max(0.0)).ceil() as usize;
+    if n == 0 {
+        return 0.0;
+    }
+    let h = (z_hi_m - z_lo_m) / n as f64;
+    (0..n)
+        .map(|k| ozone_number_density_m3(z_lo_m + (k as f64 + 0.5) * h))
+        .sum::<f64>()
+        * h
+}
+
+// ---------------------------------------------------------------------------------------
+// Background aerosol, paper Eq. 5–6: Koschmieder/Kruse surface extinction and the
+// Elterman (1968, AFCRL-68-0153) 340-nm attenuation profile as its shape, log-linear
+// between the 1-km levels, nothing above 50 km.
+// ---------------------------------------------------------------------------------------
+
+/// Elterman (1968) aerosol attenuation at 340 nm, km⁻¹, 0–50 km at 1-km steps.
+pub const ELTERMAN_340: [f64; 51] = [
+    2.40e-01, 1.06e-01, 4.56e-02, 1.91e-02, 1.01e-02, 7.63e-03, 5.38e-03, 5.00e-03, 5.15e-03,
+    4.94e-03, 4.82e-03, 4.51e-03, 4.74e-03, 4.37e-03, 4.28e-03, 4.03e-03, 3.83e-03, 3.78e-03,
+    3.88e-03, 3.08e-03, 2.26e-03, 1.64e-03, 1.23e-03, 9.45e-04, 7.49e-04, 6.30e-04, 5.50e-04,
+    4.21e-04, 3.22e-04, 2.48e-04, 1.90e-04, 1.45e-04, 1.11e-04, 8.51e-05, 6.52e-05, 5.00e-05,
+    3.83e-05, 2.93e-05, 2.25e-05, 1.72e-05, 1.32e-05, 1.01e-05, 7.72e-06, 5.91e-06, 4.53e-06,
+    3.46e-06, 2.66e-06, 2.04e-06, 1.56e-06, 1.19e-06, 9.14e-07,
+];
+
+/// Np(z)/Np(0) of Eq. 6.
+pub fn aerosol_shape(z_m: f64) -> f64 {
+    if z_m > 50_000.0 {
+        return 0.0;
+    }
+    if z_m <= 0.0 {
+        return 1.0;
+    }
+    let x = z_m / 1000.0;
+    let i = (x.floor() as usize).min(49);
+    let f = x - i as f64;
+    (ELTERMAN_340[i].ln() + f * (ELTERMAN_340[i + 1].ln() - ELTERMAN_340[i].ln())).exp()
+        / ELTERMAN_340[0]
+}
+
+/// Surface aerosol extinction at the laser wavelength, m⁻¹ (Eq. 5: 3.91/V·(550/λ)^q with
+/// Kruse's q; or the given extinction scaled by the Ångström exponent).
+pub fn aerosol_surface_extinction_per_m(cfg: &ScenarioConfig) -> f64 {
+    let a = cfg.atmosphere.aerosol.as_ref().unwrap();
+    let wl = cfg.instrument.wavelength_nm;
+    let kruse = if a.visibility_km < 6.0 {
+        0.585 * a.visibility_km.powf(1.0 / 3.0)
+    } else {
+        1.3
+    };
+    let given = match (a.extinction_from, a.surface_extinction_per_km) {
+        (Some(ExtinctionSource::Visibility), _) | (_, None) => None,
+        (_, Some(e)) => Some(e),
+    };
+    match given {
+        Some(e) => {
+            e * 1e-3 * (a.reference_wavelength_nm / wl).powf(a.angstrom_exponent.unwrap_or(kruse))
+        }
+        None => 3.91 / a.visibility_km * (550.0 / wl).powf(kruse) * 1e-3,
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Geometry (model.md §3) and overlap (Measures 1984, §7.5: circle–circle intersection).
+// ---------------------------------------------------------------------------------------
+
+/// Altitude at range `r` of the config's beam: flat `H ∓ r cos φ`, or on a sphere of
+/// radius R, `sqrt(P² + r² ∓ 2rP cos φ) − R`.
+pub fn altitude_at_range(cfg: &ScenarioConfig, r: f64) -> f64 {
+    let p = &cfg.platform;
+    let (h, phi) = (p.altitude_km * 1e3, p.off_nadir_deg.to_radians());
+    let down = p.kind == PlatformKind::Spaceborne;
+    let sign = if down { -1.0 } else { 1.0 };
+    if !p.earth_curvature || p.off_nadir_deg == 0.0 {
+        return h + sign * r * phi.cos();
+    }
+    let big = EARTH_RADIUS_M + h;
+    (big * big + r * r + sign * 2.0 * r * big * phi.cos()).sqrt() - EARTH_RADIUS_M
+}
+
+/// Range at which the beam reaches altitude `z` (the near crossing): flat
+/// `r = (H − z)/cos φ` (space-borne) or `(z − z0)/cos φ` (ground); on a sphere the root
+/// of the law of cosines.
+pub fn range_at_altitude(cfg: &ScenarioConfig, z: f64) -> f64 {
+    let p = &cfg.platform;
+    let (h, phi) = (p.altitude_km * 1e3, p.off_nadir_deg.to_radians());
+    let down = p.kind == PlatformKind::Spaceborne;
+    if !p.earth_curvature || p.off_nadir_deg == 0.0 {
+        return if down {
+            (h - z) / phi.cos()
+        } else {
+            (z - h) / phi.cos()
+        };
+    }
+    let big = EARTH_RADIUS_M + h;
+    let reach = ((EARTH_RADIUS_M + z).powi(2) - (big * phi.sin()).powi(2)).sqrt();
+    if down {
+        big * phi.cos() - reach
+    } else {
+        reach - big * phi.cos()
+    }
+}
+
+/// Range bins `[start, end)` of the window: ΔR = c·Δt/2 from the window's near edge.
+pub fn bins(cfg: &ScenarioConfig) -> Vec<(f64, f64)> {
+    let a = &cfg.acquisition;
+    let (top, bottom) = (a.top_altitude_km * 1e3, a.bottom_altitude_km * 1e3);
+    let (near, far) = if cfg.platform.kind == PlatformKind::Spaceborne {
+        (range_at_altitude(cfg, top), range_at_altitude(cfg, bottom))
+    } else {
+        (range_at_altitude(cfg, bottom), range_at_altitude(cfg, top))
+    };
+    let dr = C_M_PER_S * cfg.instrument.bin_width_s / 2.0;
+    let n = ((far - near) / dr - 1e-9).ceil().max(1.0) as usize;
+    (0..n)
+        .map(|i| (near + i as f64 * dr, near + (i + 1) as f64 * dr))
+        .collect()
+}
+
+/// Overlap η(r): 1, a step, or the fraction of a uniform laser disc (radius w0 + r·θL/2)
+/// inside the field-of-view disc (radius R_tel + r·θ/2, R_tel from the telescope area)
+/// whose centre is d away.
+pub fn overlap(cfg: &ScenarioConfig, r: f64) -> f64 {
+    let i = &cfg.instrument;
+    match &i.overlap {
+        None | Some(OverlapConfig::None) => 1.0,
+        Some(OverlapConfig::FullRange { full_overlap_m }) => {
+            if r >= *full_overlap_m {
+                1.0
+            } else {
+                0.0
+            }
+        }
+        Some(OverlapConfig::Geometric {
+            beam_radius_m,
+            beam_divergence_rad,
+            axis_offset_m,
+        }) => {
+            let a = beam_radius_m + r * beam_divergence_rad / 2.0;
+            let b = (i.telescope_area_m2 / std::f64::consts::PI).sqrt() + r * i.fov_rad / 2.0;
+            lens_area(a, b, *axis_offset_m) / (std::f64::consts::PI * a * a)
+        }
+    }
+}
+
+/// Area common to two discs of radii a, b with centres d apart.
+pub fn lens_area(a: f64, b: f64, d: f64) -> f64 {
+    use std::f64::consts::PI;
+    if d >= a + b {
+        return 0.0;
+    }
+    if d <= (a - b).abs() {
+        return PI * a.min(b).powi(2);
+    }
+    let alpha = ((d * d + a * a - b * b) / (2.0 * d * a))
+        .clamp(-1.0, 1.0)
+        .acos();
+    let beta = ((d * d + b * b - a * a) / (2.0 * d * b))
+        .clamp(-1.0, 1.0)
+        .acos();
+    a * a * (alpha - alpha.sin() * alpha.cos()) + b * b * (beta - beta.sin() * beta.cos())
+}
+
+// ---------------------------------------------------------------------------------------
+// Point optics and the lidar equation (paper Eq. 2).
+// ---------------------------------------------------------------------------------------
+
+/// Point optics of the config's atmosphere at altitude z.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PointOptics {
+    /// Attenuating extinction (layers × η_ms), m⁻¹.
+    pub alpha: f64,
+    /// Backscatter the channel sees, m⁻¹ sr⁻¹.
+    pub beta: f64,
+}
+
+/// The config's atmosphere, reduced to what the point optics need.
+pub struct RefAtmosphere {
+    cfg: ScenarioConfig,
+    sigma_mol: f64,
+    s_mol: f64,
+    delta_mol: f64,
+    sigma_o3: f64,
+    aerosol_surface: f64,
+    polarization: String,
+    crosstalk: f64,
+}
+
+impl RefAtmosphere {
+    /// From a single-channel scenario's config (US76 molecules or none).
+    pub fn new(sc: &Scenario) -> Self {
+        let cfg = sc.loaded.config.clone();
+        let wl = cfg.instrument.wavelength_nm;
+        let m = &cfg.atmosphere.molecular;
+        let has_molecules = match &m.model {
+            MolecularModel::Named(n) if n == "none" => false,
+            MolecularModel::Named(n) => {
+                assert_eq!(n, "us76");
+                true
+            }
+            MolecularModel::File { .. } => panic!("the reference knows US76 only"),
+        };
+        let rho = m.depolarization.unwrap_or_else(|| rayleigh_rho_n(wl));
+        let cabannes = match m.line {
+            MolecularLine::Cabannes => true,
+            MolecularLine::Rayleigh => false,
+            MolecularLine::Auto => cfg.instrument.filter_width_nm < 0.4,
+        };
+        let (s_mol, delta_mol) = molecular_lidar_ratio_and_depolarization(rho, cabannes);
+        assert!(cfg.surface.is_none(), "the reference has no surface echo");
+        RefAtmosphere {
+            sigma_mol: if has_molecules {
+                rayleigh_cross_section_m2(wl)
+            } else {
+                0.0
+            },
+            s_mol,
+            delta_mol,
+            sigma_o3: if cfg.atmosphere.ozone {
+                ozone_cross_section_m2(wl)
+            } else {
+                0.0
+            },
+            aerosol_surface: if cfg.atmosphere.aerosol.is_some() {
+                aerosol_surface_extinction_per_m(&cfg)
+            } else {
+                0.0
+            },
+            polarization: sc.instrument.channel.name().to_string(),
+            crosstalk: cfg.instrument.crosstalk,
+            cfg,
+        }
+    }
+
+    /// Point optics at altitude `z_m`.
+    pub fn at(&self, z_m: f64) -> PointOptics {
+        let wl = self.cfg.instrument.wavelength_nm;
+        let share = |d: f64| channel_share(&self.polarization, d, self.crosstalk);
+        let alpha_mol = self.sigma_mol * us76_number_density_m3(z_m);
+        let mut o = PointOptics {
+            alpha: alpha_mol + self.sigma_o3 * ozone_number_density_m3(z_m),
+            beta: alpha_mol / self.s_mol * share(self.delta_mol),
+        };
+        if let Some(a) = &self.cfg.atmosphere.aerosol {
+            let alpha = self.aerosol_surface * aerosol_shape(z_m);
+            o.alpha += alpha;
+            o.beta += alpha / a.lidar_ratio_sr * share(a.depolarization);
+        }
+        for l in &self.cfg.atmosphere.layers {
+            if z_m >= l.base_km * 1e3 && z_m < l.top_km * 1e3 {
+                let reference = l.reference_wavelength_nm.unwrap_or(wl);
+                let ext = l.extinction_per_km
+                    * 1e-3
+                    * (reference / wl).powf(l.angstrom_exponent.unwrap_or(0.0));
+                assert!(l.lidar_ratio_sr_by_wavelength.is_empty());
+                let _ = LayerKind::Cloud;
+                o.alpha += ext * l.multiple_scattering;
+                o.beta += ext / l.lidar_ratio_sr * share(l.depolarization);
+            }
+        }
+        o
+    }
+}
+
+/// Signal constant C = K·E0·(λ/(hc))·A·TR·TF·Q (paper Eq. 2), from the config.
+pub fn signal_constant(cfg: &ScenarioConfig) -> f64 {
+    let i = &cfg.instrument;
+    i.optical_efficiency
+        * i.pulse_energy_j
+        * (i.wavelength_nm * 1e-9 / (H_J_S * C_M_PER_S))
+        * i.telescope_area_m2
+        * i.receiver_efficiency
+        * i.filter_transmission
+        * i.quantum_efficiency
+}
+
+/// Per bin: (∫η β T²/r² dr, ∫η/r² dr, T² at the bin centre), by the midpoint rule with
+/// steps of at most `step_m`, T² accumulated by the same rule from the top of the
+/// atmosphere (space-borne) or the station (ground). Nothing below the ground.
+pub struct BruteForce {
+    /// Atmospheric factor of each bin, sr⁻¹ m⁻².
+    pub integral: Vec<f64>,
+    /// Range weight of each bin, m⁻¹.
+    pub range_weight: Vec<f64>,
+    /// Two-way transmission at each bin centre.
+    pub t2_centre: Vec<f64>,
+}
+
+/// See [`BruteForce`].
+pub fn brute_force(sc: &Scenario, step_m: f64) -> BruteForce {
+    let cfg = &sc.loaded.config;
+    let atm = RefAtmosphere::new(sc);
+    let spaceborne = cfg.platform.kind == PlatformKind::Spaceborne;
+    let bins = bins(cfg);
+    let ground_range = if spaceborne {
+        range_at_altitude(cfg, 0.0)
+    } else {
+        f64::INFINITY
+    };
+    // start above everything: 100 km
+    let entry = if spaceborne {
+        range_at_altitude(cfg, 100_000.0).max(0.0)
+    } else {
+        0.0
+    };
+    let mut tau = 0.0;
+    let march = |a: f64, b: f64, tau: &mut f64, centre: Option<f64>| {
+        let mut out = (0.0, 0.0, 0.0);
+        if b <= a {
+            return out;
+        }
+        let n = ((b - a) / step_m).ceil().max(1.0) as usize;
+        let h = (b - a) / n as f64;
+        for k in 0..n {
+            let r = a + (k as f64 + 0.5) * h;
+            let eta = overlap(cfg, r);
+            let weight = if r > 0.0 { eta / (r * r) * h } else { 0.0 };
+            out.1 += weight;
+            if r >= ground_range {
+                continue;
+            }
+            let o = atm.at(altitude_at_range(cfg, r));
+            let t2_mid = (-2.0 * (*tau + o.alpha * 0.5 * h)).exp();
+            if let Some(c) = centre.filter(|c| r - 0.5 * h <= *c && *c < r + 0.5 * h) {
+                out.2 = (-2.0 * (*tau + o.alpha * (c - (r - 0.5 * h)))).exp();
+            }
+            out.0 += o.beta * t2_mid * weight;
+            *tau += o.alpha * h;
+        }
+        out
+    };
+    march(entry.min(bins[0].0), bins[0].0, &mut tau, None);
+    let mut f = BruteForce {
+        integral: vec![],
+        range_weight: vec![],
+        t2_centre: vec![],
+    };
+    for (a, b) in bins {
+        let (lo, hi) = (a.max(entry), b);
+        let c = 0.5 * (a + b);
+        let (i, w, t) = march(lo, hi, &mut tau, Some(c));
+        f.integral.push(i);
+        f.range_weight.push(w);
+        f.t2_centre.push(t);
+    }
+    f
+}

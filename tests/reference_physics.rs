@@ -1,0 +1,282 @@
+//! The physics against references that do not call the code under test
+//! (`tests/common/reference.rs`: formulas written from their sources, published tables,
+//! quadrature written here). Each check is tight enough that a 1 % error in the formula
+//! it covers fails it: ozone in T², the ozone cross-section, the ozone column, the range
+//! weight `∫η/r² dr`, the sky light a polarization channel receives, the molecular
+//! backscatter, the signal constant.
+
+mod common;
+
+use common::reference as r;
+use common::{lidar, scenario};
+use lidarsim::atmosphere::ozone;
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a / b - 1.0).abs()
+}
+
+/// Ozone's one-way optical depth from the top of the atmosphere to each bin centre, as
+/// the simulator's T² carries it (`T²_with / T²_without`), against the AFGL column
+/// integrated here times the published cross-section, over `cos φ` on a flat Earth.
+/// A 1 % error in σ or in the column moves τ by 1 %; the tolerance is 2e-3, and T²
+/// without ozone in T² (τ = 0) fails by 100 %.
+#[test]
+fn ozone_in_the_two_way_transmission_is_the_afgl_column_times_the_cross_section() {
+    for (off_nadir, wl) in [("0", "532"), ("20", "532"), ("0", "600"), ("0", "355")] {
+        let over = |ozone: &str| {
+            scenario(
+                "paper/scenario1.toml",
+                &[
+                    &format!("atmosphere.ozone={ozone}"),
+                    &format!("platform.off_nadir_deg={off_nadir}"),
+                    "platform.earth_curvature=false",
+                    &format!("instrument.wavelength_nm={wl}"),
+                ],
+            )
+        };
+        let (on, off) = (over("true"), over("false"));
+        let (e_on, e_off) = (on.expected().unwrap(), off.expected().unwrap());
+        let cfg = &on.loaded.config;
+        let sigma = if wl == "355" {
+            // below 360 nm the model serves the 360–370 nm bin's value (ozone.rs)
+            r::OZONE_CROSS_SECTION_M2[0]
+        } else {
+            r::ozone_cross_section_m2(wl.parse().unwrap())
+        };
+        let cos = (off_nadir.parse::<f64>().unwrap()).to_radians().cos();
+        let mut checked = 0;
+        for i in 0..e_on.n_bins() {
+            let z = e_on.altitude_m[i];
+            if !(0.0..60_000.0).contains(&z) || e_off.t2[i] < 1e-6 {
+                continue;
+            }
+            // the bin centre's altitude from this test's own geometry
+            let (a, b) = r::bins(cfg)[i];
+            let z_ref = r::altitude_at_range(cfg, 0.5 * (a + b));
+            assert!((z - z_ref).abs() < 1e-6, "bin {i}: {z} vs {z_ref}");
+            let tau_sim = -0.5 * (e_on.t2[i] / e_off.t2[i]).ln();
+            let tau_ref = sigma * r::ozone_column_m2(z_ref, 60_000.0) / cos;
+            if tau_ref < 1e-6 {
+                continue;
+            }
+            assert!(
+                rel(tau_sim, tau_ref) < 2e-3,
+                "{wl} nm, {off_nadir}°, bin {i} at {z:.0} m: τ_O3 {tau_sim} vs {tau_ref}"
+            );
+            checked += 1;
+        }
+        assert!(checked > 150, "{checked}");
+        // the ozone's two-way transmission to the ground at 532 nm, nadir: about 0.95
+        if wl == "532" && off_nadir == "0" {
+            let t2 = (-2.0 * sigma * r::ozone_column_m2(0.0, 60_000.0)).exp();
+            assert!((0.945..0.96).contains(&t2), "{t2}");
+        }
+    }
+}
+
+/// The total column of the embedded profile against this test's own quadrature of the
+/// AFGL table (344 DU); the model's closed form within 1e-4.
+#[test]
+fn the_ozone_column_is_the_afgl_tables_column() {
+    let du = r::ozone_column_m2(0.0, 60_000.0) / r::DOBSON_M2;
+    assert!(
+        rel(ozone::column_du(), du) < 1e-4,
+        "{} vs {du}",
+        ozone::column_du()
+    );
+    for (lo, hi) in [(0.0, 15_000.0), (15_000.0, 30_000.0), (22_000.0, 60_000.0)] {
+        let col = r::ozone_column_m2(lo, hi);
+        assert!(rel(ozone::column_m2(lo, hi), col) < 1e-4, "{lo}–{hi}");
+    }
+    for z in [0.0, 500.0, 9_700.0, 22_000.0, 33_333.0, 59_000.0] {
+        assert!(
+            rel(ozone::number_density_m3(z), r::ozone_number_density_m3(z)) < 1e-9,
+            "{z}"
+        );
+    }
+}
+
+/// σ_O3 at several wavelengths equals the published 10-nm bin averages (Serdyuchenko
+/// et al. 2014, 233 K, as tabulated by Bruneton 2017: 4.672e-21 cm² at 570–580 nm, …);
+/// 1 % off anywhere fails.
+#[test]
+fn the_ozone_cross_section_is_the_published_table() {
+    let published = [
+        (400.0, 1.527e-27), // [400, 410)
+        (450.0, 2.316e-26),
+        (500.0, 1.48e-25),
+        (532.0, 2.755e-25), // [530, 540): 2.76e-21 cm², model.md ≈ 2.8e-21
+        (575.0, 4.672e-25),
+        (600.0, 5.019e-25), // the Chappuis maximum bin
+        (650.0, 2.238e-25),
+        (700.0, 7.455e-26),
+        (750.0, 3.237e-26),
+        (835.0, 7.105e-27), // the last bin
+    ];
+    for (wl, sigma) in published {
+        assert!(
+            rel(ozone::cross_section_m2(wl), sigma) < 1e-6,
+            "{wl} nm: {} vs {sigma}",
+            ozone::cross_section_m2(wl)
+        );
+        assert_eq!(r::ozone_cross_section_m2(wl), sigma, "the test's table");
+    }
+    assert_eq!(ozone::cross_section_m2(1064.0), 0.0);
+}
+
+/// The range weight alone, `∫_bin η(r)/r² dr`: for full overlap `1/a − 1/b` on this
+/// test's own bin grid; for the biaxial ground lidar the midpoint rule at 5 mm on this
+/// test's own circle–circle overlap. A 1 % error fails by 10×.
+#[test]
+fn the_range_weight_is_the_integral_of_the_overlap_over_r_squared() {
+    let sc = scenario("paper/scenario1.toml", &[]);
+    let e = sc.expected().unwrap();
+    let bins = r::bins(&sc.loaded.config);
+    assert_eq!(bins.len(), e.n_bins());
+    for (i, (a, b)) in bins.iter().enumerate() {
+        let exact = 1.0 / a - 1.0 / b;
+        assert!(
+            rel(e.range_weight[i], exact) < 1e-9,
+            "bin {i}: {} vs {exact}",
+            e.range_weight[i]
+        );
+    }
+    let sc = scenario(
+        "ground/ground_532_overlap.toml",
+        &["acquisition.top_altitude_km=3"],
+    );
+    let e = sc.expected().unwrap();
+    let cfg = &sc.loaded.config;
+    let bins = r::bins(cfg);
+    assert_eq!(bins.len(), e.n_bins());
+    let mut nonzero = 0;
+    for (i, &(a, b)) in bins.iter().enumerate() {
+        let n = ((b - a) / 0.005).ceil() as usize;
+        let h = (b - a) / n as f64;
+        let w: f64 = (0..n)
+            .map(|k| {
+                let rr = a + (k as f64 + 0.5) * h;
+                r::overlap(cfg, rr) / (rr * rr) * h
+            })
+            .sum();
+        if w == 0.0 {
+            assert_eq!(e.range_weight[i], 0.0, "bin {i}");
+            continue;
+        }
+        nonzero += 1;
+        assert!(
+            rel(e.range_weight[i], w) < 1e-3,
+            "bin {i}: {} vs {w}",
+            e.range_weight[i]
+        );
+    }
+    assert!(nonzero > 300, "{nonzero}");
+}
+
+/// Unpolarized sky light: each polarization channel receives half of
+/// `Lλ·A·Ω·Δλ·TF·Δt·TR·Q` (Eq. 3, Ω = πθ²/4), whatever its cross-talk (the cross-talk
+/// exchanges halves of equal size); the total channel all of it.
+#[test]
+fn sky_light_is_halved_in_each_polarization_channel() {
+    for overrides in [
+        vec![],
+        vec![
+            "instrument.channels.0.crosstalk=0.2",
+            "instrument.channels.1.crosstalk=0.2",
+        ],
+    ] {
+        let l = lidar("instruments/caliop_3ch.toml", &overrides);
+        let mut seen = vec![];
+        for sc in &l.channels {
+            let i = &sc.loaded.config.instrument;
+            let radiance = sc.loaded.config.background.radiance.unwrap();
+            let omega = std::f64::consts::PI / 4.0 * i.fov_rad * i.fov_rad;
+            let full = radiance
+                * i.telescope_area_m2
+                * omega
+                * i.filter_width_nm
+                * i.filter_transmission
+                * i.bin_width_s
+                * i.receiver_efficiency
+                * i.quantum_efficiency;
+            let name = sc.instrument.channel.name();
+            let share = if name == "total" { 1.0 } else { 0.5 };
+            assert!(
+                rel(sc.instrument.background_per_bin, share * full) < 1e-12,
+                "{}: {} vs {}",
+                sc.channel_name,
+                sc.instrument.background_per_bin,
+                share * full
+            );
+            seen.push(name);
+        }
+        assert_eq!(seen, ["parallel", "perpendicular", "total"]);
+    }
+}
+
+/// The signal constant `C = K·E0·(λ/hc)·A·TR·TF·Q` and the molecular backscatter
+/// `β_mol = N_US76·σ_Bucholtz/S_mol` at bin centres, from this test's formulas, for
+/// 355, 532 and 1064 nm (whole Rayleigh line) and 532 nm through a narrow filter
+/// (Cabannes line); the 532/1064 ratio is ≈ 16.7 (λ⁻⁴·⁰⁸), here to 1e-4.
+#[test]
+fn signal_constant_and_molecular_backscatter_follow_their_formulas() {
+    for (wl, filter) in [
+        ("355", "0.5"),
+        ("532", "0.5"),
+        ("1064", "0.5"),
+        ("532", "0.1"),
+    ] {
+        let sc = scenario(
+            "paper/scenario6.toml",
+            &[
+                &format!("instrument.wavelength_nm={wl}"),
+                &format!("instrument.filter_width_nm={filter}"),
+                "atmosphere.molecular.model=us76",
+            ],
+        );
+        let cfg = &sc.loaded.config;
+        assert!(rel(sc.instrument.signal_constant, r::signal_constant(cfg)) < 1e-12);
+        let e = sc.expected().unwrap();
+        let wl_nm: f64 = wl.parse().unwrap();
+        let (s_mol, _) =
+            r::molecular_lidar_ratio_and_depolarization(r::rayleigh_rho_n(wl_nm), filter == "0.1");
+        for i in (0..e.n_bins()).step_by(7) {
+            let z = e.altitude_m[i];
+            if !(0.0..86_000.0).contains(&z) {
+                continue;
+            }
+            let beta = r::us76_number_density_m3(z) * r::rayleigh_cross_section_m2(wl_nm) / s_mol;
+            assert!(
+                rel(e.beta_mol[i], beta) < 1e-4,
+                "{wl} nm, filter {filter}, z {z}: {} vs {beta}",
+                e.beta_mol[i]
+            );
+        }
+    }
+    // Bucholtz (1995) Table 2 values: σ(532) = 5.167e-27 cm², σ(1064) = 3.127e-28 cm²
+    // (US-standard air at 288.15 K, 1013.25 hPa) — the test's fit within 0.1 %
+    assert!(rel(r::rayleigh_cross_section_m2(532.0), 5.162e-31) < 1e-3);
+    assert!(rel(r::rayleigh_cross_section_m2(1064.0), 3.125e-32) < 1e-3);
+}
+
+/// This test's US76 against the Standard's Table I (number density 2.5470e25 m⁻³ at
+/// sea level, 8.5976e24 at 10 km... computed as N_A·P/(R*T) of the printed P, T).
+#[test]
+fn the_reference_us76_reproduces_the_published_table() {
+    for (z, p, t) in [
+        (0.0, 1.01325e5, 288.150),
+        (5_000.0, 5.4048e4, 255.676),
+        (11_000.0, 2.2700e4, 216.774),
+        (20_000.0, 5.5293e3, 216.650),
+        (32_000.0, 8.8906e2, 228.490),
+        (47_000.0, 1.1585e2, 269.684),
+        (71_000.0, 4.4796e0, 216.846),
+        (86_000.0, 3.7338e-1, 186.870),
+    ] {
+        let (tt, pp) = r::us76_t_p(z);
+        assert!(rel(pp, p) < 1e-4, "P at {z}: {pp} vs {p}");
+        assert!(rel(tt, t) < 1e-4, "T at {z}: {tt} vs {t}");
+        let sim = lidarsim::atmosphere::us76::number_density_m3(z);
+        assert!(rel(sim, r::us76_number_density_m3(z)) < 1e-4, "N at {z}");
+    }
+}
