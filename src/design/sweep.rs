@@ -49,7 +49,8 @@ struct AxisSpec {
 
 impl AxisSpec {
     fn parse(spec: &str) -> Result<AxisSpec> {
-        let fail = |why: &str| Error::Unsupported(format!("--vary {spec}: {why}; expected {VARY_FORMS}"));
+        let fail =
+            |why: &str| Error::Unsupported(format!("--vary {spec}: {why}; expected {VARY_FORMS}"));
         let (key, range) = spec.split_once('=').ok_or_else(|| fail("no `=`"))?;
         let key = key.trim();
         if key.is_empty() || key.split('.').any(|part| part.trim().is_empty()) {
@@ -385,7 +386,11 @@ pub fn run(
         return Ok(vec![]);
     };
     let first = point_metrics(first)?;
-    let rest: Vec<Result<_>> = points.collect::<Vec<_>>().into_par_iter().map(point_metrics).collect();
+    let rest: Vec<Result<_>> = points
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .map(point_metrics)
+        .collect();
     std::iter::once(Ok(first)).chain(rest).collect()
 }
 

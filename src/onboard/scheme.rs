@@ -161,8 +161,8 @@ impl Scheme {
         let top_bin = |top_m: f64| (0..n_bins).find(|&i| bin_altitude_m(i) < top_m);
         let mut out = Vec::with_capacity(self.regions.len());
         for (k, r) in self.regions.iter().enumerate() {
-            let merge = whole_native_bins(r.vertical_resolution_m, native_vertical_m)
-                .ok_or_else(|| {
+            let merge =
+                whole_native_bins(r.vertical_resolution_m, native_vertical_m).ok_or_else(|| {
                     let ratio = r.vertical_resolution_m / native_vertical_m;
                     let lo = ratio.floor().max(1.0);
                     Error::Unsupported(format!(

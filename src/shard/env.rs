@@ -138,14 +138,28 @@ mod tests {
         assert!(e.to_string().contains("SLURM_ARRAY_TASK_ID=\"x\""), "{e}");
         let e = from_environment(env(&[(SLURM_ID, "5"), (SLURM_COUNT, "4")])).unwrap_err();
         assert!(e.to_string().contains("0 to N-1"), "{e}");
-        let e = from_environment(env(&[(SLURM_ID, "0"), (SLURM_COUNT, "4"), (SLURM_STEP, "0")]))
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("SLURM_ARRAY_TASK_STEP=0") && e.contains("at least 1"), "{e}");
-        let e = from_environment(env(&[(SLURM_ID, "0"), (SLURM_COUNT, "4"), (SLURM_STEP, "-2")]))
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("SLURM_ARRAY_TASK_STEP=\"-2\" is not a whole number"), "{e}");
+        let e = from_environment(env(&[
+            (SLURM_ID, "0"),
+            (SLURM_COUNT, "4"),
+            (SLURM_STEP, "0"),
+        ]))
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("SLURM_ARRAY_TASK_STEP=0") && e.contains("at least 1"),
+            "{e}"
+        );
+        let e = from_environment(env(&[
+            (SLURM_ID, "0"),
+            (SLURM_COUNT, "4"),
+            (SLURM_STEP, "-2"),
+        ]))
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("SLURM_ARRAY_TASK_STEP=\"-2\" is not a whole number"),
+            "{e}"
+        );
         let e = from_environment(env(&[
             (SLURM_ID, "4"),
             (SLURM_COUNT, "4"),
@@ -154,6 +168,9 @@ mod tests {
         ]))
         .unwrap_err()
         .to_string();
-        assert!(e.contains("not SLURM_ARRAY_TASK_MIN + k·SLURM_ARRAY_TASK_STEP"), "{e}");
+        assert!(
+            e.contains("not SLURM_ARRAY_TASK_MIN + k·SLURM_ARRAY_TASK_STEP"),
+            "{e}"
+        );
     }
 }

@@ -334,7 +334,10 @@ fn unit_slips_are_warned_once_and_the_run_goes_on() {
     // 10 J itself is not warned
     let (st, err) = run(&["expect", &s1, "--set", "instrument.pulse_energy_j=10"]);
     assert_eq!(st, Some(0), "{err:?}");
-    assert!(warnings(&err, "instrument.pulse_energy_j").is_empty(), "{err:?}");
+    assert!(
+        warnings(&err, "instrument.pulse_energy_j").is_empty(),
+        "{err:?}"
+    );
     // a ground window of 150 km: longer than 0 km + 100 km
     let (st, err) = run(&[
         "expect",
@@ -348,9 +351,15 @@ fn unit_slips_are_warned_once_and_the_run_goes_on() {
     assert!(w[0].contains("150.0 km along the beam"), "{err:?}");
     // 99 km is not warned, nor is a space-borne window of 100 km from 600 km
     let (_, err) = run(&["expect", &ground, "--set", "acquisition.top_altitude_km=99"]);
-    assert!(warnings(&err, "acquisition.top_altitude_km").is_empty(), "{err:?}");
+    assert!(
+        warnings(&err, "acquisition.top_altitude_km").is_empty(),
+        "{err:?}"
+    );
     let (_, err) = run(&["expect", &s1]);
-    assert!(!err.iter().any(|l| l.contains("warning: acquisition")), "{err:?}");
+    assert!(
+        !err.iter().any(|l| l.contains("warning: acquisition")),
+        "{err:?}"
+    );
     // 10 kHz on a 20 km ground window: beyond c/(2 fL) = 14.99 km
     let (st, err) = run(&["expect", &ground, "--set", "instrument.rep_rate_hz=10000"]);
     assert_eq!(st, Some(0), "{err:?}");
@@ -363,7 +372,10 @@ fn unit_slips_are_warned_once_and_the_run_goes_on() {
     );
     // 7000 Hz: c/(2 fL) = 21.4 km holds the 20 km window
     let (_, err) = run(&["expect", &ground, "--set", "instrument.rep_rate_hz=7000"]);
-    assert!(warnings(&err, "instrument.rep_rate_hz").is_empty(), "{err:?}");
+    assert!(
+        warnings(&err, "instrument.rep_rate_hz").is_empty(),
+        "{err:?}"
+    );
     // two channels (2500 Hz, c/(2 fL) = 60 km) and a 70 km window: one warning per run
     let out = dir.join("two.h5");
     let (st, err) = run(&[
@@ -394,7 +406,11 @@ fn unit_slips_are_warned_once_and_the_run_goes_on() {
         csv.to_str().unwrap(),
     ]);
     assert_eq!(st, Some(0), "{err:?}");
-    assert_eq!(warnings(&err, "instrument.pulse_energy_j").len(), 1, "{err:?}");
+    assert_eq!(
+        warnings(&err, "instrument.pulse_energy_j").len(),
+        1,
+        "{err:?}"
+    );
     assert_eq!(fs::read_to_string(&csv).unwrap().lines().count(), 4);
     let _ = fs::remove_dir_all(&dir);
 }

@@ -341,9 +341,7 @@ fn measurement_id(opts: &SccOptions, date: &str) -> Result<String> {
          (e.g. {date}{station}00)"
     );
     if !ok {
-        return Err(Error::Unsupported(format!(
-            "--measurement-id {id}: {form}"
-        )));
+        return Err(Error::Unsupported(format!("--measurement-id {id}: {form}")));
     }
     let given = &id[..8];
     if !is_calendar_date(given) {
@@ -384,7 +382,9 @@ mod measurement_id_tests {
         for good in ["20240229", "20000229", "20241231", "20040321"] {
             assert!(is_calendar_date(good), "{good}");
         }
-        for bad in ["20241301", "20230229", "19000229", "20240431", "20240100", "20240001"] {
+        for bad in [
+            "20241301", "20230229", "19000229", "20240431", "20240100", "20240001",
+        ] {
             assert!(!is_calendar_date(bad), "{bad}");
         }
         let opts = |id: &str| SccOptions {
@@ -399,6 +399,9 @@ mod measurement_id_tests {
         let e = measurement_id(&opts("20241301ls00"), "20241301").unwrap_err();
         assert!(e.to_string().contains("not a calendar date"), "{e}");
         let e = measurement_id(&opts("20040322ls00"), "20040321").unwrap_err();
-        assert!(e.to_string().contains("not the data's start date 20040321"), "{e}");
+        assert!(
+            e.to_string().contains("not the data's start date 20040321"),
+            "{e}"
+        );
     }
 }

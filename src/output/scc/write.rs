@@ -70,7 +70,10 @@ fn describe(e: &netcdf3::WriteError) -> String {
 /// Writes `c` to `out` (created or truncated).
 pub fn write_scc(out: &Path, c: &SccContent) -> Result<()> {
     let fail = |what: &str, e: &netcdf3::WriteError| {
-        Error::output(out, format!("cannot write the SCC file ({what}): {}", describe(e)))
+        Error::output(
+            out,
+            format!("cannot write the SCC file ({what}): {}", describe(e)),
+        )
     };
     let ds = define(c).map_err(|_| {
         // the layout is lidarsim's own: a refusal here is a bug, not the user's input
