@@ -433,6 +433,59 @@ mod tests {
             Metric::TimeToSnr(10.0, 15e3)
         );
         assert!(Metric::parse("snr_at:10").is_err() && Metric::parse("bogus").is_err());
+        // issue 18: nonsense the grammar used to take is refused with the valid form
+        for bad in [
+            "x=0.1...1:5",
+            "=1..2:3",
+            "a..b=1..2:3",
+            "x=1..1:3",
+            "x=1..2:1000001",
+        ] {
+            let e = Axis::parse(bad).unwrap_err().to_string();
+            assert!(e.contains("KEY=START..STOP:N"), "{bad}: {e}");
+        }
+        assert_eq!(Axis::parse("x=1..1:1").unwrap().values, vec![1.0]);
+        let twice = ["x=1..2:2".to_string(), "x=3..4:2".to_string()];
+        assert!(
+            Axis::parse_all(&twice)
+                .unwrap_err()
+                .to_string()
+                .contains("twice")
+        );
+        let big = ["a=1..2:1000".to_string(), "b=1..2:1001".to_string()];
+        assert!(
+            Axis::parse_all(&big)
+                .unwrap_err()
+                .to_string()
+                .contains("grid points")
+        );
+        for bad in [
+            "time_to_snr:0@5km",
+            "time_to_snr:-3@5km",
+            "max_altitude:snr=-1",
+            "max_altitude:snr=0",
+        ] {
+            let e = Metric::parse(bad).unwrap_err().to_string();
+            assert!(
+                e.contains("not positive") && e.contains("X > 0"),
+                "{bad}: {e}"
+            );
+        }
+        let same = ["snr_at:5km".to_string(), "snr_at:5km".to_string()];
+        assert!(
+            Metric::parse_all(&same)
+                .unwrap_err()
+                .to_string()
+                .contains("twice")
+        );
+        for m in [
+            "snr_at:-5km",
+            "time_to_snr:10@15km",
+            "max_altitude:snr=3",
+            "pulses_in_flight",
+        ] {
+            assert_eq!(Metric::parse(m).unwrap().to_string(), m);
+        }
         let g = grid(&[
             Axis {
                 key: "a".into(),
