@@ -65,6 +65,14 @@ pub fn tolerance(s: &str) -> Result<f64, String> {
     }
 }
 
+/// Most bits per downlinked count (`onboard --word-bits`): a 64-bit word.
+pub const MAX_WORD_BITS: u32 = 64;
+
+/// `onboard --word-bits`: 1 to [`MAX_WORD_BITS`].
+pub fn word_bits(s: &str) -> Result<u32, String> {
+    whole(s, 1, u64::from(MAX_WORD_BITS)).map(|n| n as u32)
+}
+
 /// `--shard`: `K/N` (0 ≤ K < N) or `auto` ([`crate::shard::ShardArg`]).
 pub fn shard(s: &str) -> Result<crate::shard::ShardArg, String> {
     s.parse()
@@ -82,6 +90,12 @@ mod tests {
             assert!(profiles(bad).is_err(), "{bad}");
         }
         assert!(threads("100000").is_err());
+        for bad in ["0", "65", "-1", "1e3", "x"] {
+            let e = word_bits(bad).unwrap_err();
+            assert!(e.contains("from 1 to 64"), "{bad}: {e}");
+        }
+        assert_eq!(word_bits("64"), Ok(64));
+        assert_eq!(word_bits("1"), Ok(1));
         assert_eq!(threads("2"), Ok(2));
     }
 

@@ -113,6 +113,9 @@ pub fn expect(
         }
         None => to_stdout(|w| expect::write_table(w, &sc, &e))?,
     }
+    for w in sc.loaded.config.plausibility_warnings() {
+        eprintln!("{w}");
+    }
     if let Some(note) = sc.atmosphere.molecules.continuation_note() {
         eprintln!("{note}");
     }
@@ -313,14 +316,8 @@ pub fn sweep(
             "sweep needs at least one --vary KEY=START..STOP:N and one --metric".into(),
         ));
     }
-    let axes = vary
-        .iter()
-        .map(|v| Axis::parse(v))
-        .collect::<Result<Vec<_>>>()?;
-    let parsed = metrics
-        .iter()
-        .map(|m| Metric::parse(m))
-        .collect::<Result<Vec<_>>>()?;
+    let axes = Axis::parse_all(vary)?;
+    let parsed = Metric::parse_all(metrics)?;
     let base = Scenario::load(config, overrides)?;
     let mut outputs = outputs_for(&base);
     let csv_id = outputs.add("--csv", csv, Stream::Text)?;
@@ -354,7 +351,11 @@ pub fn sweep(
             .map_err(|r| Error::output(outputs.shown_path(id), r))?;
         outputs.write(id, |w| w.write_all(&bytes))?;
     }
-    outputs.commit()
+    outputs.commit()?;
+    for w in base.loaded.config.plausibility_warnings() {
+        eprintln!("{w}");
+    }
+    Ok(())
 }
 
 /// `lidarsim curtain RAW.h5 --png OUT.png`: one channel's counts per shot against

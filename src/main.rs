@@ -150,8 +150,8 @@ enum Command {
         /// Random seed (default: simulation.seed).
         #[arg(long, allow_negative_numbers = true, value_parser = cli_values::seed)]
         seed: Option<u64>,
-        /// Bits per downlinked count, for the data rate.
-        #[arg(long, default_value_t = 16)]
+        /// Bits per downlinked count, for the data rate (1 to 64).
+        #[arg(long, default_value_t = 16, allow_negative_numbers = true, value_parser = cli_values::word_bits)]
         word_bits: u32,
         /// Draw shard K of N of the run only (whole frames of shots; its product shard for
         /// `merge`); `auto` reads K and N from an array job's environment.

@@ -53,6 +53,20 @@ pub fn expand(
     file: &str,
 ) -> Result<Vec<ChannelConfig>> {
     let entries = &base.instrument.channels;
+    let listed_empty = table
+        .get("instrument")
+        .and_then(|i| i.get("channels"))
+        .is_some_and(|c| c.as_array().is_some_and(|a| a.is_empty()));
+    if listed_empty {
+        return Err(Error::config(
+            file,
+            "instrument.channels",
+            format!(
+                "lists no channel; give 1 to {MAX_CHANNELS} [[instrument.channels]] tables, or \
+                 leave the key out for one channel (the [instrument] itself)"
+            ),
+        ));
+    }
     if entries.is_empty() {
         let i = &base.instrument;
         return Ok(vec![ChannelConfig {

@@ -74,9 +74,12 @@ impl Lidar {
             .collect()
     }
 
-    /// What a run tells after it succeeds: the model's notes (a profile file continued
-    /// with US76) and every channel's warning (rates beyond a photon counter's range).
+    /// What a run tells after it succeeds: the config's plausibility warnings (once,
+    /// from the config every channel shares), the model's notes (a profile file
+    /// continued with US76) and every channel's warning (rates beyond a photon
+    /// counter's range).
     pub fn run_notes(&self, expected: &[ExpectedProfile]) -> Option<String> {
+        let plausibility = self.first().loaded.config.plausibility_warnings();
         let note = self.first().atmosphere.molecules.continuation_note();
         let warnings = self.channels.iter().zip(expected).filter_map(|(c, e)| {
             let w = c.linear_range_warning(e)?;
@@ -90,7 +93,11 @@ impl Lidar {
                 w
             })
         });
-        let lines: Vec<String> = note.into_iter().chain(warnings).collect();
+        let lines: Vec<String> = plausibility
+            .into_iter()
+            .chain(note)
+            .chain(warnings)
+            .collect();
         (!lines.is_empty()).then(|| lines.join("\n"))
     }
 }

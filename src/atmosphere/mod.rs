@@ -191,7 +191,30 @@ impl Atmosphere {
             MolecularModel::Named(n) if n == "none" => MolecularSource::None,
             MolecularModel::Named(_) => MolecularSource::Us76,
             MolecularModel::File { file } => {
-                MolecularSource::Profile(MolecularProfile::from_file(&loaded.resolve_path(file))?)
+                let resolved = loaded.resolve_path(file);
+                // a file that cannot be read: name the key and where it was looked for
+                let profile = MolecularProfile::from_file(&resolved).map_err(|e| match e {
+                    crate::error::Error::Io { source, .. } => crate::error::Error::config(
+                        loaded.file_label(),
+                        "atmosphere.molecular.model.file",
+                        if file.is_absolute() {
+                            format!(
+                                "{}: {}",
+                                resolved.display(),
+                                crate::error::describe_io(&source)
+                            )
+                        } else {
+                            format!(
+                                "\"{}\" resolves to {} (relative to the config's directory): {}",
+                                file.display(),
+                                resolved.display(),
+                                crate::error::describe_io(&source)
+                            )
+                        },
+                    ),
+                    e => e,
+                })?;
+                MolecularSource::Profile(profile)
             }
         };
         let rho_n = m

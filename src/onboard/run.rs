@@ -550,7 +550,12 @@ pub fn run(config: &Path, overrides: &[String], opts: &OnboardOptions) -> Result
         let p = super::partial::OnboardPartial::new(&native, opts.word_bits, shard, shots, sums);
         outputs.write(id, |w| p.write(w))?;
     }
-    commit_with_raw(&native, outputs, raw.zip(opts.raw.as_deref()))
+    commit_with_raw(&native, outputs, raw.zip(opts.raw.as_deref()))?;
+    // the native config differs from the user's only in accumulation and profiles
+    for w in native.lidar.first().loaded.config.plausibility_warnings() {
+        eprintln!("{w}");
+    }
+    Ok(())
 }
 
 /// A refusal of the onboard command.

@@ -169,6 +169,15 @@ impl Scheme {
                     "regions[{i}]: needs top_km > bottom_km, vertical_resolution_m > 0, shots_averaged ≥ 1"
                 ));
             }
+            let thickness_m = (r.top_km - r.bottom_km) * 1e3;
+            if (thickness_m / r.vertical_resolution_m).round() < 1.0 {
+                return Err(format!(
+                    "regions[{i}]: top_km − bottom_km = {} m holds no bin of \
+                     vertical_resolution_m = {} m; a region is at least one bin thick",
+                    format_args!("{thickness_m:.1}"),
+                    r.vertical_resolution_m
+                ));
+            }
             if i > 0 && (r.top_km - self.regions[i - 1].bottom_km).abs() > 1e-9 {
                 return Err(format!(
                     "regions[{i}]: its top must be the previous region's bottom"
@@ -296,9 +305,21 @@ impl Scheme {
         let top_bin = |top_m: f64| (0..n_bins).find(|&i| bin_altitude_m(i) < top_m);
         let mut out = Vec::with_capacity(regions.len());
         for (k, r) in regions.iter().enumerate() {
-            let merge = (r.vertical_resolution_m / native_vertical_m)
-                .round()
-                .max(1.0) as usize;
+            let merge =
+                whole_native_bins(r.vertical_resolution_m, native_vertical_m).ok_or_else(|| {
+                    let ratio = r.vertical_resolution_m / native_vertical_m;
+                    let lo = ratio.floor().max(1.0);
+                    Error::Unsupported(format!(
+                        "scheme {}: regions[{k}].vertical_resolution_m = {} m is {ratio:.3} \
+                         native bins of {native_vertical_m:.3} m; it must be a whole number of \
+                         native bins (within {} %), e.g. {:.2} or {:.2} m",
+                        self.name,
+                        r.vertical_resolution_m,
+                        RESOLUTION_TOLERANCE * 100.0,
+                        lo * native_vertical_m,
+                        (lo + 1.0) * native_vertical_m
+                    ))
+                })?;
             let bins = ((r.top_km - r.bottom_km) * 1e3 / r.vertical_resolution_m).round() as usize;
             let first_bin = match out.last() {
                 Some(prev) => {
@@ -313,13 +334,30 @@ impl Scheme {
                 })?,
             };
             if first_bin + merge * bins > n_bins {
+                // where the scheme's last bin ends: the bins the window lacks, below its
+                // last bin (altitude falls with the bin for a space-borne lidar)
+                let needed: usize = regions[k + 1..]
+                    .iter()
+                    .map(|q| {
+                        let m = whole_native_bins(q.vertical_resolution_m, native_vertical_m)
+                            .unwrap_or(1);
+                        m * ((q.top_km - q.bottom_km) * 1e3 / q.vertical_resolution_m).round()
+                            as usize
+                    })
+                    .sum::<usize>()
+                    + first_bin
+                    + merge * bins;
+                let last = bin_altitude_m(n_bins - 1);
+                let hint = if n_bins > 1 && bin_altitude_m(0) > last {
+                    let reach_m = last - ((needed - n_bins) as f64 + 0.5) * native_vertical_m;
+                    let reach_km = (reach_m / 10.0).floor() / 100.0;
+                    format!("lower acquisition.bottom_altitude_km to {reach_km} km or below")
+                } else {
+                    "the window has too few bins for the scheme".to_string()
+                };
                 return Err(Error::Unsupported(format!(
-                    "scheme {}: region {k} ({} to {} km) runs past the window's last bin; \
-                     lower acquisition.bottom_altitude_km to {} km or below",
-                    self.name,
-                    r.top_km,
-                    r.bottom_km,
-                    regions.last().map_or(r.bottom_km, |l| l.bottom_km)
+                    "scheme {}: region {k} ({} to {} km) runs past the window's last bin; {hint}",
+                    self.name, r.top_km, r.bottom_km,
                 )));
             }
             out.push(RegionLayout {
@@ -333,6 +371,19 @@ impl Scheme {
         }
         Ok(out)
     }
+}
+
+/// How far a region's `vertical_resolution_m` may be from a whole number of native bins,
+/// relative: 1 %, so that nominal labels pass (CALIOP's "30 m" bins are 29.93 m deep at
+/// 3° off nadir, 0.23 % off) and mislabels do not (31 m on 29.93 m bins is 3.6 % off).
+pub const RESOLUTION_TOLERANCE: f64 = 0.01;
+
+/// The native bins one downlinked bin of `resolution_m` merges: the nearest whole
+/// number, `None` when `resolution_m` is not within [`RESOLUTION_TOLERANCE`] of one.
+pub fn whole_native_bins(resolution_m: f64, native_vertical_m: f64) -> Option<usize> {
+    let ratio = resolution_m / native_vertical_m;
+    let merge = ratio.round();
+    (merge >= 1.0 && (ratio / merge - 1.0).abs() <= RESOLUTION_TOLERANCE).then_some(merge as usize)
 }
 
 /// A region on the native grid.

@@ -54,11 +54,20 @@ pub fn from_environment(var: impl Fn(&str) -> Option<String>) -> Result<Shard> {
     if let Some(id) = number(SLURM_ID)? {
         let count = required(SLURM_COUNT, SLURM_ID)?;
         let min = number(SLURM_MIN)?.unwrap_or(0);
-        let step = number(SLURM_STEP)?.unwrap_or(1).max(1);
-        let from = format!("{SLURM_ID}={id}, {SLURM_MIN}={min}, {SLURM_COUNT}={count}");
+        let step = number(SLURM_STEP)?.unwrap_or(1);
+        if step == 0 {
+            return Err(Error::Unsupported(format!(
+                "--shard auto: {SLURM_STEP}=0: the step between task ids must be a whole \
+                 number of at least 1 (sbatch --array=A-B:S, S ≥ 1)"
+            )));
+        }
+        let from = format!(
+            "{SLURM_ID}={id}, {SLURM_MIN}={min}, {SLURM_STEP}={step}, {SLURM_COUNT}={count}"
+        );
         if id < min || (id - min) % step != 0 {
             return Err(Error::Unsupported(format!(
-                "--shard auto: {from}: not an evenly spaced array; submit with --array=0-{}",
+                "--shard auto: {from}: the task id is not {SLURM_MIN} + k·{SLURM_STEP} \
+                 (k = 0 to {SLURM_COUNT} − 1); submit with --array=0-{}",
                 count.saturating_sub(1)
             )));
         }
@@ -129,5 +138,39 @@ mod tests {
         assert!(e.to_string().contains("SLURM_ARRAY_TASK_ID=\"x\""), "{e}");
         let e = from_environment(env(&[(SLURM_ID, "5"), (SLURM_COUNT, "4")])).unwrap_err();
         assert!(e.to_string().contains("0 to N-1"), "{e}");
+        let e = from_environment(env(&[
+            (SLURM_ID, "0"),
+            (SLURM_COUNT, "4"),
+            (SLURM_STEP, "0"),
+        ]))
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("SLURM_ARRAY_TASK_STEP=0") && e.contains("at least 1"),
+            "{e}"
+        );
+        let e = from_environment(env(&[
+            (SLURM_ID, "0"),
+            (SLURM_COUNT, "4"),
+            (SLURM_STEP, "-2"),
+        ]))
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("SLURM_ARRAY_TASK_STEP=\"-2\" is not a whole number"),
+            "{e}"
+        );
+        let e = from_environment(env(&[
+            (SLURM_ID, "4"),
+            (SLURM_COUNT, "4"),
+            (SLURM_MIN, "1"),
+            (SLURM_STEP, "2"),
+        ]))
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("not SLURM_ARRAY_TASK_MIN + k·SLURM_ARRAY_TASK_STEP"),
+            "{e}"
+        );
     }
 }

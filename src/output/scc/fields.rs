@@ -388,10 +388,72 @@ fn measurement_id(opts: &SccOptions, date: &str) -> Result<String> {
         && b[..8].iter().all(u8::is_ascii_digit)
         && b[8..10].iter().all(u8::is_ascii_alphanumeric)
         && b[10..].iter().all(u8::is_ascii_digit);
+    let form = format!(
+        "must be YYYYMMDDccNN: the data's start date, a 2-character station ID, 2 digits \
+         (e.g. {date}{station}00)"
+    );
     if !ok {
+        return Err(Error::Unsupported(format!("--measurement-id {id}: {form}")));
+    }
+    let given = &id[..8];
+    if !is_calendar_date(given) {
         return Err(Error::Unsupported(format!(
-            "SCC measurement ID `{id}`: must be YYYYMMDDccNN (date, 2-character station ID, 2 digits)"
+            "--measurement-id {id}: {given} is not a calendar date; {form}"
+        )));
+    }
+    if given != date {
+        return Err(Error::Unsupported(format!(
+            "--measurement-id {id}: its date {given} is not the data's start date {date} \
+             (RawData_Start_Date); {form}"
         )));
     }
     Ok(id.clone())
+}
+
+/// Whether `yyyymmdd` (8 ASCII digits) is a date of the Gregorian calendar.
+fn is_calendar_date(yyyymmdd: &str) -> bool {
+    let num = |r: std::ops::Range<usize>| yyyymmdd[r].parse::<u32>().unwrap_or(0);
+    let (y, m, d) = (num(0..4), num(4..6), num(6..8));
+    let leap = (y % 4 == 0 && y % 100 != 0) || y % 400 == 0;
+    let days = match m {
+        1 | 3 | 5 | 7 | 8 | 10 | 12 => 31,
+        4 | 6 | 9 | 11 => 30,
+        2 if leap => 29,
+        2 => 28,
+        _ => return false,
+    };
+    (1..=days).contains(&d)
+}
+
+#[cfg(test)]
+mod measurement_id_tests {
+    use super::*;
+
+    #[test]
+    fn measurement_ids_carry_a_calendar_date_equal_to_the_data_start() {
+        for good in ["20240229", "20000229", "20241231", "20040321"] {
+            assert!(is_calendar_date(good), "{good}");
+        }
+        for bad in [
+            "20241301", "20230229", "19000229", "20240431", "20240100", "20240001",
+        ] {
+            assert!(!is_calendar_date(bad), "{bad}");
+        }
+        let opts = |id: &str| SccOptions {
+            measurement_id: Some(id.into()),
+            station_id: "ls".into(),
+            channel_ids: None,
+        };
+        assert_eq!(
+            measurement_id(&opts("20040321ls07"), "20040321").unwrap(),
+            "20040321ls07"
+        );
+        let e = measurement_id(&opts("20241301ls00"), "20241301").unwrap_err();
+        assert!(e.to_string().contains("not a calendar date"), "{e}");
+        let e = measurement_id(&opts("20040322ls00"), "20040321").unwrap_err();
+        assert!(
+            e.to_string().contains("not the data's start date 20040321"),
+            "{e}"
+        );
+    }
 }

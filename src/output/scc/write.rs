@@ -56,12 +56,32 @@ pub const SCC_VARIABLES: &[(&str, &[&str], SccType)] = &[
     ("Temperature_at_Lidar_Station", &[], SccType::Double),
 ];
 
+/// A NetCDF writer's error in plain words: the OS reason of an I/O failure ("no space
+/// left on device"), never the library's debug text (`IOErrorKind(StorageFull)`).
+fn describe(e: &netcdf3::WriteError) -> String {
+    match e {
+        netcdf3::WriteError::IOErrorKind(kind) => {
+            crate::error::describe_io(&std::io::Error::from(*kind))
+        }
+        _ => "the NetCDF writer refused the data (a lidarsim bug; please report it)".into(),
+    }
+}
+
 /// Writes `c` to `out` (created or truncated).
 pub fn write_scc(out: &Path, c: &SccContent) -> Result<()> {
-    let fail = |what: &str, e: &dyn std::fmt::Debug| {
-        Error::output(out, format!("cannot write the SCC file ({what}): {e:?}"))
+    let fail = |what: &str, e: &netcdf3::WriteError| {
+        Error::output(
+            out,
+            format!("cannot write the SCC file ({what}): {}", describe(e)),
+        )
     };
-    let ds = define(c).map_err(|e| fail("definition", &e))?;
+    let ds = define(c).map_err(|_| {
+        // the layout is lidarsim's own: a refusal here is a bug, not the user's input
+        Error::output(
+            out,
+            "cannot write the SCC file: its variables could not be laid out (a lidarsim bug; please report it)",
+        )
+    })?;
     let file = std::fs::File::create(out).map_err(|e| Error::Io {
         path: out.to_path_buf(),
         source: e,
