@@ -349,7 +349,7 @@ pub fn check(path: &Path, f: &hdf5::File) -> Result<RawHeader> {
     let channels = read_channels(path, f)?;
     for k in KNOWN.iter().filter(|k| k.values != Values::Any) {
         if let Ok(d) = f.dataset(k.name) {
-            scan(path, k, &d)?;
+            scan(path, k.name, k.values, &d)?;
         }
     }
     Ok(RawHeader {
@@ -390,8 +390,24 @@ fn check_version(path: &Path, f: &hdf5::File) -> Result<()> {
     Ok(())
 }
 
+/// Whether dataset `d` holds unsigned integers.
+pub fn is_unsigned(d: &Dataset) -> bool {
+    Class::of(d).0 == Class::Unsigned
+}
+
+/// Whether dataset `d` holds floating-point numbers.
+pub fn is_float(d: &Dataset) -> bool {
+    Class::of(d).0 == Class::Float
+}
+
+/// Refuses, naming the file and `name`, a 1-D dataset of floats with a value that is not
+/// finite (read [`SCAN_BLOCK`] values at a time).
+pub fn check_finite(path: &Path, name: &str, d: &Dataset) -> Result<()> {
+    scan(path, name, Values::Finite, d)
+}
+
 /// A dataset is stored with lidarsim's filters and holds the bytes it declares.
-fn check_storage(path: &Path, name: &str, d: &Dataset) -> Result<()> {
+pub fn check_storage(path: &Path, name: &str, d: &Dataset) -> Result<()> {
     let bad = |why: String| Error::output(path, why);
     if let Some(other) = d
         .filters()
@@ -452,15 +468,15 @@ fn read_channels(path: &Path, f: &hdf5::File) -> Result<Vec<String>> {
     Ok(v.iter().map(|s| s.as_str().to_string()).collect())
 }
 
-/// Checks the values of variable `k` (dataset `d`), [`SCAN_BLOCK`] at a time.
-fn scan(path: &Path, k: &Known, d: &Dataset) -> Result<()> {
+/// Checks the values of variable `name` (dataset `d`), [`SCAN_BLOCK`] at a time.
+fn scan(path: &Path, name: &str, values: Values, d: &Dataset) -> Result<()> {
     let n = d.shape().first().copied().unwrap_or(0);
     let unreadable = |e: hdf5::Error| {
         Error::output(
             path,
             format!(
                 "cannot read `{}`: {}",
-                k.name,
+                name,
                 crate::output::safe_file::describe_hdf5_error(&e.to_string())
             ),
         )
@@ -468,9 +484,9 @@ fn scan(path: &Path, k: &Known, d: &Dataset) -> Result<()> {
     for a in (0..n).step_by(SCAN_BLOCK) {
         let b = (a + SCAN_BLOCK).min(n);
         let bad_at = |i: usize, v: String, want: &str| {
-            Error::output(path, format!("`{}` value {} is {v}; {want}", k.name, a + i))
+            Error::output(path, format!("`{}` value {} is {v}; {want}", name, a + i))
         };
-        match k.values {
+        match values {
             Values::Any => {}
             Values::AtLeastOne => {
                 let v = d.read_slice::<u64, _, Ix1>(s![a..b]).map_err(unreadable)?;
@@ -484,9 +500,9 @@ fn scan(path: &Path, k: &Known, d: &Dataset) -> Result<()> {
             }
             Values::Finite | Values::NonNegative => {
                 let v = d.read_slice::<f64, _, Ix1>(s![a..b]).map_err(unreadable)?;
-                let ok = |x: f64| x.is_finite() && (k.values == Values::Finite || x >= 0.0);
+                let ok = |x: f64| x.is_finite() && (values == Values::Finite || x >= 0.0);
                 if let Some(i) = v.iter().position(|&x| !ok(x)) {
-                    let want = match k.values {
+                    let want = match values {
                         Values::Finite => "it must be finite",
                         _ => "it must be finite and not negative",
                     };
