@@ -95,6 +95,11 @@ pub fn read(path: &Path, channel: Option<&str>) -> Result<Curtain> {
         }
     }
     drop(counts);
+    let x_name = if header.along_track {
+        "along_track_distance"
+    } else {
+        "time"
+    };
     let (x, x_label) = if header.along_track {
         (
             read_f64("along_track_distance")?
@@ -106,12 +111,24 @@ pub fn read(path: &Path, channel: Option<&str>) -> Result<Curtain> {
     } else {
         (read_f64("time")?, "time (s)".into())
     };
+    let altitude_km: Vec<f64> = read_f64("altitude")?.iter().map(|z| z / 1e3).collect();
+    // an axis whose span overflows f64 has no ticks: plotters would search forever
+    for (name, v) in [(x_name, &x), ("altitude", &altitude_km)] {
+        let (lo, hi) = bounds(v);
+        if !(hi - lo).is_finite() {
+            return Err(fail(format!(
+                "`{name}` spans {} to {}: wider than a plot axis can hold",
+                crate::error::compact(lo),
+                crate::error::compact(hi)
+            )));
+        }
+    }
     Ok(Curtain {
         counts_per_shot,
         n_bins,
         x,
         x_label,
-        altitude_km: read_f64("altitude")?.iter().map(|z| z / 1e3).collect(),
+        altitude_km,
         title: format!("{}: counts per shot, channel {}", path.display(), names[c]),
     })
 }

@@ -202,12 +202,12 @@ fn check_even(v: &[f64], name: &str) -> std::result::Result<(), String> {
         if (step - first).abs() > SPACING_TOLERANCE * first {
             return Err(format!(
                 "curtain: `{name}` is not evenly spaced: values {k} and {} ({} and {}) are \
-                 {} apart, the first two {} (cells are evenly spaced, within {} %)",
+                 {:.4} apart, the first two {:.4}; spacings must agree within {} %",
                 k + 1,
                 w[0],
                 w[1],
-                crate::error::compact(step),
-                crate::error::compact(first),
+                step,
+                first,
                 SPACING_TOLERANCE * 100.0
             ));
         }
@@ -244,4 +244,31 @@ fn check_values(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn altitudes_must_be_evenly_spaced_within_the_tolerance() {
+        // 30 m cells to 40 km, and the same rounded to float32 (about 2 mm at 40 km)
+        let z: Vec<f64> = (0..1334).map(|k| 0.015 + 0.03 * k as f64).collect();
+        assert_eq!(check_even(&z, "altitude_km"), Ok(()));
+        let z32: Vec<f64> = z.iter().map(|&x| f64::from(x as f32)).collect();
+        assert_eq!(check_even(&z32, "altitude_km"), Ok(()));
+        // one centre moved by 0.2 % of the spacing (60 mm): refused, naming the values
+        let mut bad = z.clone();
+        bad[500] += 0.002 * 0.03;
+        let e = check_even(&bad, "altitude_km").unwrap_err();
+        assert!(
+            e.contains("`altitude_km` is not evenly spaced: values 499 and 500"),
+            "{e}"
+        );
+        // 0.05 % passes: within the stated 0.1 %
+        let mut near = z;
+        near[500] += 0.0005 * 0.03;
+        assert_eq!(check_even(&near, "altitude_km"), Ok(()));
+        assert_eq!(check_even(&[1.0], "altitude_km"), Ok(()));
+    }
 }

@@ -78,6 +78,11 @@ pub fn cases() -> Vec<Case> {
             Refused("crafted"),
             curtain(),
         ),
+        c(
+            "curtain: time spanning -1e308 to 1e308",
+            Refused("`time` spans -1e308 to 1e308"),
+            curtain(),
+        ),
         // --- raw files read by `export-scc` ---
         c(
             "export-scc: n_shots 0",
@@ -386,6 +391,11 @@ pub fn prepare(name: &str, dir: &Scratch) -> Option<bool> {
         }
         "curtain: 1e12 profiles declared" | "export-scc: 1e12 profiles declared" => {
             declare_profiles(&open(dir, "raw.h5"), 1_000_000_000_000)
+        }
+        "curtain: time spanning -1e308 to 1e308" => {
+            let f = open(dir, "raw.h5");
+            set_f64(&f, "time", 0, -1e308);
+            set_f64(&f, "time", 2, 1e308);
         }
         "export-scc: n_shots 0" => zero_u64(&open(dir, "raw.h5"), "n_shots", 1),
         "export-scc: NaN in range" => set_f64(&open(dir, "raw.h5"), "range", 5, f64::NAN),
