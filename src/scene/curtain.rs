@@ -54,7 +54,7 @@ pub fn segments(path: &Path) -> Result<Vec<SegmentConfig>> {
         }
     };
     let (nx, nz) = (length("along_track_km")?, length("altitude_km")?);
-    let cells = nx.checked_mul(nz).unwrap_or(usize::MAX);
+    let cells = nx.saturating_mul(nz);
     if cells > MAX_CELLS {
         return Err(fail(format!(
             "curtain: {nx} columns × {nz} altitudes is more than {MAX_CELLS} cells"
