@@ -137,27 +137,68 @@ impl ProductShard {
 }
 
 impl ShardRegion {
-    /// Region group `g` of the shard at `path`.
+    /// Region group `g` of the shard at `path`, checked as a raw file's variables are
+    /// ([`crate::output::raw_file::read`]): `counts` (profile, channel, bin) of unsigned
+    /// integers holding the values it declares, `time` and `n_shots` (profile), `channel`
+    /// (channel), `altitude` (bin), finite coordinates, `shots_averaged` ≥ 1.
     fn of(g: &Group, path: &Path) -> Result<ShardRegion> {
+        use crate::output::raw_file::read::{check_finite, check_storage, is_float, is_unsigned};
+        let region = g.name().trim_start_matches('/').to_string();
+        let bad = |why: String| Error::output(path, format!("{region}: {why}"));
         let get = |name: &str| {
             g.dataset(name).map_err(|_| {
-                Error::output(path, format!("{} has no `{name}`: not a product", g.name()))
+                Error::output(path, format!("{region} has no `{name}`: not a product"))
             })
         };
-        let shape = get("counts")?.shape();
+        let counts = get("counts")?;
+        let shape = counts.shape();
+        let [rows, channels, bins] = shape[..] else {
+            return Err(bad(format!(
+                "`counts` has {} dimensions, not 3 (profile, channel, bin)",
+                shape.len()
+            )));
+        };
+        if !is_unsigned(&counts) || channels == 0 || bins == 0 {
+            return Err(bad(
+                "`counts` is not (profile, channel, bin) of unsigned integers with channels \
+                 and bins"
+                    .into(),
+            ));
+        }
         let shots = g
             .attr("shots_averaged")
             .and_then(|a| a.read_scalar::<u32>())
-            .map_err(unreadable(path))?;
-        if get("time")?.shape().first() != shape.first() {
-            return Err(Error::output(
-                path,
-                format!("{}: `time` and `counts` differ in profiles", g.name()),
+            .map_err(|_| bad("no whole-number attribute `shots_averaged`".into()))?;
+        if shots == 0 {
+            return Err(bad(
+                "`shots_averaged` is 0; a profile sums at least one shot".into(),
             ));
         }
+        for (name, len, float) in [
+            ("time", rows, true),
+            ("n_shots", rows, false),
+            ("channel", channels, false),
+            ("altitude", bins, true),
+        ] {
+            let d = get(name)?;
+            if d.shape() != [len] || (float && !is_float(&d)) {
+                return Err(bad(format!(
+                    "`{name}` is {}, but `counts` (profile, channel, bin) = {rows} × \
+                     {channels} × {bins} makes it {len}{}",
+                    crate::output::raw_file::read::shape_text(&d.shape()),
+                    if float { " floating-point numbers" } else { "" }
+                )));
+            }
+        }
+        for name in ["counts", "time", "n_shots", "channel", "altitude"] {
+            check_storage(path, &format!("{region}/{name}"), &get(name)?)?;
+        }
+        for name in ["time", "altitude"] {
+            check_finite(path, &format!("{region}/{name}"), &get(name)?)?;
+        }
         Ok(ShardRegion {
-            rows: shape.first().copied().unwrap_or(0),
-            row_elems: shape.iter().skip(1).product(),
+            rows,
+            row_elems: channels * bins,
             shots,
         })
     }

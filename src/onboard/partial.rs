@@ -106,9 +106,80 @@ impl OnboardPartial {
     }
 }
 
-/// Reads a partial; one line naming the file when it is not one.
+/// Reads a partial; one line naming the file when it is not one, when its shots are not
+/// within the run, or when its sums are impossible ([`impossible_sums`]).
 pub fn read(path: &Path) -> Result<OnboardPartial> {
-    read_partial(path, PARTIAL_FORMAT, "onboard --shard K/N --partial")
+    let p: OnboardPartial = read_partial(path, PARTIAL_FORMAT, "onboard --shard K/N --partial")?;
+    if p.first_shot > p.end_shot || p.end_shot > p.shots {
+        return Err(Error::output(
+            path,
+            format!(
+                "`first_shot` {} and `end_shot` {} are not shots of its run's {} `shots`",
+                p.first_shot, p.end_shot, p.shots
+            ),
+        ));
+    }
+    if p.sums.len() != p.schemes.len() {
+        return Err(Error::output(
+            path,
+            format!("{} `sums` for {} `schemes`", p.sums.len(), p.schemes.len()),
+        ));
+    }
+    if let Some(why) = impossible_sums(&p.sums) {
+        return Err(Error::output(
+            path,
+            format!("impossible sums (a damaged or edited partial): {why}"),
+        ));
+    }
+    Ok(p)
+}
+
+/// Why `sums` cannot be sums of downlinked counts, naming the field; `None` when they
+/// can be. Of `n` whole counts `c ≥ 0`: `Σc ≤ Σc² ≤ (Σc)²` and (Cauchy–Schwarz: a
+/// variance is not negative) `(Σc)² ≤ n·Σc²`; at most `n` biases, their sum finite.
+pub fn impossible_sums(sums: &[SchemeSums]) -> Option<String> {
+    for (i, scheme) in sums.iter().enumerate() {
+        for (k, region) in scheme.regions.iter().enumerate() {
+            for (b, s) in region.iter().enumerate() {
+                let n = u128::from(s.n);
+                let why = if s.squares < s.counts {
+                    Some(format!(
+                        "`squares` {} is less than `counts` {}",
+                        s.squares, s.counts
+                    ))
+                } else if s
+                    .counts
+                    .checked_mul(s.counts)
+                    .is_some_and(|c2| s.squares > c2)
+                {
+                    Some(format!(
+                        "`squares` {} is more than `counts`² (counts are ≥ 0)",
+                        s.squares
+                    ))
+                } else if match (s.counts.checked_mul(s.counts), n.checked_mul(s.squares)) {
+                    (Some(a), Some(b)) => a > b,
+                    (None, Some(_)) => true,
+                    _ => (s.counts as f64).powi(2) > n as f64 * s.squares as f64,
+                } {
+                    Some(format!(
+                        "`counts` {} and `squares` {} of `n` = {} profiles make a negative \
+                         variance",
+                        s.counts, s.squares, s.n
+                    ))
+                } else if s.biased > s.n {
+                    Some(format!("`biased` {} is more than `n` {}", s.biased, s.n))
+                } else if !s.bias.is_finite() || !s.bias.value().is_finite() {
+                    Some("`bias` is not finite".to_string())
+                } else {
+                    None
+                };
+                if let Some(why) = why {
+                    return Some(format!("`sums[{i}].regions[{k}][{b}]`: {why}"));
+                }
+            }
+        }
+    }
+    None
 }
 
 /// The whole run set up again from a partial: one line naming it when this lidarsim

@@ -8,10 +8,14 @@
 
 use std::path::Path;
 
+use ndarray::{Ix2, s};
 use plotters::prelude::*;
 
+use super::raw_file;
+use super::safe_file::describe_hdf5_error;
 use super::snr_map::{FONT, encode_png, ensure_font};
 use crate::error::{Error, Result};
+use crate::resources::try_vec;
 
 /// Image width and height, pixels.
 const WIDTH: u32 = 1200;
@@ -35,25 +39,17 @@ pub struct Curtain {
     pub title: String,
 }
 
-/// Reads channel `channel` (default the first) of the raw file `path`.
+/// Reads channel `channel` (default the first) of the raw file `path`, checked as every
+/// reader of raw files checks it ([`raw_file::read::check`]: the dimensions agree, the
+/// coordinates are finite, every profile has shots) and refused, naming the file, where
+/// its counts would not fit in memory.
 pub fn read(path: &Path, channel: Option<&str>) -> Result<Curtain> {
     let fail = |why: String| Error::output(path, why);
     crate::input_file::check("RAW.h5", path)?;
     let f =
         hdf5::File::open(path).map_err(|_| fail("not a lidarsim raw file (not HDF5)".into()))?;
-    let get = |name: &str| {
-        f.dataset(name).map_err(|_| {
-            fail(format!(
-                "has no `{name}`: not a lidarsim raw file of format 2"
-            ))
-        })
-    };
-    let names: Vec<String> = get("channel")?
-        .read_raw::<hdf5::types::VarLenUnicode>()
-        .map_err(|e| fail(e.to_string()))?
-        .iter()
-        .map(|s| s.as_str().to_string())
-        .collect();
+    let header = raw_file::read::check(path, &f)?;
+    let names = &header.channels;
     let c = match channel {
         None => 0,
         Some(name) => names.iter().position(|n| n == name).ok_or_else(|| {
@@ -63,41 +59,77 @@ pub fn read(path: &Path, channel: Option<&str>) -> Result<Curtain> {
             ))
         })?,
     };
-    let counts = get("counts")?;
-    let shape = counts.shape();
-    let [profiles, _, n_bins] = shape[..] else {
-        return Err(fail("`counts` is not (profile, channel, bin)".into()));
+    let (profiles, n_bins) = (header.n_profiles, header.n_bins);
+    // the channel's counts as read (u64) and per shot (f64), the coordinates
+    let values = profiles as f64 * n_bins as f64;
+    header.require_memory(
+        path,
+        "the curtain",
+        16.0 * values + 16.0 * (profiles + n_bins) as f64,
+    )?;
+    let unreadable = |name: &str, e: hdf5::Error| {
+        fail(format!(
+            "cannot read `{name}`: {}",
+            describe_hdf5_error(&e.to_string())
+        ))
+    };
+    let get = |name: &str| {
+        f.dataset(name)
+            .map_err(|_| fail(format!("has no `{name}`")))
     };
     let read_f64 = |name: &str| -> Result<Vec<f64>> {
         get(name)?
             .read_raw::<f64>()
-            .map_err(|e| fail(e.to_string()))
+            .map_err(|e| unreadable(name, e))
     };
-    let shots: Vec<f64> = get("n_shots")?
+    let shots: Vec<u64> = get("n_shots")?
         .read_raw::<u64>()
-        .map_err(|e| fail(e.to_string()))?
-        .iter()
-        .map(|&n| n as f64)
-        .collect();
-    let all: Vec<u64> = counts.read_raw().map_err(|e| fail(e.to_string()))?;
-    let mut counts_per_shot = Vec::with_capacity(profiles * n_bins);
-    for p in 0..profiles {
-        let row = &all[(p * names.len() + c) * n_bins..][..n_bins];
-        counts_per_shot.extend(row.iter().map(|&x| x as f64 / shots[p].max(1.0)));
+        .map_err(|e| unreadable("n_shots", e))?;
+    let counts = get("counts")?
+        .read_slice::<u64, _, Ix2>(s![.., c, ..])
+        .map_err(|e| unreadable("counts", e))?;
+    let mut counts_per_shot = try_vec("the curtain", profiles * n_bins, 0.0)?;
+    for (p, row) in counts.outer_iter().enumerate() {
+        let per_shot = 1.0 / shots[p] as f64;
+        for (out, &x) in counts_per_shot[p * n_bins..][..n_bins].iter_mut().zip(row) {
+            *out = x as f64 * per_shot;
+        }
     }
-    let (x, x_label) = match read_f64("along_track_distance") {
-        Ok(d) => (
-            d.iter().map(|m| m / 1e3).collect(),
-            "along-track distance (km)".into(),
-        ),
-        Err(_) => (read_f64("time")?, "time (s)".into()),
+    drop(counts);
+    let x_name = if header.along_track {
+        "along_track_distance"
+    } else {
+        "time"
     };
+    let (x, x_label) = if header.along_track {
+        (
+            read_f64("along_track_distance")?
+                .iter()
+                .map(|m| m / 1e3)
+                .collect(),
+            "along-track distance (km)".into(),
+        )
+    } else {
+        (read_f64("time")?, "time (s)".into())
+    };
+    let altitude_km: Vec<f64> = read_f64("altitude")?.iter().map(|z| z / 1e3).collect();
+    // an axis whose span overflows f64 has no ticks: plotters would search forever
+    for (name, v) in [(x_name, &x), ("altitude", &altitude_km)] {
+        let (lo, hi) = bounds(v);
+        if !(hi - lo).is_finite() {
+            return Err(fail(format!(
+                "`{name}` spans {} to {}: wider than a plot axis can hold",
+                crate::error::compact(lo),
+                crate::error::compact(hi)
+            )));
+        }
+    }
     Ok(Curtain {
         counts_per_shot,
         n_bins,
         x,
         x_label,
-        altitude_km: read_f64("altitude")?.iter().map(|z| z / 1e3).collect(),
+        altitude_km,
         title: format!("{}: counts per shot, channel {}", path.display(), names[c]),
     })
 }
@@ -158,11 +190,16 @@ fn draw(c: &Curtain, rgb: &mut [u8]) -> std::result::Result<(), Box<dyn std::err
     Ok(())
 }
 
-/// `(min, max)` of `v`, widened when they coincide.
+/// `(min, max)` of the finite values of `v`, widened when they coincide; `(0, 1)` when
+/// there are none. Never infinite: an infinite axis range makes the axis' tick search
+/// run forever (the hang of issue 18, with `inf` in `time`).
 fn bounds(v: &[f64]) -> (f64, f64) {
-    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    if hi > lo {
+    let finite = v.iter().copied().filter(|x| x.is_finite());
+    let lo = finite.clone().fold(f64::INFINITY, f64::min);
+    let hi = finite.fold(f64::NEG_INFINITY, f64::max);
+    if !(lo.is_finite() && hi.is_finite()) {
+        (0.0, 1.0)
+    } else if hi - lo > 0.0 && (hi - lo).is_finite() {
         (lo, hi)
     } else {
         (lo - 0.5, hi + 0.5)

@@ -9,7 +9,7 @@
 //! | name | dims | meaning |
 //! |---|---|---|
 //! | `along_track_km` | (along_track) | start of each column along the track, km, strictly increasing from 0 |
-//! | `altitude_km` | (altitude) | cell centres, km, strictly increasing, evenly spaced (cells span the midpoints) |
+//! | `altitude_km` | (altitude) | cell centres, km, strictly increasing, evenly spaced within 0.1 % ([`SPACING_TOLERANCE`]; cells span the midpoints) |
 //! | `extinction_aerosol`, `extinction_cloud` | (along_track, altitude) | extinction, km⁻¹, ≥ 0 (either may be absent) |
 //! | `lidar_ratio_aerosol`, `lidar_ratio_cloud` | (along_track, altitude) | lidar ratio, sr, in [1, 1e4] where the extinction is > 0 |
 //! | `depolarization_aerosol`, `depolarization_cloud` | (along_track, altitude) | linear depolarization ratio in [0, 1] (absent = 0) |
@@ -33,33 +33,65 @@ pub fn segments(path: &Path) -> Result<Vec<SegmentConfig>> {
     crate::input_file::check("scene.curtain", path)?;
     let f = hdf5::File::open(path)
         .map_err(|_| fail("cannot open the curtain (not an HDF5 / netCDF-4 file)".into()))?;
+    // sizes first, from the datasets' shapes: nothing sized by the file is read before
+    // the cells are known to be at most MAX_CELLS and to fit in memory
+    let length = |name: &str| -> Result<usize> {
+        let d = f
+            .dataset(name)
+            .map_err(|_| fail(format!("curtain: no `{name}`")))?;
+        match d.shape()[..] {
+            [n] => Ok(n),
+            ref other => Err(fail(format!(
+                "curtain: `{name}` has {} dimensions, not 1",
+                other.len()
+            ))),
+        }
+    };
+    let (nx, nz) = (length("along_track_km")?, length("altitude_km")?);
+    let cells = nx.saturating_mul(nz);
+    if cells > MAX_CELLS {
+        return Err(fail(format!(
+            "curtain: {nx} columns × {nz} altitudes is more than {MAX_CELLS} cells"
+        )));
+    }
+    // six grids of f64, and a layer of each species in each cell at most
+    crate::resources::require_memory(
+        &format!("{}: the curtain", path.display()),
+        cells as f64 * (6.0 * 8.0 + 2.0 * std::mem::size_of::<LayerConfig>() as f64),
+    )?;
     let vector = |name: &str| -> Result<Vec<f64>> {
         f.dataset(name)
             .and_then(|d| d.read_raw::<f64>())
-            .map_err(|_| fail(format!("curtain: no readable `{name}`")))
+            .map_err(|_| fail(format!("curtain: `{name}` is not readable as numbers")))
     };
     let x = vector("along_track_km")?;
     let z = vector("altitude_km")?;
     check_axis(&x, "along_track_km").map_err(fail)?;
     check_axis(&z, "altitude_km").map_err(fail)?;
-    if x.len() * z.len() > MAX_CELLS {
-        return Err(fail(format!("curtain: more than {MAX_CELLS} cells")));
-    }
+    check_even(&z, "altitude_km").map_err(fail)?;
     let wavelength_nm: f64 = f
         .attr("wavelength_nm")
         .and_then(|a| a.read_scalar())
         .map_err(|_| fail("curtain: no root attribute `wavelength_nm`".into()))?;
+    if !(wavelength_nm.is_finite() && wavelength_nm > 0.0) {
+        return Err(fail(format!(
+            "curtain: root attribute `wavelength_nm` is {wavelength_nm}, not a positive number"
+        )));
+    }
     let grid = |name: &str, default: Option<f64>| -> Result<Option<Vec<f64>>> {
         match f.dataset(name) {
             Ok(d) => {
                 if d.shape() != [x.len(), z.len()] {
                     return Err(fail(format!(
-                        "curtain: `{name}` is not (along_track, altitude)"
+                        "curtain: `{name}` is {}, not (along_track, altitude) = {} × {}",
+                        crate::output::raw_file::read::shape_text(&d.shape()),
+                        x.len(),
+                        z.len()
                     )));
                 }
                 let v: Vec<f64> = d
                     .read_raw()
-                    .map_err(|e| fail(format!("curtain: `{name}`: {e}")))?;
+                    .map_err(|_| fail(format!("curtain: `{name}` is not readable as numbers")))?;
                 Ok(Some(v))
             }
             Err(_) => Ok(default.map(|d| vec![d; x.len() * z.len()])),
@@ -81,6 +113,11 @@ pub fn segments(path: &Path) -> Result<Vec<SegmentConfig>> {
             .and_then(|d| d.attr("angstrom_exponent"))
             .and_then(|a| a.read_scalar::<f64>())
             .ok();
+        if let Some(a) = angstrom.filter(|a| !a.is_finite()) {
+            return Err(fail(format!(
+                "curtain: attribute `angstrom_exponent` of `extinction_{tag}` is {a}, not finite"
+            )));
+        }
         check_values(&ext, &ratio, &depol, tag).map_err(fail)?;
         species.push((kind, ext, ratio, depol, angstrom));
     }
@@ -143,6 +180,35 @@ fn check_axis(v: &[f64], name: &str) -> std::result::Result<(), String> {
     Ok(())
 }
 
+/// Relative tolerance of the altitude spacing: every spacing within 0.1 % of the first.
+/// The cells span the midpoints of their centres with the first spacing, so uneven
+/// centres would make cells overlap or leave gaps; 0.1 % admits a grid rounded to
+/// float32 (about 2 mm at 40 km, under 0.01 % of a 30 m spacing).
+pub const SPACING_TOLERANCE: f64 = 1e-3;
+
+/// An axis evenly spaced within [`SPACING_TOLERANCE`] (it has been checked increasing).
+fn check_even(v: &[f64], name: &str) -> std::result::Result<(), String> {
+    let Some(first) = v.windows(2).map(|w| w[1] - w[0]).next() else {
+        return Ok(());
+    };
+    for (k, w) in v.windows(2).enumerate() {
+        let step = w[1] - w[0];
+        if (step - first).abs() > SPACING_TOLERANCE * first {
+            return Err(format!(
+                "curtain: `{name}` is not evenly spaced: values {k} and {} ({} and {}) are \
+                 {:.4} apart, the first two {:.4}; spacings must agree within {} %",
+                k + 1,
+                w[0],
+                w[1],
+                step,
+                first,
+                SPACING_TOLERANCE * 100.0
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// A species' values: extinction ≥ 0, lidar ratio in [1, 1e4] and depolarization in
 /// [0, 1] wherever there is extinction, everything finite.
 fn check_values(
@@ -172,4 +238,31 @@ fn check_values(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn altitudes_must_be_evenly_spaced_within_the_tolerance() {
+        // 30 m cells to 40 km, and the same rounded to float32 (about 2 mm at 40 km)
+        let z: Vec<f64> = (0..1334).map(|k| 0.015 + 0.03 * k as f64).collect();
+        assert_eq!(check_even(&z, "altitude_km"), Ok(()));
+        let z32: Vec<f64> = z.iter().map(|&x| f64::from(x as f32)).collect();
+        assert_eq!(check_even(&z32, "altitude_km"), Ok(()));
+        // one centre moved by 0.2 % of the spacing (60 mm): refused, naming the values
+        let mut bad = z.clone();
+        bad[500] += 0.002 * 0.03;
+        let e = check_even(&bad, "altitude_km").unwrap_err();
+        assert!(
+            e.contains("`altitude_km` is not evenly spaced: values 499 and 500"),
+            "{e}"
+        );
+        // 0.05 % passes: within the stated 0.1 %
+        let mut near = z;
+        near[500] += 0.0005 * 0.03;
+        assert_eq!(check_even(&near, "altitude_km"), Ok(()));
+        assert_eq!(check_even(&[1.0], "altitude_km"), Ok(()));
+    }
 }

@@ -68,10 +68,8 @@ impl ShardFile {
             .strip_prefix(&format!("{created} "))
             .ok_or_else(|| fail("its `history` does not start with its `date_created`"))?
             .to_string();
-        let rows = file
-            .dataset("counts")
-            .map(|d| d.shape().first().copied().unwrap_or(0))
-            .map_err(|_| fail("has no `counts`: not a lidarsim raw file"))?;
+        // the same checks as every reader of raw files (`curtain`, `export-scc`)
+        let rows = crate::output::raw_file::read::check(path, &file)?.n_profiles;
         Ok(ShardFile {
             shard: a.shard()?,
             run_profiles: a.whole("run_profiles")?,

@@ -396,6 +396,14 @@ pub fn read_partial<T: serde::de::DeserializeOwned>(
     format: &str,
     made_by: &str,
 ) -> Result<T> {
+    // the text, and what it parses to: a number of the sums takes at least 2 bytes of
+    // text and at most 16 bytes parsed, so about 8 times the file at most
+    if let Ok(m) = std::fs::metadata(path) {
+        crate::resources::require_memory(
+            &format!("{}: reading the partial", path.display()),
+            9.0 * m.len() as f64,
+        )?;
+    }
     let text = crate::input_file::read_to_string("--combine", path)?;
     let not_one = |e: &dyn std::fmt::Display| {
         Error::output(path, format!("not a partial of `{made_by}` ({e})"))

@@ -48,6 +48,11 @@ impl ExactSum {
         other.partials.iter().for_each(|&p| self.add(p));
     }
 
+    /// Whether every partial is finite (a sum read from a file may not be).
+    pub fn is_finite(&self) -> bool {
+        self.partials.iter().all(|p| p.is_finite())
+    }
+
     /// The sum, correctly rounded to f64 (round half to even).
     pub fn value(&self) -> f64 {
         let p = &self.partials;

@@ -99,9 +99,87 @@ pub fn partial(lidar: &Lidar, opts: &ValidateOptions, shard: Shard) -> Result<Pa
     })
 }
 
-/// Reads a partial; one line naming the file when it is not one.
+/// Reads a partial; one line naming the file when it is not one, when its realizations
+/// are beyond `--realizations`' range or not within the run, or when its sums are
+/// impossible ([`impossible_sums`]).
 pub fn read(path: &Path) -> Result<Partial> {
-    read_partial(path, PARTIAL_FORMAT, "validate --shard K/N --partial")
+    let p: Partial = read_partial(path, PARTIAL_FORMAT, "validate --shard K/N --partial")?;
+    let max = crate::cli_values::MAX_REALIZATIONS;
+    if p.realizations as u64 > max || p.first > p.end || p.end > p.realizations {
+        return Err(Error::output(
+            path,
+            format!(
+                "`first` {}, `end` {} and `realizations` {} are not realizations first..end \
+                 of a run of at most {max}",
+                p.first, p.end, p.realizations
+            ),
+        ));
+    }
+    if let Some(why) = impossible_sums(&p.sums, p.end - p.first) {
+        return Err(Error::output(
+            path,
+            format!("impossible sums (a damaged or edited partial): {why}"),
+        ));
+    }
+    Ok(p)
+}
+
+/// Why `sums` cannot be the sums of `n` realizations, naming the field; `None` when they
+/// can be. Of whole counts `c ≥ 0` (and whole `u`): `Σc ≤ Σc² ≤ (Σc)²`, `|Σu| ≤ Σu²`,
+/// and (Cauchy–Schwarz: a variance is not negative) `(Σc)² ≤ n·Σc²`, `(Σu)² ≤ n·Σu²`.
+/// Of a changing scene, every floating-point sum finite and ≥ 0
+/// ([`super::scene::Sums::impossible`]).
+pub fn impossible_sums(sums: &Sums, n: usize) -> Option<String> {
+    match sums {
+        Sums::Identical(bins) => bins.iter().enumerate().find_map(|(b, s)| {
+            impossible_bin(s, n as u128).map(|why| format!("`sums.bins[{b}]`: {why}"))
+        }),
+        Sums::Changing(bins) => bins
+            .iter()
+            .enumerate()
+            .find_map(|(b, s)| s.impossible().map(|why| format!("`sums.bins[{b}]`: {why}"))),
+    }
+}
+
+/// [`impossible_sums`] of one bin's sums over `n` realizations.
+fn impossible_bin(s: &super::BinSums, n: u128) -> Option<String> {
+    let square = |x: u128| x.checked_mul(x);
+    // (Σx)² ≤ n·Σx²; where a product overflows, in f64 (ample for a refusal)
+    let cauchy = |sum: u128, squares: u128| match (square(sum), n.checked_mul(squares)) {
+        (Some(a), Some(b)) => a <= b,
+        (None, Some(_)) => false,
+        _ => (sum as f64).powi(2) <= n as f64 * squares as f64,
+    };
+    let u_abs = s.u.unsigned_abs();
+    if s.squares < s.total {
+        Some(format!(
+            "`squares` {} is less than `total` {}, but Σc² ≥ Σc for whole counts",
+            s.squares, s.total
+        ))
+    } else if square(s.total).is_some_and(|t2| s.squares > t2) {
+        Some(format!(
+            "`squares` {} is more than `total`² = {}, but Σc² ≤ (Σc)² for counts ≥ 0",
+            s.squares,
+            s.total * s.total
+        ))
+    } else if !cauchy(s.total, s.squares) {
+        Some(format!(
+            "`total` {} and `squares` {} of {n} realizations make a negative variance",
+            s.total, s.squares
+        ))
+    } else if s.u_squares < u_abs {
+        Some(format!(
+            "`u_squares` {} is less than |`u`| = {u_abs}, but Σu² ≥ |Σu| for whole u",
+            s.u_squares
+        ))
+    } else if !cauchy(u_abs, s.u_squares) {
+        Some(format!(
+            "`u` {} and `u_squares` {} of {n} realizations make a negative variance",
+            s.u, s.u_squares
+        ))
+    } else {
+        None
+    }
 }
 
 impl Partial {
@@ -162,4 +240,50 @@ pub fn combine(paths: &[PathBuf]) -> Result<(Report, Vec<PathBuf>)> {
             .map_err(|why| Error::output(&paths[i], why))?;
     }
     Ok((v.report(&sums)?, lidar.first().loaded.files_read()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::BinSums;
+    use super::*;
+
+    fn sums_of(counts: &[u64], background: &[u64], n_b: usize) -> BinSums {
+        let mut s = BinSums::default();
+        counts
+            .iter()
+            .zip(background)
+            .for_each(|(&c, &b)| s.push(c, b, n_b));
+        s
+    }
+
+    #[test]
+    fn sums_of_real_counts_are_possible() {
+        let s = sums_of(&[0, 3, 7, 7, 12], &[4, 8, 0, 30, 9], 3);
+        assert_eq!(impossible_sums(&Sums::Identical(vec![s; 4]), 5), None);
+        // all counts equal: variance exactly 0, on the Cauchy–Schwarz boundary
+        let s = sums_of(&[5, 5, 5], &[15, 15, 15], 3);
+        assert_eq!(impossible_bin(&s, 3), None);
+        assert_eq!(impossible_bin(&BinSums::default(), 0), None);
+    }
+
+    #[test]
+    fn impossible_sums_are_named() {
+        let s = sums_of(&[0, 3, 7, 7, 12], &[4, 8, 0, 30, 9], 3);
+        let edit = |f: &dyn Fn(&mut BinSums)| {
+            let mut x = s;
+            f(&mut x);
+            impossible_sums(&Sums::Identical(vec![s, x]), 5).unwrap_or_default()
+        };
+        // Σc = 29, Σc² = 251: (Σc)² = 841 ≤ 5·251 = 1255; with n = 3, 753 < 841
+        assert!(
+            impossible_sums(&Sums::Identical(vec![s]), 3)
+                .unwrap()
+                .contains("negative variance")
+        );
+        assert!(edit(&|x| x.squares = 28).contains("`sums.bins[1]`: `squares` 28 is less"));
+        assert!(edit(&|x| x.squares = 842).contains("more than `total`²"));
+        assert!(edit(&|x| x.squares = 168).contains("negative variance"));
+        assert!(edit(&|x| x.u_squares = 0).contains("`u_squares` 0"));
+        assert_eq!(edit(&|x| x.squares = 169), "");
+    }
 }

@@ -55,6 +55,31 @@ impl Sums {
             .add(mu + 112.0 * mu * mu + 384.0 * mu.powi(3) + 48.0 * mu.powi(4));
     }
 
+    /// Why these cannot be sums of counts and of their laws' cumulants (a damaged or
+    /// edited partial): the field (`mu`, `v`, `var`, `k3`, `k4`) that is not finite or
+    /// negative (each sums terms ≥ 0); `None` when they can be.
+    pub fn impossible(&self) -> Option<String> {
+        let fields = [
+            ("mu", &self.mu),
+            ("v", &self.v),
+            ("var", &self.var),
+            ("k3", &self.k3),
+            ("k4", &self.k4),
+        ];
+        fields.into_iter().find_map(|(name, s)| {
+            let x = s.value();
+            if !s.is_finite() || !x.is_finite() {
+                Some(format!("`{name}` is not finite"))
+            } else if x < 0.0 {
+                Some(format!(
+                    "`{name}` = {x:e} is negative, but it sums terms that are not"
+                ))
+            } else {
+                None
+            }
+        })
+    }
+
     /// The sums of both.
     pub fn add(&mut self, o: &Sums) {
         self.total += o.total;

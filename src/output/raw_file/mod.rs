@@ -29,6 +29,7 @@ pub mod content;
 pub(crate) mod hdf5_ds;
 pub mod layout;
 pub mod planes;
+pub mod read;
 pub mod writer;
 
 pub use writer::RawFileWriter;

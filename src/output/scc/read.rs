@@ -6,7 +6,8 @@ use std::path::Path;
 use hdf5::types::VarLenUnicode;
 
 use crate::error::{Error, Result};
-use crate::output::raw_file::{BIN_DIM, CHANNEL_DIM, FORMAT_VERSION, PROFILE_DIM};
+use crate::output::raw_file::{self, BIN_DIM, CHANNEL_DIM, PROFILE_DIM};
+use crate::output::safe_file::describe_hdf5_error;
 
 /// The parts of a raw file the SCC export uses, as read (no SCC meaning yet).
 #[derive(Debug, Clone)]
@@ -48,7 +49,9 @@ pub struct RawRun {
     pub config: toml::Table,
 }
 
-/// Reads `path`, refusing a file that is not a lidarsim raw file of format version 2.
+/// Reads `path`, refusing a file that is not a lidarsim raw file of format version 2 as
+/// every reader of raw files checks it ([`raw_file::read::check`]), or whose sizes would
+/// not fit in memory.
 pub fn read_raw(path: &Path) -> Result<RawRun> {
     crate::input_file::check("RAW.h5", path)?;
     let f = hdf5::File::open(path).map_err(|_| {
@@ -57,28 +60,30 @@ pub fn read_raw(path: &Path) -> Result<RawRun> {
             "not a lidarsim raw file (not an HDF5 / netCDF-4 file)",
         )
     })?;
-    check_version(path, &f)?;
+    let header = raw_file::read::check(path, &f)?;
+    let (n_profiles, n_channels, n_bins) =
+        (header.n_profiles, header.channels.len(), header.n_bins);
+    // the counts (u64) and the (channel, bin) variables read, with the coordinates
+    let values = n_profiles as f64 * n_channels as f64 * n_bins as f64;
+    header.require_memory(
+        path,
+        "the SCC export",
+        8.0 * values + 32.0 * (n_channels * n_bins) as f64 + 24.0 * (n_profiles + n_bins) as f64,
+    )?;
     let counts_ds = dataset(path, &f, "counts")?;
-    let shape = counts_ds.shape();
-    let [n_profiles, n_channels, n_bins] = shape[..] else {
-        return Err(bad(
-            path,
-            &format!("`counts` has {} dimensions, not 3", shape.len()),
-        ));
-    };
     let time_ds = dataset(path, &f, "time")?;
     let run = RawRun {
-        channels: read_channels(path, &f)?,
+        channels: header.channels.clone(),
         n_profiles,
         n_bins,
         counts: counts_ds
             .read_raw::<u64>()
-            .map_err(|e| bad(path, &format!("cannot read `counts`: {e}")))?,
+            .map_err(|e| unreadable(path, "counts", e))?,
         time_s: f64s(path, &f, "time")?,
         time_units: str_attr(path, &time_ds, "time", "units")?,
         n_shots: dataset(path, &f, "n_shots")?
             .read_raw::<u64>()
-            .map_err(|e| bad(path, &format!("cannot read `n_shots`: {e}")))?,
+            .map_err(|e| unreadable(path, "n_shots", e))?,
         range_m: f64s(path, &f, "range")?,
         expected_signal: over_profiles(
             path,
@@ -108,31 +113,20 @@ pub fn read_raw(path: &Path) -> Result<RawRun> {
     Ok(run)
 }
 
+/// A failure reading variable `name` of the raw file, in one line.
+fn unreadable(path: &Path, name: &str, e: hdf5::Error) -> Error {
+    bad(
+        path,
+        &format!(
+            "cannot read `{name}`: {}",
+            describe_hdf5_error(&e.to_string())
+        ),
+    )
+}
+
 /// An [`Error::Output`] about the raw file.
 pub(super) fn bad(path: &Path, reason: &str) -> Error {
     Error::output(path, reason)
-}
-
-fn check_version(path: &Path, f: &hdf5::File) -> Result<()> {
-    let attr = f.attr("lidarsim_format_version").map_err(|_| {
-        bad(
-            path,
-            "not a lidarsim raw file (no `lidarsim_format_version` attribute)",
-        )
-    })?;
-    let v: i32 = attr
-        .read_scalar()
-        .map_err(|e| bad(path, &format!("cannot read `lidarsim_format_version`: {e}")))?;
-    if v != FORMAT_VERSION {
-        return Err(bad(
-            path,
-            &format!(
-                "lidarsim raw file format version {v}; the SCC export reads version \
-                 {FORMAT_VERSION} only (re-run `lidarsim simulate` with this version)"
-            ),
-        ));
-    }
-    Ok(())
 }
 
 fn dataset(path: &Path, f: &hdf5::File, name: &str) -> Result<hdf5::Dataset> {
@@ -143,7 +137,7 @@ fn dataset(path: &Path, f: &hdf5::File, name: &str) -> Result<hdf5::Dataset> {
 fn f64s(path: &Path, f: &hdf5::File, name: &str) -> Result<Vec<f64>> {
     dataset(path, f, name)?
         .read_raw::<f64>()
-        .map_err(|e| bad(path, &format!("cannot read `{name}`: {e}")))
+        .map_err(|e| unreadable(path, name, e))
 }
 
 fn f64_attr(path: &Path, f: &hdf5::File, name: &str) -> Result<f64> {
@@ -152,7 +146,7 @@ fn f64_attr(path: &Path, f: &hdf5::File, name: &str) -> Result<f64> {
         .map_err(|_| bad(path, &format!("missing root attribute `{name}`")))?;
     let x: f64 = a
         .read_scalar()
-        .map_err(|e| bad(path, &format!("cannot read root attribute `{name}`: {e}")))?;
+        .map_err(|_| bad(path, &format!("root attribute `{name}` is not a number")))?;
     if !x.is_finite() || x <= 0.0 {
         return Err(bad(
             path,
@@ -166,20 +160,13 @@ fn str_attr(path: &Path, loc: &hdf5::Location, owner: &str, name: &str) -> Resul
     let a = loc
         .attr(name)
         .map_err(|_| bad(path, &format!("`{owner}` has no attribute `{name}`")))?;
-    let v: VarLenUnicode = a.read_scalar().map_err(|e| {
+    let v: VarLenUnicode = a.read_scalar().map_err(|_| {
         bad(
             path,
-            &format!("cannot read `{owner}` attribute `{name}`: {e}"),
+            &format!("`{owner}` attribute `{name}` is not a string"),
         )
     })?;
     Ok(v.as_str().to_string())
-}
-
-fn read_channels(path: &Path, f: &hdf5::File) -> Result<Vec<String>> {
-    let v: Vec<VarLenUnicode> = dataset(path, f, CHANNEL_DIM)?
-        .read_raw()
-        .map_err(|e| bad(path, &format!("cannot read `{CHANNEL_DIM}`: {e}")))?;
-    Ok(v.iter().map(|s| s.as_str().to_string()).collect())
 }
 
 fn read_config(path: &Path, f: &hdf5::File) -> Result<toml::Table> {
