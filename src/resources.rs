@@ -220,8 +220,16 @@ pub fn check_memory(what: &str, bytes: f64, limits: &MemoryLimits) -> Result<()>
         return Ok(());
     };
     if !bytes.is_finite() || bytes > MEMORY_FRACTION * avail {
+        let share = if bytes <= avail {
+            format!(
+                " (a run plans on at most {:.0} % of it)",
+                MEMORY_FRACTION * 100.0
+            )
+        } else {
+            String::new()
+        };
         return Err(Error::Unsupported(format!(
-            "{what} needs about {} of memory, {} is {}; make the run smaller",
+            "{what} needs about {} of memory, {} is {}{share}; make the run smaller",
             human_bytes(bytes),
             human_bytes(avail),
             limits.binding()

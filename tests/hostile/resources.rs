@@ -102,7 +102,7 @@ pub fn cases() -> Vec<Case> {
             "sweep of 6.7e5 bins under ulimit -v",
             Refused("sweeping 3 points"),
             limited(
-                1_270_000,
+                750_000,
                 &with(
                     &[
                         "sweep",
