@@ -325,6 +325,12 @@ pub fn sweep(
         .map(|p| outputs.add("--png", p, Stream::Binary))
         .transpose()?;
     let points = sweep::grid(&axes)?.len();
+    // the points run in parallel, each with its own model of the base's size
+    let at_once = points.min(rayon::current_num_threads().max(1)) as f64;
+    resources::require_memory(
+        &format!("sweeping {points} points of {} bins", base.geometry.n_bins),
+        at_once * base.geometry.n_bins as f64 * crate::scenario::MODEL_BYTES_PER_BIN,
+    )?;
     let bar =
         crate::simulate::progress_bar(std::io::IsTerminal::is_terminal(&std::io::stderr()), points);
     let scenario = |extra: &[String]| {

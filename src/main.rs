@@ -246,6 +246,11 @@ enum Command {
     },
 }
 
+/// An allocation that fails ends the run with one line and exit status 2, never an
+/// abort (issue 18; `lidarsim::resources::NoAbortAllocator`).
+#[global_allocator]
+static ALLOCATOR: lidarsim::resources::NoAbortAllocator = lidarsim::resources::NoAbortAllocator;
+
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,

@@ -61,6 +61,9 @@ enum Run {
     SecondWriter,
     /// `simulate` with the file size limited (RLIMIT_FSIZE) to this many bytes.
     FileSizeLimit(u64),
+    /// One invocation with these arguments, its address space limited (RLIMIT_AS, as
+    /// `ulimit -v`) to this many bytes.
+    AddressSpaceLimit(u64, Vec<String>),
     /// A long `simulate` into a tmpfs of this many bytes, which fills up while it writes
     /// (skipped where mounting is not permitted).
     FullDisk(u64),
@@ -914,12 +917,21 @@ fn bin() -> PathBuf {
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_BIN_EXE_lidarsim")))
 }
 
+/// A resource limit set on a child before it runs.
+#[derive(Clone, Copy)]
+enum Limit {
+    /// RLIMIT_FSIZE, bytes (SIGXFSZ ignored, so a write past it fails with EFBIG).
+    FileSize(u64),
+    /// RLIMIT_AS, bytes.
+    AddressSpace(u64),
+}
+
 /// Starts the binary in `dir` with output captured to files beside it.
 fn spawn(
     dir: &Scratch,
     args: &[String],
     env: &[(&str, &str)],
-    fsize: Option<u64>,
+    limit: Option<Limit>,
 ) -> (std::process::Child, PathBuf, PathBuf) {
     static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
@@ -933,16 +945,22 @@ fn spawn(
         .stdin(Stdio::null())
         .stdout(fs::File::create(&out).unwrap())
         .stderr(fs::File::create(&err).unwrap());
-    if let Some(limit) = fsize {
+    if let Some(limit) = limit {
+        let (resource, bytes) = match limit {
+            Limit::FileSize(b) => (libc::RLIMIT_FSIZE, b),
+            Limit::AddressSpace(b) => (libc::RLIMIT_AS, b),
+        };
         // SAFETY: only async-signal-safe calls between fork and exec.
         unsafe {
             cmd.pre_exec(move || {
                 libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
                 let rl = libc::rlimit {
-                    rlim_cur: limit,
-                    rlim_max: limit,
+                    rlim_cur: bytes,
+                    rlim_max: bytes,
                 };
-                libc::setrlimit(libc::RLIMIT_FSIZE, &rl);
+                if libc::setrlimit(resource, &rl) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
                 Ok(())
             });
         }
@@ -1004,12 +1022,13 @@ fn run_case(case: &Case, n: usize) -> Option<Outcome> {
     if !prepare(case.name, &dir) {
         return None;
     }
-    let fsize = match case.run {
-        Run::FileSizeLimit(b) => Some(b),
+    let limit = match case.run {
+        Run::FileSizeLimit(b) => Some(Limit::FileSize(b)),
+        Run::AddressSpaceLimit(b, _) => Some(Limit::AddressSpace(b)),
         _ => None,
     };
     let args = match &case.run {
-        Run::Args(a) => a.clone(),
+        Run::Args(a) | Run::AddressSpaceLimit(_, a) => a.clone(),
         Run::Signal(_) | Run::SecondWriter => long_run(),
         Run::FileSizeLimit(_) => ["simulate", "@S1", "-o", "@D/out.h5", "--profiles", "20000"]
             .iter()
@@ -1054,7 +1073,7 @@ fn run_case(case: &Case, n: usize) -> Option<Outcome> {
             let after = snapshot(&dir.0);
             return Some(outcome(st, hung, &second.1, &second.2, &before, &after));
         }
-        _ => spawn(&dir, &args, &case.env, fsize),
+        _ => spawn(&dir, &args, &case.env, limit),
     };
     if let Run::Signal(sig) = case.run
         && wait_for_partial(&dir.0)

@@ -453,6 +453,32 @@ fn draw_shots(
     Ok(())
 }
 
+/// Refuses a draw whose memory cannot fit (issue 18: checked before the work): the
+/// samplers' tables per channel, per scheme the pending sums (`u64` per native bin and
+/// channel) and truth sums (two `f64` per bin) and its report sums, and the batch of
+/// drawn shots (4 Mi counts, twice: the batch and its collection).
+fn check_memory(native: &NativeRun, schemes: usize) -> Result<()> {
+    let first = native.lidar.first();
+    let (bins, channels) = (
+        first.geometry.n_bins as f64,
+        native.lidar.channels.len() as f64,
+    );
+    let bytes = channels * crate::sampling::table_bytes_bound(first.geometry.n_bins)
+        + schemes as f64 * bins * (8.0 * channels + 16.0 + 64.0)
+        + 2.0 * 8.0 * (4u64 << 20).max((bins * channels) as u64) as f64;
+    let channels = match native.lidar.channels.len() {
+        1 => "1 channel".to_string(),
+        n => format!("{n} channels"),
+    };
+    crate::resources::require_memory(
+        &format!(
+            "the onboard draw of {} bins in {channels}",
+            crate::error::compact(bins)
+        ),
+        bytes,
+    )
+}
+
 /// Refuses options that do not go together (one line each).
 fn check_options(opts: &OnboardOptions) -> Result<()> {
     let refuse = |why: &str| Err(Error::Unsupported(why.into()));
@@ -482,6 +508,7 @@ fn write_product(
     outputs: &Outputs,
     product: OutputId,
 ) -> Result<Vec<SchemeSums>> {
+    check_memory(native, native.layouts.len())?;
     let draw = Draw::new(native)?;
     let header = native.header(opts.shard.map(|s| (s, shots)), opts.word_bits)?;
     let specs = native.region_specs(shots);

@@ -28,16 +28,31 @@
 //!   temporary and lock file of the process and end it with one line on stderr and the
 //!   conventional status 128 + signal number (130, 143, 129).
 //!
-//! Renames are atomic one by one, not as a set: if the second of two renames failed
-//! (the directory vanished, say), the first output would stay. Both renames happen after
-//! all writing and syncing, where nothing but such an outside change can fail.
+//! **The commit under signals.** [`Outputs::commit`] syncs every temporary file, then
+//! renames them over their targets in the order they were declared (`simulate`: `-o`;
+//! `onboard`: `-o`, `--raw`, `--report`) while it holds the lock of the process's file
+//! registry. The signal watcher takes the same lock before it deletes anything and never
+//! gives it back (the process ends), and every creation of a temporary or lock file
+//! happens under it too. So a signal lands either before the first rename (the
+//! temporaries are deleted: every old output stays as it was, "interrupted by SIGINT;
+//! partial output removed") or after the last (every new output is complete and in
+//! place: "interrupted by SIGINT after its outputs were written; they are complete"),
+//! never between two renames; either way the status is 128 + signal and no
+//! `.NAME.partial-*` or `.NAME.lock` file stays. A reopen of a temporary file that a
+//! signal's cleanup deleted is not reported as an error of the run: the thread waits
+//! for the watcher to end the process.
+//!
+//! Renames are atomic one by one, not as a set, against anything but a signal: if the
+//! second of two renames failed (the directory vanished, say), the first output would
+//! stay. Every rename happens after all writing and syncing, where nothing but such an
+//! outside change (or a crash of the machine, or SIGKILL) can fail.
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufWriter, Seek, Write};
 use std::os::unix::fs::MetadataExt;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use crate::error::{Error, Result};
 
@@ -196,9 +211,9 @@ impl Outputs {
         }
         let lock = Lock::acquire(&target).map_err(fail)?;
         let temp = partial_path(&target);
-        register(&temp);
-        if let Err(e) = OpenOptions::new().write(true).create_new(true).open(&temp) {
-            unregister(&temp);
+        if let Err(e) = create_registered(&temp, Kind::Temp, || {
+            OpenOptions::new().write(true).create_new(true).open(&temp)
+        }) {
             return Err(fail(format!(
                 "cannot create a file in {}: {}",
                 dir.display(),
@@ -216,6 +231,7 @@ impl Outputs {
     /// The temporary file of a file output, for writers that open files by path (HDF5).
     /// Errors for an output going to standard output.
     pub fn temp_path(&self, id: OutputId) -> Result<&Path> {
+        wait_if_signalled();
         match &self.outputs[id.0].sink {
             Sink::File(s) => Ok(&s.temp),
             Sink::Stdout { .. } => Err(Error::Unsupported(format!(
@@ -254,7 +270,10 @@ impl Outputs {
                 PathBuf::from("<stdout>"),
             ),
         };
-        let fail = |e: io::Error| Error::output(&shown, describe_io(&e));
+        let fail = |e: io::Error| {
+            wait_if_signalled();
+            Error::output(&shown, describe_io(&e))
+        };
         let mut w = BufWriter::new(file.map_err(fail)?);
         fill(&mut w).map_err(fail)?;
         w.flush().map_err(fail)
@@ -267,6 +286,7 @@ impl Outputs {
         for out in &self.outputs {
             if let Sink::File(s) = &out.sink {
                 let fail = |what: &str, e: io::Error| {
+                    wait_if_signalled();
                     Error::output(&s.shown, format!("{what}: {}", describe_io(&e)))
                 };
                 let f = File::open(&s.temp).map_err(|e| fail("cannot reopen", e))?;
@@ -276,15 +296,26 @@ impl Outputs {
                 }
             }
         }
-        for out in &self.outputs {
-            if let Sink::File(s) = &out.sink {
-                fs::rename(&s.temp, &s.target).map_err(|e| {
-                    Error::output(&s.shown, format!("cannot rename: {}", describe_io(&e)))
-                })?;
-                unregister(&s.temp);
-                if let Ok(dir) = File::open(parent_dir(&s.target)) {
-                    let _ = dir.sync_all();
+        // Every rename under the lock of the file registry: a signal's cleanup waits
+        // for the last rename (then reports the outputs complete) or, having come
+        // first, ends the process before the first one (the old outputs stay).
+        {
+            let mut state = file_state();
+            for out in &self.outputs {
+                if let Sink::File(s) = &out.sink {
+                    fs::rename(&s.temp, &s.target).map_err(|e| {
+                        Error::output(&s.shown, format!("cannot rename: {}", describe_io(&e)))
+                    })?;
+                    state.files.retain(|(p, _)| *p != s.temp);
+                    state.committed = true;
                 }
+            }
+        }
+        for out in &self.outputs {
+            if let Sink::File(s) = &out.sink
+                && let Ok(dir) = File::open(parent_dir(&s.target))
+            {
+                let _ = dir.sync_all();
             }
         }
         for out in &mut self.outputs {
@@ -339,17 +370,16 @@ impl Lock {
     fn acquire(target: &Path) -> std::result::Result<Lock, String> {
         let path = sibling(target, "", ".lock");
         for _ in 0..16 {
-            register(&path);
-            let file = match OpenOptions::new()
-                .read(true)
-                .write(true)
-                .create(true)
-                .truncate(false)
-                .open(&path)
-            {
+            let file = match create_registered(&path, Kind::Lock, || {
+                OpenOptions::new()
+                    .read(true)
+                    .write(true)
+                    .create(true)
+                    .truncate(false)
+                    .open(&path)
+            }) {
                 Ok(f) => f,
                 Err(e) => {
-                    unregister(&path);
                     return Err(format!(
                         "cannot create the lock file {}: {}",
                         path.display(),
@@ -486,7 +516,7 @@ impl ScratchFile {
             .file_name()
             .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
         let path = parent_dir(output).join(format!(".{name}.{suffix}-{}", std::process::id()));
-        register(&path);
+        register(&path, Kind::Scratch);
         ScratchFile { path }
     }
 
@@ -503,29 +533,138 @@ impl Drop for ScratchFile {
     }
 }
 
-/// Files this process deletes if a signal ends it: temporary outputs and lock files.
-static CLEANUP: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
-
-fn cleanup_list() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
-    CLEANUP.lock().unwrap_or_else(|e| e.into_inner())
+/// What a file of the registry is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    /// The temporary stand-in of an output not yet committed.
+    Temp,
+    /// The lock file of an output.
+    Lock,
+    /// An intermediate file of the command ([`ScratchFile`]).
+    Scratch,
 }
 
-fn register(path: &Path) {
-    cleanup_list().push(path.to_path_buf());
+/// The files this process deletes if a signal ends it (temporary outputs, lock files,
+/// scratch files), and whether a commit renamed outputs into place.
+///
+/// Every creation of a registered file and every commit's renames happen while this
+/// state is locked; the signal watcher locks it before it deletes anything and never
+/// unlocks it (the process ends). So a signal either comes before a creation or rename
+/// (which then never happens) or after it (and sees its result).
+struct FileState {
+    files: Vec<(PathBuf, Kind)>,
+    committed: bool,
+}
+
+static FILE_STATE: Mutex<FileState> = Mutex::new(FileState {
+    files: Vec::new(),
+    committed: false,
+});
+
+fn file_state() -> std::sync::MutexGuard<'static, FileState> {
+    FILE_STATE.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+fn register(path: &Path, kind: Kind) {
+    file_state().files.push((path.to_path_buf(), kind));
+}
+
+/// Registers `path` and runs `create` (which makes the file) under the registry's lock,
+/// so that a signal cannot fall between the two; unregisters it when `create` fails.
+fn create_registered<T>(
+    path: &Path,
+    kind: Kind,
+    create: impl FnOnce() -> io::Result<T>,
+) -> io::Result<T> {
+    let mut state = file_state();
+    state.files.push((path.to_path_buf(), kind));
+    let made = create();
+    if made.is_err() {
+        state.files.retain(|(p, _)| p != path);
+    }
+    made
 }
 
 fn unregister(path: &Path) {
-    cleanup_list().retain(|p| p != path);
+    file_state().files.retain(|(p, _)| p != path);
 }
 
 fn is_registered(path: &Path) -> bool {
-    cleanup_list().iter().any(|p| p == path)
+    file_state().files.iter().any(|(p, _)| p == path)
 }
 
-/// Installs handlers for SIGINT, SIGTERM and SIGHUP: a watcher thread deletes every
-/// registered temporary and lock file, prints one line and ends the process at once with
-/// status 128 + signal (130, 143, 129), without running exit handlers (HDF5's could
-/// block on a file another thread is writing). Call once, from `main`.
+/// Set by the signal watcher as it starts ending the process.
+static SIGNALLED: AtomicBool = AtomicBool::new(false);
+
+/// Blocks for good when a signal is ending the process: its watcher deletes the
+/// temporary files, so an error from one (a reopen that finds it gone) is no error of
+/// the run, and a writer about to open one by path must not recreate it.
+fn wait_if_signalled() {
+    if SIGNALLED.load(Ordering::SeqCst) {
+        loop {
+            std::thread::park();
+        }
+    }
+}
+
+/// How the process ends: what its outputs are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Ending {
+    /// Temporary outputs were deleted: every old output is as it was.
+    PartialRemoved,
+    /// A commit renamed the outputs into place and none is pending: they are complete.
+    Complete,
+    /// No output was under way.
+    NoOutput,
+}
+
+/// Deletes every registered file and keeps the registry locked for good (no file is
+/// created or renamed after); for a process about to end. `wait`: wait for the
+/// registry (a commit's renames), else give up (`None`, nothing deleted) when it is
+/// busy. `paths` receives the deleted paths (for a second pass: a writer that opened
+/// its file by path, as HDF5 does, may recreate it before the process ends).
+fn clean_for_exit(wait: bool, paths: Option<&mut Vec<PathBuf>>) -> Option<Ending> {
+    let state = if wait {
+        file_state()
+    } else {
+        match FILE_STATE.try_lock() {
+            Ok(s) => s,
+            Err(std::sync::TryLockError::Poisoned(e)) => e.into_inner(),
+            Err(std::sync::TryLockError::WouldBlock) => return None,
+        }
+    };
+    for (f, _) in &state.files {
+        let _ = fs::remove_file(f);
+    }
+    if let Some(paths) = paths {
+        paths.extend(state.files.iter().map(|(p, _)| p.clone()));
+    }
+    let ending = if state.files.iter().any(|(_, k)| *k == Kind::Temp) {
+        Ending::PartialRemoved
+    } else if state.committed {
+        Ending::Complete
+    } else {
+        Ending::NoOutput
+    };
+    std::mem::forget(state);
+    Some(ending)
+}
+
+/// For a run ending on an allocation failure ([`crate::resources::NoAbortAllocator`]):
+/// deletes every temporary, lock and scratch file of the process, unless the registry
+/// is busy; `true` when a partial output was among them.
+pub fn remove_files_for_exit() -> bool {
+    clean_for_exit(false, None) == Some(Ending::PartialRemoved)
+}
+
+/// Installs handlers for SIGINT, SIGTERM and SIGHUP: a watcher thread waits for a commit
+/// in progress to finish its renames, deletes every registered temporary and lock file,
+/// prints one line saying what the outputs are and ends the process at once with status
+/// 128 + signal (130, 143, 129), without running exit handlers (HDF5's could block on a
+/// file another thread is writing). The line is "interrupted by SIGINT; partial output
+/// removed" (every old output intact), "interrupted by SIGINT after its outputs were
+/// written; they are complete", or "interrupted by SIGINT" (no output under way).
+/// Call once, from `main`.
 pub fn install_signal_handlers() -> Result<()> {
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
     let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])
@@ -534,21 +673,23 @@ pub fn install_signal_handlers() -> Result<()> {
         .name("signals".into())
         .spawn(move || {
             if let Some(sig) = signals.forever().next() {
-                let files = std::mem::take(&mut *cleanup_list());
-                for f in &files {
-                    let _ = fs::remove_file(f);
-                }
+                SIGNALLED.store(true, Ordering::SeqCst);
+                let mut files = Vec::new();
+                let ending = clean_for_exit(true, Some(&mut files)).unwrap_or(Ending::NoOutput);
                 let name = match sig {
                     SIGINT => "SIGINT",
                     SIGTERM => "SIGTERM",
                     _ => "SIGHUP",
                 };
-                let what = if files.is_empty() {
-                    String::new()
-                } else {
-                    "; partial output removed".to_string()
+                let what = match ending {
+                    Ending::PartialRemoved => "; partial output removed",
+                    Ending::Complete => " after its outputs were written; they are complete",
+                    Ending::NoOutput => "",
                 };
                 eprintln!("\nlidarsim: interrupted by {name}{what}");
+                for f in &files {
+                    let _ = fs::remove_file(f);
+                }
                 signal_hook::low_level::exit(128 + sig);
             }
         })
