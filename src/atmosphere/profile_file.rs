@@ -34,7 +34,7 @@ use crate::constants::BOLTZMANN_J_PER_K;
 use crate::error::{Error, Result};
 
 /// Config key reported in parse errors.
-const KEY: &str = "atmosphere.molecular.model";
+const KEY: &str = "atmosphere.molecular.model.file";
 
 /// A tabulated molecular number-density profile.
 #[derive(Debug, Clone, PartialEq)]
@@ -354,7 +354,7 @@ mod tests {
         let e = err("altitude_km number_density_m3\n0 2.5e25\n1 abc\n");
         assert_eq!(
             e,
-            "test.txt: key `atmosphere.molecular.model`: line 3: number_density_m3 `abc` is not a number"
+            "test.txt: key `atmosphere.molecular.model.file`: line 3: number_density_m3 `abc` is not a number"
         );
     }
 
@@ -466,7 +466,7 @@ mod tests {
         let e = MolecularProfile::from_file(&bad).unwrap_err().to_string();
         assert!(
             e.starts_with(&format!(
-                "{}: key `atmosphere.molecular.model`: line 2:",
+                "{}: key `atmosphere.molecular.model.file`: line 2:",
                 bad.display()
             )),
             "{e}"
@@ -478,7 +478,7 @@ mod tests {
         assert_eq!(
             e,
             format!(
-                "atmosphere.molecular.model {}: no such file or directory",
+                "atmosphere.molecular.model.file {}: no such file or directory",
                 missing.display()
             )
         );
