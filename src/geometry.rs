@@ -29,7 +29,7 @@ pub fn ground_track_speed_m_per_s(altitude_m: f64) -> f64 {
     EARTH_RADIUS_M / radius * (EARTH_GM_M3_PER_S2 / radius).sqrt()
 }
 
-/// Maximum repetition rate with one pulse in flight at a time, `c/(2H)` (model.md §5).
+/// Maximum repetition rate with one pulse in flight at a time, `c/(2H)` (docs/model.md §3).
 pub fn max_rep_rate_hz(range_m: f64) -> f64 {
     SPEED_OF_LIGHT_M_PER_S / (2.0 * range_m)
 }

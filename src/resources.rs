@@ -1,4 +1,4 @@
-//! Sizes checked before work starts (interface.md: "Sizes ... are checked before work
+//! Sizes checked before work starts (docs/outputs.md: "Sizes ... are checked before work
 //! starts: an impossible run is refused with its estimate, a long one announces its
 //! estimate").
 //!

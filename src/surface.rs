@@ -21,7 +21,7 @@ pub struct Surface {
     pub altitude_m: f64,
 }
 
-/// What reflects sunlight under a column (model.md §7 "Daylight seen from above").
+/// What reflects sunlight under a column (docs/model.md §4f).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Reflector {
     /// Its albedo ρ.

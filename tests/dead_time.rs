@@ -40,7 +40,7 @@ fn simulate_stationary(model: DeadTimeModel, n: f64, shots: u64, seed: u64) -> (
     (mean, sum2 / k - mean * mean)
 }
 
-/// model.md §7, written here: the stationary recorded rate `n/(1+nτ)` (non-paralyzable)
+/// docs/model.md §4b, written here: the stationary recorded rate `n/(1+nτ)` (non-paralyzable)
 /// or `n·e^{−nτ}` (paralyzable), and the renewal-theory variance of a window T ≫ τ,
 /// `nT/(1+nτ)³` or `mT(1 − 2nτ·e^{−nτ})`.
 fn formulas(model: DeadTimeModel, n: f64, t: f64) -> (f64, f64) {
@@ -103,7 +103,7 @@ fn recorded_rates_follow_the_dead_time_formulas() {
 }
 
 /// Mean recorded counts per bin for a piecewise-constant true rate (per-bin means
-/// `lambda`, bins of `dt`), from model.md §7's exact equations solved here on a grid of
+/// `lambda`, bins of `dt`), from docs/model.md §4b's exact equations solved here on a grid of
 /// τ/700: paralyzable, a photon at t is recorded with probability
 /// `exp(−∫_{t−τ}^{t} n ds)`; non-paralyzable, `m(t) = n(t)·(1 − ∫_{t−τ}^{t} m ds)`
 /// (trapezoidal in the integral, implicit in m(t)). The shot starts live at t = 0.
@@ -141,7 +141,7 @@ fn recorded_means_by_quadrature(model: DeadTimeModel, lambda: &[f64], dt: f64) -
 }
 
 /// Where the rate jumps from 0 to 100 MHz mid-window and back, the solver's recorded
-/// means (the file's `expected_counts`) agree with model.md §7's equations solved here
+/// means (the file's `expected_counts`) agree with docs/model.md §4b's equations solved here
 /// within 3e-3 (a 1 % error fails; the solver, on its τ/64 grid, is 2.6e-3 off in the
 /// step's first bin, more than the 1e-3 its module docs state), and the sampler's counts agree with them bin by bin
 /// within 5 sd (false alarm 40 × 6e-7): dead time crossing bin edges is modelled, not

@@ -1,4 +1,4 @@
-//! Sunlight through the atmosphere (model.md §8, docs/model.md "Sunlight from the
+//! Sunlight through the atmosphere (docs/model.md "Sunlight from the
 //! scene"): the solar background seen from above is `ρ·F_λ·μ/π·T(μ)` with, for a
 //! molecules-only atmosphere (no absorber),
 //! `T(μ) = exp(−τ)·[exp(−τ/μ) + ½·(1 − exp(−τ/μ))]`, μ = cos θ_s, τ the Rayleigh optical

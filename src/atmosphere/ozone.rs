@@ -1,5 +1,5 @@
 //! Ozone: a standard number-density profile and the Chappuis-band absorption
-//! cross-section (model.md §7 "Ozone"): `α_O3(z, λ) = n_O3(z)·σ_O3(λ)`, part of T².
+//! cross-section (docs/model.md §4g): `α_O3(z, λ) = n_O3(z)·σ_O3(λ)`, part of T².
 //!
 //! **Profile.** The AFGL U.S. Standard ozone profile: Anderson, Clough, Kneizys,
 //! Chetwynd & Shettle (1986), *AFGL Atmospheric Constituent Profiles (0–120 km)*,
@@ -247,7 +247,7 @@ mod tests {
 
     #[test]
     fn two_way_transmission_at_532() {
-        // model.md §7: ozone takes about 4–5 % two-way at 532 nm from space down to the
+        // docs/model.md §4g: ozone takes about 4–5 % two-way at 532 nm from space down to the
         // troposphere (300 DU); nearly all of it lies above 15 km.
         let sigma = cross_section_m2(532.0);
         let to_15km = (-2.0 * sigma * column_m2(15_000.0, TOP_ALTITUDE_M)).exp();

@@ -1,4 +1,4 @@
-//! Onboard averaging (issue 10, model.md §7): altitude regions, each with a vertical
+//! Onboard averaging (issue 10, docs/model.md): altitude regions, each with a vertical
 //! resolution (native bins merged) and a horizontal one (shots summed), applied to the
 //! shot-level counts as an onboard processor would: integer sums, nothing in floating
 //! point in the data path. The sum of Poisson counts is Poisson, so a stationary scene

@@ -1,4 +1,4 @@
-//! The report of `lidarsim onboard --report` (interface.md columns): per scheme and
+//! The report of `lidarsim onboard --report` (docs/config.md columns): per scheme and
 //! region the resolutions, the Eq. 4 and empirical S/N, the data rate and, for a scene
 //! that changes along the track, the averaging bias.
 //!
@@ -96,7 +96,7 @@ impl SchemeSums {
     }
 }
 
-/// The averaging bias of one downlinked bin (model.md §7): how far the log of the
+/// The averaging bias of one downlinked bin (docs/model.md): how far the log of the
 /// averaged true signal lies above the average of the shots' logs,
 /// `ln(Σs/N) − Σ ln s/N ≥ 0` (Jensen), what a retrieval working on the log of averaged
 /// counts (extinction, optical depth) misses against the full-resolution truth; 0 over a
@@ -180,7 +180,7 @@ pub fn data_rate_bps(
         .sum()
 }
 
-/// Writes the report: one row per scheme and region (interface.md columns); a region's
+/// Writes the report: one row per scheme and region (docs/config.md columns); a region's
 /// S/N columns are those of its first channel.
 pub fn write_report(w: &mut dyn Write, r: &ReportInput) -> std::io::Result<()> {
     writeln!(

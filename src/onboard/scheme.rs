@@ -1,4 +1,4 @@
-//! Averaging schemes: built-in `none`, `uniform:N` and `caliop` (interface.md), or a
+//! Averaging schemes: built-in `none`, `uniform:N` and `caliop` (docs/config.md), or a
 //! TOML file of `[[regions]]` with `top_km`, `bottom_km`, `vertical_resolution_m` and
 //! `shots_averaged`, from the top down.
 
@@ -55,7 +55,7 @@ struct SchemeFile {
 }
 
 /// CALIOP's onboard averaging of its 532 nm channels on its 30 m native grid
-/// (interface.md; Hunt et al. 2009, J. Atmos. Oceanic Technol. 26, 1214, Table 2;
+/// (docs/config.md; Hunt et al. 2009, J. Atmos. Oceanic Technol. 26, 1214, Table 2;
 /// Winker et al. 2009, J. Atmos. Oceanic Technol. 26, 2310, Table 1; the CALIPSO Data
 /// Products Catalog, PC-SCI-503, Lidar Level 1B, altitude regions): 583 bins.
 pub fn caliop_regions() -> Vec<Region> {
@@ -78,7 +78,7 @@ pub fn caliop_regions() -> Vec<Region> {
 /// [`caliop_regions`]): nothing above 30.1 km, 60 m from −0.5 to 8.2 km (not 30 m), the
 /// 532 nm layout elsewhere: 55 + 200 + 145 + 5 = 405 bins. With the 532 nm channels'
 /// 583 bins twice, 16-bit words and 20.16 shots s⁻¹ the downlink is 315 kbit/s, CALIOP's
-/// 316 kbit/s (model.md §7).
+/// 316 kbit/s (docs/model.md).
 pub fn caliop_1064_regions() -> Vec<Region> {
     let r = |top_km, bottom_km, vertical_resolution_m, shots_averaged| Region {
         top_km,

@@ -1,6 +1,6 @@
 //! The sun: its zenith angle at a time and place, the Earth–Sun distance, the
 //! top-of-atmosphere solar spectrum and the daylight radiance a nadir view sees
-//! (model.md §7 "Daylight seen from above").
+//! (docs/model.md §4f).
 //!
 //! **Solar position.** The NOAA Solar Calculator equations (NOAA Global Monitoring
 //! Laboratory, `NOAA_Solar_Calculations_day.xls`), which are the low-accuracy solar
@@ -27,10 +27,10 @@
 //! 1-nm spectrum swings by ±10 % around these values), 300–2000 nm, at 1 AU.
 //!
 //! **Daylight radiance** seen looking down on a Lambertian reflector of albedo ρ
-//! (model.md §7–8): `L = ρ·E↓/π · exp(−τ)`, with `E↓` the solar irradiance reaching the
+//! (docs/model.md §4f): `L = ρ·E↓/π · exp(−τ)`, with `E↓` the solar irradiance reaching the
 //! reflector and `exp(−τ)` the direct transmission back up to the nadir view; 0 when
 //! the sun is below the horizon (θ_s ≥ 90°). Sunlight reaches the reflector along its
-//! slant path (model.md §8 "Sunlight through the atmosphere"), μ = cos θ_s:
+//! slant path (docs/model.md §4f), μ = cos θ_s:
 //!
 //! ```text
 //! E↓ = F_λ·μ·[ exp(−τ/μ)  +  ½·exp(−τ_abs/μ)·(1 − exp(−τ_sca/μ)) ]
@@ -200,7 +200,7 @@ impl SunlightPath {
     }
 }
 
-/// Daylight radiance seen looking down on a Lambertian reflector (model.md §7–8),
+/// Daylight radiance seen looking down on a Lambertian reflector (docs/model.md §4f),
 /// photons m⁻² s⁻¹ sr⁻¹ nm⁻¹ (the unit of the irradiance, per steradian):
 /// `L = ρ·F_λ·cos θ_s/π · T(cos θ_s)` for |θ_s| < 90°, 0 otherwise (NaN for a NaN angle),
 /// with `T` the sunlight's path ([`SunlightPath::transmission`]).

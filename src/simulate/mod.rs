@@ -1046,7 +1046,7 @@ pub fn estimated_file_bytes(totals: &[f64], shots: u64, profiles: usize, streams
 }
 
 /// Refuses a run whose memory or file cannot fit, and announces a long one
-/// (interface.md: sizes checked before work starts). `totals` are the per-shot means of
+/// (docs/outputs.md: sizes checked before work starts). `totals` are the per-shot means of
 /// every bin of every channel.
 fn check_sizes(
     totals: &[f64],

@@ -348,7 +348,7 @@ impl SceneModel {
 
     /// Background counts per shot per bin of each run of profile `p`, channel `channel`:
     /// the channel's fixed background, or the sunlight reflected below each run's
-    /// column, `ρ·F_λ/d²·cos θ_s/π·T(θ_s)` (model.md §7–8, T along the sun's slant path
+    /// column, `ρ·F_λ/d²·cos θ_s/π·T(θ_s)` (docs/model.md §4f, T along the sun's slant path
     /// through the column's atmosphere at the channel's wavelength,
     /// [`sun::SunlightPath`]) times the instrument's factor, plus the fixed radiance's
     /// background as a floor.
