@@ -499,7 +499,24 @@ pub fn describe_hdf5_error(message: &str) -> String {
         .and_then(|digits| digits.parse::<i32>().ok());
     match errno {
         Some(n) => describe_io(&io::Error::from_raw_os_error(n)),
-        None => message.to_string(),
+        // no errno: the library's words without its function names and trace details
+        None => {
+            let core = message
+                .split(", time =")
+                .next()
+                .unwrap_or(message)
+                .split(" time = ")
+                .next()
+                .unwrap_or(message);
+            let words: Vec<&str> = core
+                .split(": ")
+                .filter(|part| !(part.starts_with("H5") && part.ends_with("()")))
+                .collect();
+            words
+                .join(": ")
+                .trim_end_matches([':', ',', ' '])
+                .to_string()
+        }
     }
 }
 
@@ -859,5 +876,13 @@ mod tests {
                  'No space left on device', buf = 0x1, total write size = 4096";
         assert_eq!(describe_hdf5_error(m), "no space left on device");
         assert_eq!(describe_hdf5_error("bad chunk"), "bad chunk");
+        // no errno: the library's words, without its function names or trace details
+        assert_eq!(
+            describe_hdf5_error(
+                "H5Dcreate2(): unable to create dataset: H5D__create(): chunk size too large, \
+                 time = Sun Nov 22"
+            ),
+            "unable to create dataset: chunk size too large"
+        );
     }
 }

@@ -169,7 +169,7 @@ fn heatmap(
             .collect();
         let lines = contour::ContourBuilder::new(nx, ny, true)
             .lines(&values, &SNR_CONTOURS)
-            .map_err(|e| format!("contours: {e:?}"))?;
+            .map_err(|e| format!("contours: {e}"))?;
         for line in &lines {
             for path in line.geometry().0.iter() {
                 // the rings close along the grid's edge: draw only the inner pieces

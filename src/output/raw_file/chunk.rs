@@ -258,7 +258,7 @@ pub fn deflate(shuffled: &[u8]) -> Result<Vec<u8>, String> {
 /// Undoes [`deflate`] (any zlib stream); for checks.
 pub fn inflate(stored: &[u8]) -> Result<Vec<u8>, String> {
     miniz_oxide::inflate::decompress_to_vec_zlib(stored)
-        .map_err(|e| format!("not a zlib stream: {e:?}"))
+        .map_err(|e| format!("not a zlib stream: {e}"))
 }
 
 /// Undoes the shuffle of a chunk of `elem_bytes`-byte elements: back to the elements'
