@@ -175,16 +175,16 @@ fn an_orbit_run_uses_the_slant_path() {
          start_latitude_deg = -50.0\nstart_longitude_deg = 0.0\nascending = false\n",
     );
     let out = dir.join("run.h5");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_lidarsim"))
-        .args([
+    common::cli::ok(common::cli::lidarsim(
+        &dir,
+        &[
             "simulate",
             path.to_str().unwrap(),
             "-o",
             out.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        ],
+        &[],
+    ));
     let f = hdf5::File::open(&out).unwrap();
     let read = |n: &str| -> Vec<f64> { f.dataset(n).unwrap().read_raw().unwrap() };
     let (lat, lon, bkg, n_bins) = (

@@ -26,16 +26,16 @@ fn orbit_run(name: &str) -> (PathBuf, hdf5::File) {
     std::fs::create_dir_all(&dir).unwrap();
     let out = dir.join("run.h5");
     let cfg = common::config_path("instruments/caliop_orbit.toml");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_lidarsim"))
-        .args([
+    common::cli::ok(common::cli::lidarsim(
+        &dir,
+        &[
             "simulate",
             cfg.to_str().unwrap(),
             "-o",
             out.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        ],
+        &[],
+    ));
     let f = hdf5::File::open(&out).unwrap();
     (dir, f)
 }
