@@ -33,7 +33,7 @@ use std::io::Write;
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use statrs::distribution::{ContinuousCDF, DiscreteCDF, Normal, Poisson};
+use statrs::distribution::{DiscreteCDF, Poisson};
 
 use crate::detector::DeadTime;
 use crate::laser::PulseEnergy;
@@ -391,30 +391,56 @@ fn accumulate(
     sums
 }
 
-fn z_from_two_sided_p(p: f64, sign: f64) -> f64 {
-    let std = Normal::standard();
-    let p = p.clamp(1e-300, 1.0);
-    sign * std.inverse_cdf(1.0 - p / 2.0).max(0.0)
-}
-
-/// The mean's z-score: exact Poisson test when the count is Poisson (κ2 = κ1).
-fn mean_z(total: u128, n: f64, m: &BinModel) -> Option<f64> {
+/// The mean's z-score `(T − Nκ1)/sd(T)` of the total `T` over `n` profiles, with its
+/// law under the model where that departs from the normal.
+///
+/// Where the count is Poisson to 0.1 % in variance (κ2 = κ1: no jitter or dead time), `T`
+/// is Poisson(μ = Nκ1) and `z = (T − μ)/√μ` is Pearson's: `E z² = 1` and the excess
+/// kurtosis of z is `1/μ` exactly, and the probability of `|z| > z₀` is summed from the
+/// Poisson law itself (Edgeworth with γ1 = μ^(−1/2), γ2 = 1/μ above μ = 10⁴, where the
+/// two differ by < 1e-6). So `Σz²` has mean K and the Satterthwaite variance of
+/// [`calibration::check_calibrated`] at every count. (A z taken from the two-sided
+/// exact-test p-value instead has `E z² < 1` for a discrete law: 0.88 at μ = 40, 0.65 at
+/// μ = 4; its `Σz²` p-values crowded towards 1, which a uniformity test of
+/// `validation/reports/paper_scenarios.md` caught.) Elsewhere the normal z with the total's
+/// variance `Nκ2`.
+fn mean_z(total: u128, n: f64, m: &BinModel) -> (Option<f64>, Option<Shape>) {
     let [k1, k2, ..] = m.cumulants;
     if k1 <= 0.0 {
-        return (total > 0).then_some(f64::INFINITY);
+        return ((total > 0).then_some(f64::INFINITY), None);
     }
     let mean = total as f64 / n;
-    // the exact Poisson test where the law is Poisson to 0.1 % in variance (a faint
-    // bin under jitter or dead time), the normal one beyond
-    if (k2 - k1).abs() <= 1e-3 * k1 {
-        let pois = Poisson::new(n * k1).ok()?;
-        let t = total.min(u128::from(u64::MAX)) as u64;
-        let lower = pois.cdf(t);
-        let upper = if t == 0 { 1.0 } else { pois.sf(t - 1) };
-        let p = (2.0 * lower.min(upper)).min(1.0);
-        Some(z_from_two_sided_p(p, (mean - k1).signum()))
+    if (k2 - k1).abs() > 1e-3 * k1 {
+        return (Some((mean - k1) / (k2 / n).sqrt()), None);
+    }
+    let mu = n * k1;
+    let z = (total as f64 - mu) / mu.sqrt();
+    (Some(z), Some(poisson_pearson_shape(mu)))
+}
+
+/// The law of Pearson's `z = (T − μ)/√μ` for `T ~ Poisson(μ)`: its probability outside
+/// the nominal interval and its excess kurtosis `1/μ`.
+fn poisson_pearson_shape(mu: f64) -> Shape {
+    let excess_kurtosis = 1.0 / mu;
+    let exact = Poisson::new(mu).ok().filter(|_| mu < 1e4);
+    let Some(law) = exact else {
+        return calibration::outside_probability(mu.sqrt().recip(), excess_kurtosis)
+            .unwrap_or_else(Shape::normal);
+    };
+    let half_width = calibration::z_interval() * mu.sqrt();
+    // |T − μ| > half_width: T < μ − half_width or T > μ + half_width
+    let below = mu - half_width;
+    let lower = if below > 0.0 {
+        // largest integer strictly below `below`
+        let t = below.ceil() - 1.0;
+        if t >= 0.0 { law.cdf(t as u64) } else { 0.0 }
     } else {
-        Some((mean - k1) / (k2 / n).sqrt())
+        0.0
+    };
+    let upper = law.sf((mu + half_width).floor() as u64);
+    Shape {
+        outside_probability: (lower + upper).clamp(0.0, 1.0),
+        excess_kurtosis,
     }
 }
 
@@ -437,11 +463,12 @@ fn bin_reports(
             let (s, m) = (&sums[i], &models[i]);
             let [k1, k2, k3, k4] = m.cumulants;
             let enough = nf * k1 >= MIN_TOTAL_COUNTS;
+            let (z, shape) = mean_z(s.total, nf, m);
             let mean = Stat {
                 empirical: s.total as f64 / nf,
                 model: k1,
-                z: mean_z(s.total, nf, m),
-                shape: None,
+                z,
+                shape,
             };
             let (mu2, mu3, mu4) = central_moments(k2, k3, k4);
             let x = MeanVar::of(n, s.total as i128, s.squares, 1.0);
@@ -692,3 +719,6 @@ pub fn write_table(w: &mut dyn Write, r: &Report) -> std::io::Result<()> {
         }
     )
 }
+
+#[cfg(test)]
+mod tests;

@@ -173,11 +173,12 @@ fn bin_report(sums: &Sums, n: usize, channel: &str, bin: usize, altitude_m: f64)
         k4: sums.k4.value(),
     };
     let model = BinModel::new(0.0, s.mu / nf, nf, 0.0);
+    let (z, mean_shape) = mean_z(s.total, 1.0, &BinModel::new(0.0, s.mu, 1.0, 0.0));
     let mean = Stat {
         empirical: s.total as f64 / nf,
         model: s.mu / nf,
-        z: mean_z(s.total, 1.0, &BinModel::new(0.0, s.mu, 1.0, 0.0)),
-        shape: None,
+        z,
+        shape: mean_shape,
     };
     let enough = model.cumulants[0] >= MIN_TOTAL_COUNTS && s.var > 0.0;
     let shape = calibration::outside_probability(s.k3 / s.var.powf(1.5), s.k4 / (s.var * s.var));
