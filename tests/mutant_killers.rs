@@ -26,3 +26,129 @@ fn signal_constant_and_dark_counts_with_no_unit_factor() {
     let dark = sc.instrument.dark_per_bin;
     assert!((dark / 7e-4 - 1.0).abs() < 1e-12, "{dark}");
 }
+
+/// `configs/instruments/caliop_3ch.toml` with `from` replaced by `to` (once), loaded.
+fn three_channels(from: &str, to: &str) -> lidarsim::error::Result<lidarsim::config::LoadedConfig> {
+    let path = common::config_path("instruments/caliop_3ch.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(from.is_empty() || text.contains(from), "{from}");
+    lidarsim::config::load_str(&text.replacen(from, to, 1), &path, &[])
+}
+
+/// A channel's `detector` table is merged key by key into the instrument's: the 1064 nm
+/// channel sets only its dead time and keeps the instrument's (paralyzable) model; the
+/// other channels keep both (`src/receiver.rs` `merge_table`; cargo-mutants survivors
+/// "replace merge_table with ()" and "delete match arm").
+#[test]
+fn a_channel_detector_table_merges_into_the_instrument_one() {
+    let loaded = three_channels(
+        "dead_time_model = \"nonparalyzable\"",
+        "dead_time_model = \"paralyzable\"",
+    )
+    .unwrap();
+    let detector = |k: usize| {
+        let d = loaded.channels[k]
+            .config
+            .instrument
+            .detector
+            .as_ref()
+            .unwrap();
+        (d.dead_time_s, d.dead_time_model)
+    };
+    use lidarsim::detector::DeadTimeModel::Paralyzable;
+    assert_eq!(detector(0), (3.5e-9, Paralyzable));
+    assert_eq!(detector(2), (5e-9, Paralyzable));
+}
+
+/// A receiver has at most 32 channels: 32 load, 33 are refused naming the key
+/// (survivors "replace > with >=" and "with ==" in `expand`).
+#[test]
+fn thirty_two_channels_load_and_thirty_three_do_not() {
+    let extra = |n: usize| {
+        (0..n)
+            .map(|k| format!("\n[[instrument.channels]]\nname = \"extra {k}\"\n"))
+            .collect::<String>()
+    };
+    // the file's three channels end with the 1064 nm one's detector line
+    let anchor = "detector = { dead_time_s = 5e-9 }  # ASSUMED";
+    let loaded = three_channels(anchor, &format!("{anchor}\n{}", extra(29))).unwrap();
+    assert_eq!(loaded.channels.len(), 32);
+    let e = three_channels(anchor, &format!("{anchor}\n{}", extra(30)))
+        .err()
+        .expect("33 channels accepted")
+        .to_string();
+    assert!(e.contains("instrument.channels") && e.contains("33"), "{e}");
+}
+
+/// Channel names have 1 to 64 characters (survivors "replace || with &&", "replace >
+/// with ==" and "with >=" in `channel_label`).
+#[test]
+fn channel_names_have_one_to_sixty_four_characters() {
+    let name = |s: &str| three_channels("name = \"1064_total\"", &format!("name = \"{s}\""));
+    assert_eq!(
+        name(&"n".repeat(64)).unwrap().channels[2].name,
+        "n".repeat(64)
+    );
+    for bad in [String::new(), "n".repeat(65)] {
+        let e = name(&bad).err().expect("accepted").to_string();
+        assert!(
+            e.contains("instrument.channels[2].name") && e.contains("1 to 64"),
+            "{e}"
+        );
+    }
+}
+
+/// A channel's own polarization replaces the instrument's, whichever of its two names
+/// (`polarization`, `channel`) either uses (survivor "delete match arm").
+#[test]
+fn a_channel_polarization_replaces_the_instrument_one() {
+    use lidarsim::config::Channel;
+    let loaded =
+        three_channels("[instrument]\n", "[instrument]\nchannel = \"parallel\"\n").unwrap();
+    let pol = |k: usize| loaded.channels[k].config.instrument.channel;
+    assert_eq!(
+        [pol(0), pol(1), pol(2)],
+        [Channel::Parallel, Channel::Perpendicular, Channel::Parallel]
+    );
+}
+
+/// An error is named by the channel's key where the channel set it (`polarization` for
+/// its alias `channel` too), and by the instrument's key, with the channel's name, where
+/// the instrument did (survivors "replace || with &&", "&& with ||", "== with !=" in
+/// `rename_key`).
+#[test]
+fn channel_errors_name_the_key_where_it_was_set() {
+    let error = |from: &str, to: &str| {
+        three_channels(from, to)
+            .err()
+            .expect("accepted")
+            .to_string()
+    };
+    let e = error("wavelength_nm = 1064.0", "wavelength_nm = -5.0");
+    assert!(e.contains("instrument.channels[2].wavelength_nm"), "{e}");
+    let e = error("polarization = \"parallel\"", "polarization = \"sideways\"");
+    assert!(e.contains("instrument.channels[0].polarization"), "{e}");
+    // the instrument's cross-talk reaches the 1064 nm channel, which says it sees the
+    // total: the key is the instrument's, the channel is named in the reason
+    let path = common::config_path("instruments/caliop_3ch.toml");
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replacen(
+            "[instrument]\n",
+            "[instrument]\nchannel = \"parallel\"\ncrosstalk = 0.01\n",
+            1,
+        )
+        .replacen(
+            "wavelength_nm = 1064.0",
+            "wavelength_nm = 1064.0\npolarization = \"total\"",
+            1,
+        );
+    let e = lidarsim::config::load_str(&text, &path, &[])
+        .err()
+        .expect("accepted")
+        .to_string();
+    assert!(
+        e.contains("key `instrument.crosstalk`") && e.contains("(in channel 1064_total)"),
+        "{e}"
+    );
+}
