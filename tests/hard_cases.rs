@@ -16,6 +16,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
+use common::reference as r;
 use common::{config_path, scenario};
 use lidarsim::output::raw_file::CountWidth;
 use lidarsim::sampling::{
@@ -873,7 +874,7 @@ fn a_profile_of_100_000_bins() {
 
 /// A 0.5 m layer with α = 2 m⁻¹ (τ = 1) inside one 300 m bin: that bin's signal equals an
 /// independent quadrature (midpoint rule split at the layer's edges, 0.2 mm steps in the
-/// layer, on the point optics) to 1e-5, T² below the layer is exp(−2τ) times T² without it
+/// layer, on the reference's own geometry and optics) to 1e-4, T² below the layer is exp(−2τ) times T² without it
 /// (exp(−2·η_ms·τ) with a multiple-scattering factor), unchanged above, and every bin
 /// below loses the same factor. Deterministic.
 #[test]
@@ -904,29 +905,40 @@ fn a_layer_thinner_than_a_bin() {
     let (ew, eo) = (with.expected().unwrap(), without.expected().unwrap());
     let tau = 2.0 * 0.5;
 
-    // the bin's signal against a quadrature that knows only the point optics
-    let r_top = with.geometry.range_at_altitude(top_m);
-    let r_base = with.geometry.range_at_altitude(base_m);
+    // the bin's signal against a quadrature written from scratch (tests/common/reference.rs:
+    // its own geometry, US76, ozone, aerosol and layer optics, Eq. 2 constant, T² marched
+    // from 100 km), split at the layer's edges
+    let cfg = &with.loaded.config;
+    let optics = r::RefAtmosphere::new(&with);
+    let r_top = r::range_at_altitude(cfg, top_m);
+    let r_base = r::range_at_altitude(cfg, base_m);
     assert!(a < r_top && r_base < b);
-    let mut tau_acc = with.path.optical_depth(a);
+    let mut tau_acc = 0.0;
     let mut integral = 0.0;
-    for (lo, hi, step) in [(a, r_top, 1e-2), (r_top, r_base, 2e-4), (r_base, b, 1e-2)] {
+    let entry = r::range_at_altitude(cfg, 100_000.0);
+    for (lo, hi, step, in_bin) in [
+        (entry, a, 1.0, false),
+        (a, r_top, 1e-2, true),
+        (r_top, r_base, 2e-4, true),
+        (r_base, b, 1e-2, true),
+    ] {
         let n = ((hi - lo) / step).ceil() as usize;
         let h = (hi - lo) / n as f64;
         for k in 0..n {
             let r = lo + (k as f64 + 0.5) * h;
-            let o = with
-                .atmosphere
-                .optics_at(with.geometry.altitude_at_range(r));
-            integral += o.beta_channel * (-2.0 * (tau_acc + 0.5 * h * o.alpha_effective)).exp()
-                / (r * r)
-                * h;
-            tau_acc += o.alpha_effective * h;
+            let o = optics.at(r::altitude_at_range(cfg, r));
+            if in_bin {
+                integral +=
+                    r::overlap(cfg, r) * o.beta * (-2.0 * (tau_acc + 0.5 * h * o.alpha)).exp()
+                        / (r * r)
+                        * h;
+            }
+            tau_acc += o.alpha * h;
         }
     }
-    let brute = with.instrument.signal_constant * integral;
+    let brute = r::signal_constant(cfg) * integral;
     assert!(
-        (ew.signal[ib] - brute).abs() < 1e-5 * brute,
+        (ew.signal[ib] - brute).abs() < 1e-4 * brute,
         "bin {ib}: {} vs quadrature {brute}",
         ew.signal[ib]
     );

@@ -152,3 +152,28 @@ fn channel_errors_name_the_key_where_it_was_set() {
         "{e}"
     );
 }
+
+/// The ozone cross-section's edges: from 350 nm (inclusive) to 360 nm the 360–370 nm bin's
+/// value, NaN below (survivor "replace < with <=" in `cross_section_m2`).
+#[test]
+fn the_ozone_cross_section_starts_at_350_nm() {
+    use lidarsim::atmosphere::ozone::cross_section_m2;
+    assert_eq!(cross_section_m2(350.0), 1.18e-27);
+    assert_eq!(cross_section_m2(359.999), 1.18e-27);
+    assert!(cross_section_m2(349.999).is_nan());
+}
+
+/// The ozone column over an interval of a few nanometres is `n·Δz` to 1e-9, where the
+/// closed form `(n0 − n1)·Δz/ln(n0/n1)` loses its digits (survivors in
+/// `segment_integral`'s near-equal branch). Δz is taken as the floats represent it.
+#[test]
+fn a_nanometre_of_ozone_column_is_the_density_times_the_thickness() {
+    use lidarsim::atmosphere::ozone::column_m2;
+    for z in [500.0, 22_000.0, 33_333.0] {
+        let top: f64 = z + 4e-9;
+        let dz = top - z; // exact (Sterbenz)
+        let want = common::reference::ozone_number_density_m3(z) * dz;
+        let got = column_m2(z, top);
+        assert!((got / want - 1.0).abs() < 1e-9, "{z} m: {got} vs {want}");
+    }
+}

@@ -163,10 +163,10 @@ pub fn cross_section_m2(wavelength_nm: f64) -> f64 {
     if wavelength_nm.is_nan() || wavelength_nm < CROSS_SECTION_MIN_NM {
         return f64::NAN;
     }
-    let bin = ((wavelength_nm - CROSS_SECTION_START_NM) / CROSS_SECTION_BIN_NM).floor();
-    if bin < 0.0 {
-        return CROSS_SECTION_M2[0];
-    }
+    // 350 ≤ λ < 360 nm: bin −1, served by the first bin
+    let bin = ((wavelength_nm - CROSS_SECTION_START_NM) / CROSS_SECTION_BIN_NM)
+        .floor()
+        .max(0.0);
     CROSS_SECTION_M2.get(bin as usize).copied().unwrap_or(0.0)
 }
 
@@ -177,6 +177,12 @@ pub fn extinction_per_m(z_m: f64, wavelength_nm: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    //! Internal consistency (levels, closed-form column against quadrature, edges) and
+    //! physical plausibility with field values (a ~300-350 DU column, σ(532) ≈ 2.8e-21 cm²,
+    //! a 4-5 % two-way loss). These ranges are sanity checks, not the 1 % checks: those
+    //! compare with the published tables, independently of this module, in
+    //! `tests/reference_physics.rs` (cross-section at ten wavelengths to 1e-6, column and
+    //! number density to 1e-4 and 1e-9, the ozone in T² at 355, 532 and 600 nm).
     use super::*;
 
     #[test]
