@@ -74,8 +74,7 @@ fn thirty_two_channels_load_and_thirty_three_do_not() {
     let loaded = three_channels(anchor, &format!("{anchor}\n{}", extra(29))).unwrap();
     assert_eq!(loaded.channels.len(), 32);
     let e = three_channels(anchor, &format!("{anchor}\n{}", extra(30)))
-        .err()
-        .expect("33 channels accepted")
+        .expect_err("33 channels accepted")
         .to_string();
     assert!(e.contains("instrument.channels") && e.contains("33"), "{e}");
 }
@@ -90,7 +89,7 @@ fn channel_names_have_one_to_sixty_four_characters() {
         "n".repeat(64)
     );
     for bad in [String::new(), "n".repeat(65)] {
-        let e = name(&bad).err().expect("accepted").to_string();
+        let e = name(&bad).expect_err("accepted").to_string();
         assert!(
             e.contains("instrument.channels[2].name") && e.contains("1 to 64"),
             "{e}"
@@ -118,12 +117,7 @@ fn a_channel_polarization_replaces_the_instrument_one() {
 /// `rename_key`).
 #[test]
 fn channel_errors_name_the_key_where_it_was_set() {
-    let error = |from: &str, to: &str| {
-        three_channels(from, to)
-            .err()
-            .expect("accepted")
-            .to_string()
-    };
+    let error = |from: &str, to: &str| three_channels(from, to).expect_err("accepted").to_string();
     let e = error("wavelength_nm = 1064.0", "wavelength_nm = -5.0");
     assert!(e.contains("instrument.channels[2].wavelength_nm"), "{e}");
     let e = error("polarization = \"parallel\"", "polarization = \"sideways\"");
@@ -144,8 +138,7 @@ fn channel_errors_name_the_key_where_it_was_set() {
             1,
         );
     let e = lidarsim::config::load_str(&text, &path, &[])
-        .err()
-        .expect("accepted")
+        .expect_err("accepted")
         .to_string();
     assert!(
         e.contains("key `instrument.crosstalk`") && e.contains("(in channel 1064_total)"),
