@@ -486,10 +486,15 @@ impl RefAtmosphere {
                 let ext = l.extinction_per_km
                     * 1e-3
                     * (reference / wl).powf(l.angstrom_exponent.unwrap_or(0.0));
-                assert!(l.lidar_ratio_sr_by_wavelength.is_empty());
+                // docs/config.md: a channel within 0.5 nm of a key takes its ratio
+                let ratio = l
+                    .lidar_ratio_sr_by_wavelength
+                    .iter()
+                    .find(|(k, _)| (k.parse::<f64>().unwrap() - wl).abs() <= 0.5)
+                    .map_or(l.lidar_ratio_sr, |(_, s)| *s);
                 let _ = LayerKind::Cloud;
                 o.alpha += ext * l.multiple_scattering;
-                o.beta += ext / l.lidar_ratio_sr * share(l.depolarization);
+                o.beta += ext / ratio * share(l.depolarization);
             }
         }
         o
