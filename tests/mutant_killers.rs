@@ -120,6 +120,16 @@ fn channel_errors_name_the_key_where_it_was_set() {
     let error = |from: &str, to: &str| three_channels(from, to).expect_err("accepted").to_string();
     let e = error("wavelength_nm = 1064.0", "wavelength_nm = -5.0");
     assert!(e.contains("instrument.channels[2].wavelength_nm"), "{e}");
+    // one laser, one digitizer, one telescope: a channel cannot set them (survivor
+    // "replace match guard SHARED_KEYS.contains(&shared) with false")
+    let e = error(
+        "wavelength_nm = 1064.0",
+        "wavelength_nm = 1064.0\nrep_rate_hz = 10.0",
+    );
+    assert!(
+        e.contains("instrument.channels[2].rep_rate_hz") && e.contains("shared"),
+        "{e}"
+    );
     let e = error("polarization = \"parallel\"", "polarization = \"sideways\"");
     assert!(e.contains("instrument.channels[0].polarization"), "{e}");
     // the instrument's cross-talk reaches the 1064 nm channel, which says it sees the
