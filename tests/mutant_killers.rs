@@ -198,11 +198,42 @@ fn a_profile_file_is_continued_by_scaled_us76_above_its_top() {
     std::fs::write(&profile, format!("altitude_km number_density_m3\n{rows}")).unwrap();
     let sc = scenario(
         "ground/profile_file_example.toml",
-        &[&format!("atmosphere.molecular.model.file=\"{}\"", profile.display())],
+        &[&format!(
+            "atmosphere.molecular.model.file=\"{}\"",
+            profile.display()
+        )],
     );
     for z in [30_000.0, 35_000.0, 50_000.0, 80_000.0] {
         let got = sc.atmosphere.molecules.number_density_m3(z);
         let want = 0.9 * common::reference::us76_number_density_m3(z);
         assert!((got / want - 1.0).abs() < 1e-6, "{z} m: {got} vs {want}");
     }
+}
+
+/// A profile file reaching above US76's top (86 km) is not continued: above its own top
+/// there are no molecules (survivor "replace match guard p.top_altitude_m() <
+/// us76::TOP_ALTITUDE_M with true", which made it ∞·0 = NaN there).
+#[test]
+fn a_profile_file_above_86_km_ends_at_its_top() {
+    let dir = tempfile::tempdir().unwrap();
+    let profile = dir.path().join("profile.txt");
+    let rows: String = (0..=90)
+        .map(|km| format!("{km} {:e}\n", 2.5e25 * (-(km as f64) / 7.0).exp()))
+        .collect();
+    std::fs::write(&profile, format!("altitude_km number_density_m3\n{rows}")).unwrap();
+    let sc = scenario(
+        "ground/profile_file_example.toml",
+        &[&format!(
+            "atmosphere.molecular.model.file=\"{}\"",
+            profile.display()
+        )],
+    );
+    let m = &sc.atmosphere.molecules;
+    assert_eq!(m.number_density_m3(95_000.0), 0.0);
+    let at_88 = m.number_density_m3(88_000.0);
+    assert!(
+        (at_88 / (2.5e25 * (-88.0f64 / 7.0).exp()) - 1.0).abs() < 1e-9,
+        "{at_88}"
+    );
+    assert!(m.continuation_note().is_none());
 }
