@@ -18,10 +18,11 @@
 //! paralyzable:     m(t) = n(t)·exp(−∫_{t−τ}^{t} n(s) ds)
 //! ```
 //!
-//! solved on a grid of step h = min(τ, Δt)/64 (a running sum over the last τ), and
-//! integrated over each bin. For a stationary rate it gives `n/(1+nτ)` and `n·e^{−nτ}`
-//! exactly; at a step in the rate its error is O(h/τ) of the transient (≤ 1e-3 of the
-//! bin's count, `tests` below). A window whose grid would exceed [`MAX_GRID_STEPS`]
+//! solved on a grid of step h = min(τ, Δt)/64 by the midpoint rule (each step's rate at
+//! its middle, the integral over the last τ a running sum of the earlier steps, the
+//! oldest in part, plus half of the step itself, implicit in m), and integrated over each
+//! bin. For a stationary rate it gives `n/(1+nτ)` and `n·e^{−nτ}` exactly, whatever τ/h;
+//! at a step in the rate its error is O((h/τ)²) of the transient. A window whose grid would exceed [`MAX_GRID_STEPS`]
 //! uses the stationary formulas per bin (error O(τ/Δt) at the bin edges).
 //!
 //! **Variance** ([`DeadTime::recorded_variance`]) of a bin's recorded count per shot:
@@ -87,7 +88,11 @@ impl DeadTime {
         }
         let per_bin = per_bin as usize;
         let h = dt / per_bin as f64;
-        let lag = (self.tau_s / h).round().max(1.0) as usize;
+        // each step is evaluated at its midpoint t: the last τ before t is half of the
+        // step itself and `past` = τ/h − 1/2 earlier steps, the oldest of them in part
+        let past = self.tau_s / h - 0.5;
+        let lag = past.ceil().max(1.0) as usize;
+        let oldest_share = past - (lag as f64 - 1.0);
         // ring buffer of the last `lag` steps: m·h (non-paralyzable) or n·h (paralyzable)
         let mut ring = vec![0.0f64; lag];
         let (mut pos, mut window) = (0usize, 0.0f64);
@@ -97,12 +102,14 @@ impl DeadTime {
                 let n = l / dt;
                 let mut recorded = 0.0;
                 for _ in 0..per_bin {
+                    let before = window - (1.0 - oldest_share) * ring[pos];
                     let (m, pushed) = match self.model {
+                        // m = n·(1 − before − m·h/2)
                         DeadTimeModel::Nonparalyzable => {
-                            let m = n * (1.0 - window).max(0.0);
+                            let m = n * (1.0 - before).max(0.0) / (1.0 + 0.5 * n * h);
                             (m, m * h)
                         }
-                        DeadTimeModel::Paralyzable => (n * (-window).exp(), n * h),
+                        DeadTimeModel::Paralyzable => (n * (-(before + 0.5 * n * h)).exp(), n * h),
                     };
                     recorded += m * h;
                     window += pushed - ring[pos];
