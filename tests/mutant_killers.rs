@@ -237,3 +237,60 @@ fn a_profile_file_above_86_km_ends_at_its_top() {
     );
     assert!(m.continuation_note().is_none());
 }
+
+/// The largest clean repetition rate (docs/model.md §3): `1/max(A, −B)` with
+/// `A = 2(r_s − r_n)/c`, `B = 2(r_a − r_f)/c`, written here; infinite when both are ≤ 0
+/// (survivor "replace * with +" in `clean_windows_max_rep_rate_hz`).
+#[test]
+fn the_clean_window_rate_is_one_over_the_longer_echo_span() {
+    use lidarsim::geometry::clean_windows_max_rep_rate_hz as clean;
+    let c = 299_792_458.0;
+    // A wins: returns from 500–600 km range, window 480–610 km
+    let a = 2.0 * (600e3 - 480e3) / c;
+    assert!((clean((500e3, 600e3), (480e3, 610e3)) * a - 1.0).abs() < 1e-12);
+    // −B wins: a window reaching far below the returns
+    let b = 2.0 * (500e3 - 900e3) / c;
+    assert!((clean((500e3, 600e3), (590e3, 900e3)) * -b - 1.0).abs() < 1e-12);
+    assert_eq!(clean((500e3, 600e3), (700e3, 400e3)), f64::INFINITY);
+}
+
+/// A window of more than 10⁷ bins is refused naming `instrument.bin_width_s` (survivor
+/// "replace > with ==" in `Geometry::from_config`).
+#[test]
+fn at_most_ten_million_bins() {
+    // scenario 6 from 600 km, nadir, a 200 km window of 1e-10 s (1.5 cm) bins: 1.33e7 bins
+    let e = lidarsim::scenario::Scenario::load(
+        &common::config_path("paper/scenario6.toml"),
+        &[
+            "instrument.bin_width_s=1e-10".to_string(),
+            "acquisition.top_altitude_km=200".to_string(),
+        ],
+    )
+    .expect_err("1.33e7 bins accepted")
+    .to_string();
+    assert!(
+        e.contains("instrument.bin_width_s") && e.contains("more than the 10000000"),
+        "{e}"
+    );
+}
+
+/// A space-borne beam more than asin(R/(R+H)) off nadir misses the Earth and is refused;
+/// a nadir beam never is (survivor "replace == with !=" in `check_reach`).
+#[test]
+fn a_beam_that_misses_the_earth_is_refused() {
+    let load = |angle: &str| {
+        lidarsim::scenario::Scenario::load(
+            &common::config_path("instruments/caliop_532.toml"),
+            &[format!("platform.off_nadir_deg={angle}")],
+        )
+    };
+    // CALIOP at 705 km: the limit is asin(6371/7076) = 64.2°
+    let e = load("70")
+        .expect_err("a beam past the limb accepted")
+        .to_string();
+    assert!(
+        e.contains("platform.off_nadir_deg") && e.contains("misses the Earth"),
+        "{e}"
+    );
+    assert!(load("0").is_ok());
+}

@@ -10,6 +10,7 @@ mod common;
 use common::reference as r;
 use common::{lidar, scenario};
 use lidarsim::atmosphere::ozone;
+use lidarsim::config::PlatformKind;
 
 fn rel(a: f64, b: f64) -> f64 {
     (a / b - 1.0).abs()
@@ -334,4 +335,74 @@ fn point_optics_match_the_reference_in_every_channel() {
         }
     }
     assert_eq!(checked, 7 * 1201);
+}
+
+/// The beam's path on a sphere (docs/model.md §3): altitude at range and range at altitude
+/// against the reference's law of cosines, the local incidence against the law of sines
+/// `sin θ_z = (R + H)·sin φ/(R + z)` written here, and the bins' edges against the
+/// reference's grid, to 1e-9 — space-borne 30° off nadir, a ground beam 60° off zenith,
+/// flat and nadir beams, every 1 km of altitude.
+#[test]
+fn the_beam_geometry_matches_the_reference_on_a_sphere() {
+    for (config, overrides) in [
+        (
+            "instruments/caliop_532.toml",
+            vec!["platform.off_nadir_deg=30"],
+        ),
+        (
+            "instruments/caliop_532.toml",
+            vec![
+                "platform.off_nadir_deg=30",
+                "platform.earth_curvature=false",
+            ],
+        ),
+        ("instruments/caliop_532.toml", vec![]),
+        ("paper/scenario6.toml", vec![]),
+        (
+            "ground/profile_file_example.toml",
+            vec!["platform.off_nadir_deg=60"],
+        ),
+    ] {
+        let sc = scenario(config, &overrides);
+        let (g, cfg) = (&sc.geometry, &sc.loaded.config);
+        let p = &cfg.platform;
+        let what = format!("{config} {overrides:?}");
+        // a ground beam from its station up, a space-borne one from the ground
+        let z0 = if p.kind == PlatformKind::Ground {
+            p.altitude_km * 1e3
+        } else {
+            0.0
+        };
+        for km in 0..=40 {
+            let z = z0 + km as f64 * 1e3;
+            let r = r::range_at_altitude(cfg, z);
+            assert!(
+                (g.range_at_altitude(z) - r).abs() <= 1e-9 * r.abs().max(1.0),
+                "{what}: range at {z}"
+            );
+            assert!(
+                (g.altitude_at_range(r) - r::altitude_at_range(cfg, r)).abs() < 1e-6,
+                "{what}: altitude at {r}"
+            );
+            let sin_phi = p.off_nadir_deg.to_radians().sin();
+            let want_cos = if p.earth_curvature {
+                let s =
+                    (r::EARTH_RADIUS_M + p.altitude_km * 1e3) * sin_phi / (r::EARTH_RADIUS_M + z);
+                (1.0 - s * s).sqrt()
+            } else {
+                p.off_nadir_deg.to_radians().cos()
+            };
+            assert!(
+                rel(g.local_cos_at(z), want_cos) < 1e-9,
+                "{what}: cos at {z}"
+            );
+        }
+        let bins = r::bins(cfg);
+        assert_eq!(g.n_bins, bins.len(), "{what}");
+        for (i, (a, b)) in bins.iter().enumerate().step_by(97) {
+            let (ga, gb) = g.bin_range_bounds(i);
+            let close = |x: f64, y: f64| (x - y).abs() <= 1e-9 * y.abs().max(1.0);
+            assert!(close(ga, *a) && close(gb, *b), "{what}: bin {i}");
+        }
+    }
 }
