@@ -294,3 +294,14 @@ fn a_beam_that_misses_the_earth_is_refused() {
     );
     assert!(load("0").is_ok());
 }
+
+/// Shots per profile `M = round(fL·TC)` (paper Eq. 4's M), for the CALIOP-like rate
+/// (20.16 Hz) at several accumulation times (survivor "replace shots_per_profile -> u64
+/// with 0").
+#[test]
+fn shots_per_profile_is_the_rate_times_the_accumulation_time_rounded() {
+    let sc = scenario("instruments/caliop_532.toml", &[]);
+    for (tc, m) in [(1.0, 20), (0.7440, 15), (100.0, 2016), (3.0, 60)] {
+        assert_eq!(sc.instrument.shots_per_profile(tc), m, "TC {tc} s");
+    }
+}

@@ -4,7 +4,8 @@
     python3 validation/mutants_summary.py target/mutants/*/mutants.out
 
 Prints, per source file, the mutants tested and how each run ended (caught, missed,
-unviable, timeout), then every missed mutant. A mutant tested in several runs (a later
+unviable, timeout, or a run that failed for another reason, e.g. a killed test process),
+then every missed, timed-out or failed mutant. A mutant tested in several runs (a later
 run with `--iterate` after new tests) counts with its last outcome: give the runs oldest
 first."""
 import json
@@ -12,7 +13,7 @@ import sys
 from collections import OrderedDict
 
 KINDS = {"CaughtMutant": "caught", "MissedMutant": "missed", "Unviable": "unviable",
-         "Timeout": "timeout"}
+         "Timeout": "timeout", "Failure": "failed"}
 
 
 def main(dirs):
@@ -32,19 +33,19 @@ def main(dirs):
     files = OrderedDict()
     for file, kind in last.values():
         files.setdefault(file, {k: 0 for k in KINDS.values()})[kind] += 1
-    print("| file | tested | caught | missed | unviable | timeout |")
-    print("|---|---|---|---|---|---|")
+    print("| file | tested | caught | missed | unviable | timeout | run failed |")
+    print("|---|---|---|---|---|---|---|")
     total = {k: 0 for k in KINDS.values()}
     for file, c in sorted(files.items()):
         print(f"| {file} | {sum(c.values())} | {c['caught']} | {c['missed']} | "
-              f"{c['unviable']} | {c['timeout']} |")
+              f"{c['unviable']} | {c['timeout']} | {c['failed']} |")
         for k in total:
             total[k] += c[k]
     print(f"| **all** | {sum(total.values())} | {total['caught']} | {total['missed']} | "
-          f"{total['unviable']} | {total['timeout']} |")
+          f"{total['unviable']} | {total['timeout']} | {total['failed']} |")
     print()
     for name, (_, kind) in last.items():
-        if kind in ("missed", "timeout"):
+        if kind in ("missed", "timeout", "failed"):
             print(f"* {kind}: `{name}`")
 
 
