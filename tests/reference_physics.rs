@@ -283,7 +283,8 @@ fn the_reference_us76_reproduces_the_published_table() {
 }
 
 /// The point optics every bin integral is built on: attenuating extinction (molecules,
-/// ozone, background aerosol, layers × η_ms) and the backscatter each channel sees
+/// ozone, background aerosol, layers × η_ms), the extinction and backscatter by species
+/// (the file's truth), and the backscatter each channel sees
 /// (molecular line share, lidar ratios, each species' depolarization split by the
 /// channel's polarization and cross-talk), against tests/common/reference.rs's own
 /// formulas, every 25 m from the ground to 30 km, to 1e-6 (the code's molecules come from
@@ -330,6 +331,18 @@ fn point_optics_match_the_reference_in_every_channel() {
                     got.beta_channel,
                     want.beta
                 );
+                // the truth by species the file carries
+                for (name, g, w) in [
+                    ("α_total", got.alpha_total, want.alpha_total),
+                    ("β_mol", got.beta_mol, want.beta_mol),
+                    ("β_aer", got.beta_aer, want.beta_aer),
+                    ("β_cld", got.beta_cld, want.beta_cld),
+                ] {
+                    assert!(
+                        (g - w).abs() <= 1e-6 * w.abs() + 1e-30,
+                        "{what}: {name} {g} vs {w}"
+                    );
+                }
                 checked += 1;
             }
         }

@@ -406,6 +406,14 @@ pub struct PointOptics {
     pub alpha: f64,
     /// Backscatter the channel sees, m⁻¹ sr⁻¹.
     pub beta: f64,
+    /// Extinction of every species (no η_ms), m⁻¹.
+    pub alpha_total: f64,
+    /// Backscatter by species, whole polarization (the part of the molecular line the
+    /// channel's filter passes), m⁻¹ sr⁻¹: molecules, aerosol (background and aerosol
+    /// layers), cloud layers.
+    pub beta_mol: f64,
+    pub beta_aer: f64,
+    pub beta_cld: f64,
 }
 
 /// The config's atmosphere, reduced to what the point optics need.
@@ -471,13 +479,19 @@ impl RefAtmosphere {
         let wl = self.cfg.instrument.wavelength_nm;
         let share = |d: f64| channel_share(&self.polarization, d, self.crosstalk);
         let alpha_mol = self.sigma_mol * us76_number_density_m3(z_m);
+        let alpha_o3 = self.sigma_o3 * ozone_number_density_m3(z_m);
         let mut o = PointOptics {
-            alpha: alpha_mol + self.sigma_o3 * ozone_number_density_m3(z_m),
+            alpha: alpha_mol + alpha_o3,
             beta: alpha_mol / self.s_mol * share(self.delta_mol),
+            alpha_total: alpha_mol + alpha_o3,
+            beta_mol: alpha_mol / self.s_mol,
+            ..PointOptics::default()
         };
         if let Some(a) = &self.cfg.atmosphere.aerosol {
             let alpha = self.aerosol_surface * aerosol_shape(z_m);
             o.alpha += alpha;
+            o.alpha_total += alpha;
+            o.beta_aer += alpha / a.lidar_ratio_sr;
             o.beta += alpha / a.lidar_ratio_sr * share(a.depolarization);
         }
         for l in &self.cfg.atmosphere.layers {
@@ -492,8 +506,12 @@ impl RefAtmosphere {
                     .iter()
                     .find(|(k, _)| (k.parse::<f64>().unwrap() - wl).abs() <= 0.5)
                     .map_or(l.lidar_ratio_sr, |(_, s)| *s);
-                let _ = LayerKind::Cloud;
                 o.alpha += ext * l.multiple_scattering;
+                o.alpha_total += ext;
+                match l.kind {
+                    LayerKind::Cloud => o.beta_cld += ext / ratio,
+                    LayerKind::Aerosol => o.beta_aer += ext / ratio,
+                }
                 o.beta += ext / ratio * share(l.depolarization);
             }
         }
