@@ -532,8 +532,9 @@ pub fn signal_constant(cfg: &ScenarioConfig) -> f64 {
 }
 
 /// Per bin: (∫η β T²/r² dr, ∫η/r² dr, T² at the bin centre), by the midpoint rule with
-/// steps of at most `step_m`, T² accumulated by the same rule from the top of the
-/// atmosphere (space-borne) or the station (ground). Nothing below the ground.
+/// steps of at most `step_m` that never straddle a jump of the optics (layer edges, the
+/// tops of US76, ozone and aerosol profiles, the ground), T² accumulated by the same rule from the
+/// top of the atmosphere (space-borne) or the station (ground). Nothing below the ground.
 pub struct BruteForce {
     /// Atmospheric factor of each bin, sr⁻¹ m⁻².
     pub integral: Vec<f64>,
@@ -560,29 +561,50 @@ pub fn brute_force(sc: &Scenario, step_m: f64) -> BruteForce {
     } else {
         0.0
     };
+    // ranges where the optics jump (layer edges, the tops of US76, the ozone and the
+    // aerosol profiles): the march splits its steps there, so a step never straddles one
+    let mut jumps: Vec<f64> = [86_000.0, 60_000.0, 50_000.0]
+        .into_iter()
+        .chain(
+            cfg.atmosphere
+                .layers
+                .iter()
+                .flat_map(|l| [l.base_km * 1e3, l.top_km * 1e3]),
+        )
+        .map(|z| range_at_altitude(cfg, z))
+        .chain([ground_range])
+        .filter(|r| r.is_finite() && *r > 0.0)
+        .collect();
+    jumps.sort_by(f64::total_cmp);
     let mut tau = 0.0;
     let march = |a: f64, b: f64, tau: &mut f64, centre: Option<f64>| {
         let mut out = (0.0, 0.0, 0.0);
         if b <= a {
             return out;
         }
-        let n = ((b - a) / step_m).ceil().max(1.0) as usize;
-        let h = (b - a) / n as f64;
-        for k in 0..n {
-            let r = a + (k as f64 + 0.5) * h;
-            let eta = overlap(cfg, r);
-            let weight = if r > 0.0 { eta / (r * r) * h } else { 0.0 };
-            out.1 += weight;
-            if r >= ground_range {
-                continue;
+        let mut pieces = vec![a];
+        pieces.extend(jumps.iter().copied().filter(|r| a < *r && *r < b));
+        pieces.push(b);
+        for w in pieces.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            let n = ((b - a) / step_m).ceil().max(1.0) as usize;
+            let h = (b - a) / n as f64;
+            for k in 0..n {
+                let r = a + (k as f64 + 0.5) * h;
+                let eta = overlap(cfg, r);
+                let weight = if r > 0.0 { eta / (r * r) * h } else { 0.0 };
+                out.1 += weight;
+                if r >= ground_range {
+                    continue;
+                }
+                let o = atm.at(altitude_at_range(cfg, r));
+                let t2_mid = (-2.0 * (*tau + o.alpha * 0.5 * h)).exp();
+                if let Some(c) = centre.filter(|c| r - 0.5 * h <= *c && *c < r + 0.5 * h) {
+                    out.2 = (-2.0 * (*tau + o.alpha * (c - (r - 0.5 * h)))).exp();
+                }
+                out.0 += o.beta * t2_mid * weight;
+                *tau += o.alpha * h;
             }
-            let o = atm.at(altitude_at_range(cfg, r));
-            let t2_mid = (-2.0 * (*tau + o.alpha * 0.5 * h)).exp();
-            if let Some(c) = centre.filter(|c| r - 0.5 * h <= *c && *c < r + 0.5 * h) {
-                out.2 = (-2.0 * (*tau + o.alpha * (c - (r - 0.5 * h)))).exp();
-            }
-            out.0 += o.beta * t2_mid * weight;
-            *tau += o.alpha * h;
         }
         out
     };
