@@ -11,6 +11,7 @@ use common::reference as r;
 use common::{lidar, scenario};
 use lidarsim::atmosphere::ozone;
 use lidarsim::config::PlatformKind;
+use lidarsim::scenario::Scenario;
 
 fn rel(a: f64, b: f64) -> f64 {
     (a / b - 1.0).abs()
@@ -431,7 +432,7 @@ fn the_beam_geometry_matches_the_reference_on_a_sphere() {
 /// without it).
 #[test]
 fn every_bin_signal_is_the_brute_force_integral() {
-    let check = |sc: &lidarsim::scenario::Scenario, step_m: f64, what: &str| {
+    let check = |sc: &Scenario, step_m: f64, what: &str| {
         let e = sc.expected().unwrap();
         let brute = common::brute_force_signal(sc, step_m);
         let mut checked = 0;
@@ -456,4 +457,92 @@ fn every_bin_signal_is_the_brute_force_integral() {
     {
         check(sc, 0.5, &sc.channel_name);
     }
+}
+
+/// The surface bin's expected signal is `C·(ρ cos θ/π)·T²(r_s)/r_s²` plus the air of the
+/// bin above the surface, within 1e-4, at nadir and 30° off nadir (spherical Earth, cos θ
+/// the local incidence): everything on the right from tests/common/reference.rs (own
+/// geometry, optics, Eq. 2 constant, T² marched from 100 km) and the law of sines, none
+/// from lidarsim. The beam sees nothing below the surface; the ocean preset's albedo is 0.05.
+#[test]
+fn the_surface_echo_follows_the_lambertian_law() {
+    use common::reference as r;
+    for angle in ["0", "30"] {
+        let set = |surface: bool| {
+            let mut v = vec![format!("platform.off_nadir_deg={angle}")];
+            if surface {
+                v.push("surface.altitude_km=0.2".into());
+                v.push("surface.albedo=0.3".into());
+            }
+            v
+        };
+        let load = |surface: bool| {
+            let v = set(surface);
+            scenario(
+                "instruments/caliop_532.toml",
+                &v.iter().map(String::as_str).collect::<Vec<_>>(),
+            )
+        };
+        let sc = load(true);
+        // the reference optics know no surface: the same atmosphere without one (its
+        // optics above 200 m, all the march visits, do not depend on the surface)
+        let air = load(false);
+        let cfg = &sc.loaded.config;
+        let optics = r::RefAtmosphere::new(&air);
+        let r_s = r::range_at_altitude(cfg, 200.0);
+        let (bin, &(a, _)) = r::bins(cfg)
+            .iter()
+            .enumerate()
+            .find(|(_, (a, b))| r_s >= *a && r_s < *b)
+            .unwrap();
+        // T² to r_s and the air's part of the bin, midpoint rule at 0.5 m (0.01 m in the bin)
+        let (mut tau, mut air_part) = (0.0, 0.0);
+        for (lo, hi, step, in_bin) in [
+            (r::range_at_altitude(cfg, 100_000.0), a, 0.5, false),
+            (a, r_s, 0.01, true),
+        ] {
+            let n = ((hi - lo) / step).ceil() as usize;
+            let h = (hi - lo) / n as f64;
+            for k in 0..n {
+                let rr = lo + (k as f64 + 0.5) * h;
+                let o = optics.at(r::altitude_at_range(cfg, rr));
+                if in_bin {
+                    air_part += o.beta * (-2.0 * (tau + 0.5 * h * o.alpha)).exp() / (rr * rr) * h;
+                }
+                tau += o.alpha * h;
+            }
+        }
+        // local incidence: sin θ_i = (R + H)/(R + z)·sin θ (law of sines)
+        let big = r::EARTH_RADIUS_M + cfg.platform.altitude_km * 1e3;
+        let sin_i =
+            big / (r::EARTH_RADIUS_M + 200.0) * cfg.platform.off_nadir_deg.to_radians().sin();
+        let cos = (1.0 - sin_i * sin_i).sqrt();
+        let surface_part = 0.3 * cos / std::f64::consts::PI * (-2.0 * tau).exp() / (r_s * r_s);
+        let want = r::signal_constant(cfg) * (surface_part + air_part);
+        let e = sc.expected().unwrap();
+        let got = e.signal[bin];
+        assert!((got / want - 1.0).abs() < 1e-4, "{angle}°: {got} vs {want}");
+        assert!(
+            e.signal[bin + 1..].iter().all(|&s| s == 0.0),
+            "{angle}°: light below the surface"
+        );
+        assert!(e.signal[bin] > 100.0 * e.signal[bin - 1]);
+    }
+    let ocean = scenario("instruments/caliop_532.toml", &["surface.kind=\"ocean\""]);
+    let land = scenario("instruments/caliop_532.toml", &["surface.kind=\"land\""]);
+    let peak = |sc: &Scenario| {
+        sc.expected()
+            .unwrap()
+            .signal
+            .iter()
+            .fold(0.0f64, |m, &s| m.max(s))
+    };
+    assert!((peak(&land) / peak(&ocean) - 3.0).abs() < 0.05);
+    let e = Scenario::load(
+        &common::config_path("ground/ground_532_overlap.toml"),
+        &["surface.albedo=0.3".to_string()],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("surface") && e.contains("ground"), "{e}");
 }
