@@ -913,29 +913,17 @@ fn a_layer_thinner_than_a_bin() {
     let r_top = r::range_at_altitude(cfg, top_m);
     let r_base = r::range_at_altitude(cfg, base_m);
     assert!(a < r_top && r_base < b);
-    let mut tau_acc = 0.0;
-    let mut integral = 0.0;
     let entry = r::range_at_altitude(cfg, 100_000.0);
-    for (lo, hi, step, in_bin) in [
-        (entry, a, 1.0, false),
-        (a, r_top, 1e-2, true),
-        (r_top, r_base, 2e-4, true),
-        (r_base, b, 1e-2, true),
-    ] {
-        let n = ((hi - lo) / step).ceil() as usize;
-        let h = (hi - lo) / n as f64;
-        for k in 0..n {
-            let r = lo + (k as f64 + 0.5) * h;
-            let o = optics.at(r::altitude_at_range(cfg, r));
-            if in_bin {
-                integral +=
-                    r::overlap(cfg, r) * o.beta * (-2.0 * (tau_acc + 0.5 * h * o.alpha)).exp()
-                        / (r * r)
-                        * h;
-            }
-            tau_acc += o.alpha * h;
-        }
-    }
+    let (_, integral) = r::march(
+        cfg,
+        &optics,
+        &[
+            (entry, a, 1.0, false),
+            (a, r_top, 1e-2, true),
+            (r_top, r_base, 2e-4, true),
+            (r_base, b, 1e-2, true),
+        ],
+    );
     let brute = r::signal_constant(cfg) * integral;
     assert!(
         (ew.signal[ib] - brute).abs() < 1e-4 * brute,

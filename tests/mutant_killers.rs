@@ -181,28 +181,32 @@ fn a_nanometre_of_ozone_column_is_the_density_times_the_thickness() {
     }
 }
 
+/// The ground example config with a molecular profile file of the given rows
+/// (`altitude_km number_density_m3`), loaded (the file is read at load time).
+fn with_profile_file(rows: impl Iterator<Item = String>) -> lidarsim::scenario::Scenario {
+    let dir = tempfile::tempdir().unwrap();
+    let profile = dir.path().join("profile.txt");
+    let rows: String = rows.collect();
+    std::fs::write(&profile, format!("altitude_km number_density_m3\n{rows}")).unwrap();
+    scenario(
+        "ground/profile_file_example.toml",
+        &[&format!(
+            "atmosphere.molecular.model.file=\"{}\"",
+            profile.display()
+        )],
+    )
+}
+
 /// A molecular profile file that ends below 86 km is continued by US76 scaled to meet it
 /// at its top row: N(z) = N_file(top)/N_US76(top) · N_US76(z) above (docs/model.md;
 /// survivor "replace * with +" in `Molecules::number_density_m3`). The file holds 0.9 of
 /// the reference US76 up to 30 km; above, 0.9 of the reference US76 to 1e-6.
 #[test]
 fn a_profile_file_is_continued_by_scaled_us76_above_its_top() {
-    let dir = tempfile::tempdir().unwrap();
-    let profile = dir.path().join("profile.txt");
-    let rows: String = (0..=30)
-        .map(|km| {
-            let n = 0.9 * common::reference::us76_number_density_m3(km as f64 * 1e3);
-            format!("{km} {n:e}\n")
-        })
-        .collect();
-    std::fs::write(&profile, format!("altitude_km number_density_m3\n{rows}")).unwrap();
-    let sc = scenario(
-        "ground/profile_file_example.toml",
-        &[&format!(
-            "atmosphere.molecular.model.file=\"{}\"",
-            profile.display()
-        )],
-    );
+    let sc = with_profile_file((0..=30).map(|km| {
+        let n = 0.9 * common::reference::us76_number_density_m3(km as f64 * 1e3);
+        format!("{km} {n:e}\n")
+    }));
     for z in [30_000.0, 35_000.0, 50_000.0, 80_000.0] {
         let got = sc.atmosphere.molecules.number_density_m3(z);
         let want = 0.9 * common::reference::us76_number_density_m3(z);
@@ -215,18 +219,8 @@ fn a_profile_file_is_continued_by_scaled_us76_above_its_top() {
 /// us76::TOP_ALTITUDE_M with true", which made it ∞·0 = NaN there).
 #[test]
 fn a_profile_file_above_86_km_ends_at_its_top() {
-    let dir = tempfile::tempdir().unwrap();
-    let profile = dir.path().join("profile.txt");
-    let rows: String = (0..=90)
-        .map(|km| format!("{km} {:e}\n", 2.5e25 * (-(km as f64) / 7.0).exp()))
-        .collect();
-    std::fs::write(&profile, format!("altitude_km number_density_m3\n{rows}")).unwrap();
-    let sc = scenario(
-        "ground/profile_file_example.toml",
-        &[&format!(
-            "atmosphere.molecular.model.file=\"{}\"",
-            profile.display()
-        )],
+    let sc = with_profile_file(
+        (0..=90).map(|km| format!("{km} {:e}\n", 2.5e25 * (-(km as f64) / 7.0).exp())),
     );
     let m = &sc.atmosphere.molecules;
     assert_eq!(m.number_density_m3(95_000.0), 0.0);

@@ -496,22 +496,14 @@ fn the_surface_echo_follows_the_lambertian_law() {
             .find(|(_, (a, b))| r_s >= *a && r_s < *b)
             .unwrap();
         // T² to r_s and the air's part of the bin, midpoint rule at 0.5 m (0.01 m in the bin)
-        let (mut tau, mut air_part) = (0.0, 0.0);
-        for (lo, hi, step, in_bin) in [
-            (r::range_at_altitude(cfg, 100_000.0), a, 0.5, false),
-            (a, r_s, 0.01, true),
-        ] {
-            let n = ((hi - lo) / step).ceil() as usize;
-            let h = (hi - lo) / n as f64;
-            for k in 0..n {
-                let rr = lo + (k as f64 + 0.5) * h;
-                let o = optics.at(r::altitude_at_range(cfg, rr));
-                if in_bin {
-                    air_part += o.beta * (-2.0 * (tau + 0.5 * h * o.alpha)).exp() / (rr * rr) * h;
-                }
-                tau += o.alpha * h;
-            }
-        }
+        let (tau, air_part) = r::march(
+            cfg,
+            &optics,
+            &[
+                (r::range_at_altitude(cfg, 100_000.0), a, 0.5, false),
+                (a, r_s, 0.01, true),
+            ],
+        );
         // local incidence: sin θ_i = (R + H)/(R + z)·sin θ (law of sines)
         let big = r::EARTH_RADIUS_M + cfg.platform.altitude_km * 1e3;
         let sin_i =

@@ -624,3 +624,30 @@ pub fn brute_force(sc: &Scenario, step_m: f64) -> BruteForce {
     }
     f
 }
+
+/// A march along the beam by the midpoint rule over consecutive `pieces` of range
+/// `(start, end, step, counted)`: returns the optical depth `τ` at the last piece's end
+/// and `∫ η β T²/r² dr` over the pieces marked `counted` (T² from τ accumulated over all
+/// of them), on the reference's own geometry, overlap and `optics`.
+pub fn march(
+    cfg: &ScenarioConfig,
+    optics: &RefAtmosphere,
+    pieces: &[(f64, f64, f64, bool)],
+) -> (f64, f64) {
+    let (mut tau, mut integral) = (0.0, 0.0);
+    for &(lo, hi, step, counted) in pieces {
+        let n = ((hi - lo) / step).ceil().max(1.0) as usize;
+        let h = (hi - lo) / n as f64;
+        for k in 0..n {
+            let r = lo + (k as f64 + 0.5) * h;
+            let o = optics.at(altitude_at_range(cfg, r));
+            if counted {
+                integral += overlap(cfg, r) * o.beta * (-2.0 * (tau + 0.5 * h * o.alpha)).exp()
+                    / (r * r)
+                    * h;
+            }
+            tau += o.alpha * h;
+        }
+    }
+    (tau, integral)
+}
