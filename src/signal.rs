@@ -358,6 +358,23 @@ pub fn exponential_moments(t: f64) -> [f64; NODES] {
 mod tests {
     use super::*;
 
+    /// The product-integration nodes are the zeros of the Chebyshev polynomial
+    /// `T_N(2y − 1) = cos(N·acos(2y − 1))` on (0, 1), all of them (a node set outside the
+    /// piece still integrates polynomials exactly, so only this catches it).
+    #[test]
+    fn nodes_are_the_chebyshev_zeros_inside_the_piece() {
+        let nodes = chebyshev_nodes();
+        for &y in nodes {
+            assert!(y > 0.0 && y < 1.0, "{y}");
+            let t_n = (NODES as f64 * (2.0 * y - 1.0).acos()).cos();
+            assert!(t_n.abs() < 1e-12, "T_N({y}) = {t_n}");
+        }
+        let mut sorted = nodes.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        sorted.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+        assert_eq!(sorted.len(), NODES, "distinct nodes");
+    }
+
     fn brute_moment(j: usize, t: f64) -> f64 {
         let n = 200_000;
         (0..n)
