@@ -299,3 +299,21 @@ fn shots_per_profile_is_the_rate_times_the_accumulation_time_rounded() {
         assert_eq!(sc.instrument.shots_per_profile(tc), m, "TC {tc} s");
     }
 }
+
+/// A detector table with a zero dead time is no dead-time stage: the ideal counter, the
+/// `aggregate` method allowed (survivor "replace > with >=" at the dead-time filter of
+/// `Instrument::from_config`, previous session).
+#[test]
+fn a_zero_dead_time_is_no_dead_time_stage() {
+    let sc = scenario(
+        "paper/scenario1.toml",
+        &["instrument.detector.dead_time_s=0"],
+    );
+    assert!(sc.loaded.config.instrument.detector.is_some());
+    assert!(sc.instrument.dead_time.is_none());
+    let with = scenario(
+        "paper/scenario1.toml",
+        &["instrument.detector.dead_time_s=3.5e-9"],
+    );
+    assert!(with.instrument.dead_time.is_some());
+}
