@@ -28,7 +28,7 @@ fn poisson_pmf(mu: f64, k_max: u64) -> Vec<f64> {
 #[test]
 fn the_mean_z_is_standardized_at_every_count_and_its_tail_is_exact() {
     let z0 = z_interval();
-    for mu in [0.5_f64, 4.0, 40.0, 400.0, 3000.0] {
+    for mu in [0.5_f64, 4.0, 40.0, 400.0, 3000.0, 20_000.5] {
         let k_max = (mu + 40.0 * mu.sqrt() + 40.0) as u64;
         let pmf = poisson_pmf(mu, k_max);
         let model = BinModel::new(0.0, mu, 1.0, 0.0);
@@ -117,3 +117,4 @@ fn the_mean_check_rejects_a_one_percent_bias_at_large_totals() {
         .unzip();
     assert!(!check_calibrated("mean", &zs, &shapes).pass);
 }
+
