@@ -423,8 +423,10 @@ fn the_beam_geometry_matches_the_reference_on_a_sphere() {
 
 /// Every bin's expected signal `C·∫ηβT²/r² dr` against the reference's brute-force
 /// quadrature (own geometry, optics and T², midpoint rule at 0.5 m split at every jump of
-/// the optics) within 1e-3 (the bins holding the ground differ by up to 5e-4, the others
-/// by less than 1e-4): paper scenario 2
+/// the optics) within 1e-3. The others differ by less than 1e-4; the bins holding the
+/// ground by up to 5e-4, the model's own approximation (docs/model.md: optics constant
+/// on `grid_m` = 10 m slabs at their mid-altitude, and a ground bin holds only the lowest
+/// few metres of its slab, where the aerosol changes fastest): paper scenario 2
 /// (aerosol and two cirrus, total channel) and the three CALIOP-like channels
 /// (polarization shares with cross-talk, 1064 nm). The same check at 5 cm and 1e-3 over
 /// all six paper scenarios is `tests/bin_integral.rs`; this one is fast enough to run

@@ -128,18 +128,20 @@ fn the_fewest_realizations_keep_the_false_alarm_rate() {
         let e = sc.expected().unwrap();
         let shots = sc.shots_per_profile();
         let models = validate::bin_models(&e, shots, 0.0);
+        // the checks of MIN_REALIZATIONS profiles drawn with `drawn`'s means against `e`'s
+        let checks = |drawn: &lidarsim::scenario::ExpectedProfile, seed: u64| {
+            let source = SimulatorSource::new(drawn, ResolvedMethod::Aggregate, 0.0, seed, shots);
+            validate::validate_source(
+                &source,
+                &models,
+                &e.altitude_m,
+                MIN_REALIZATIONS,
+                &e.background_bin_indices,
+            )
+            .1
+        };
         let inconsistent = (0..300u64)
-            .filter(|&seed| {
-                let source = SimulatorSource::new(&e, ResolvedMethod::Aggregate, 0.0, seed, shots);
-                let (_, checks) = validate::validate_source(
-                    &source,
-                    &models,
-                    &e.altitude_m,
-                    MIN_REALIZATIONS,
-                    &e.background_bin_indices,
-                );
-                !checks.iter().all(|c| c.pass)
-            })
+            .filter(|&seed| !checks(&e, seed).iter().all(|c| c.pass))
             .count();
         assert!(
             inconsistent < 4,
@@ -152,14 +154,7 @@ fn the_fewest_realizations_keep_the_false_alarm_rate() {
         high.background *= 1.01;
         high.dark *= 1.01;
         for seed in 0..5u64 {
-            let source = SimulatorSource::new(&high, ResolvedMethod::Aggregate, 0.0, seed, shots);
-            let (_, checks) = validate::validate_source(
-                &source,
-                &models,
-                &e.altitude_m,
-                MIN_REALIZATIONS,
-                &e.background_bin_indices,
-            );
+            let checks = checks(&high, seed);
             let mean = checks.iter().find(|c| c.statistic == "mean").unwrap();
             assert!(
                 !mean.pass,

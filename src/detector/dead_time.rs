@@ -22,8 +22,9 @@
 //! its middle, the integral over the last τ a running sum of the earlier steps, the
 //! oldest in part, plus half of the step itself, implicit in m), and integrated over each
 //! bin. For a stationary rate it gives `n/(1+nτ)` and `n·e^{−nτ}` exactly, whatever τ/h;
-//! at a step in the rate its error is O((h/τ)²) of the transient. A window whose grid would exceed [`MAX_GRID_STEPS`]
-//! uses the stationary formulas per bin (error O(τ/Δt) at the bin edges).
+//! at a step in the rate its error is O((h/τ)²) of the transient. A window whose grid
+//! would exceed [`MAX_GRID_STEPS`] uses the stationary formulas per bin (error O(τ/Δt) at
+//! the bin edges).
 //!
 //! **Variance** ([`DeadTime::recorded_variance`]) of a bin's recorded count per shot:
 //! the renewal-theory forms of docs/model.md §4b at the bin's rate, `nΔt/(1+nτ)³` and

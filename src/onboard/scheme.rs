@@ -54,23 +54,27 @@ struct SchemeFile {
     regions: Vec<Region>,
 }
 
+/// A region from (top km, bottom km, vertical resolution m, shots averaged).
+fn region(top_km: f64, bottom_km: f64, vertical_resolution_m: f64, shots_averaged: u32) -> Region {
+    Region {
+        top_km,
+        bottom_km,
+        vertical_resolution_m,
+        shots_averaged,
+    }
+}
+
 /// CALIOP's onboard averaging of its 532 nm channels on its 30 m native grid
 /// (docs/config.md; Hunt et al. 2009, J. Atmos. Oceanic Technol. 26, 1214, Table 2;
 /// Winker et al. 2009, J. Atmos. Oceanic Technol. 26, 2310, Table 1; the CALIPSO Data
 /// Products Catalog, PC-SCI-503, Lidar Level 1B, altitude regions): 583 bins.
 pub fn caliop_regions() -> Vec<Region> {
-    let r = |top_km, bottom_km, vertical_resolution_m, shots_averaged| Region {
-        top_km,
-        bottom_km,
-        vertical_resolution_m,
-        shots_averaged,
-    };
     vec![
-        r(40.0, 30.1, 300.0, 15),
-        r(30.1, 20.2, 180.0, 5),
-        r(20.2, 8.2, 60.0, 3),
-        r(8.2, -0.5, 30.0, 1),
-        r(-0.5, -2.0, 300.0, 1),
+        region(40.0, 30.1, 300.0, 15),
+        region(30.1, 20.2, 180.0, 5),
+        region(20.2, 8.2, 60.0, 3),
+        region(8.2, -0.5, 30.0, 1),
+        region(-0.5, -2.0, 300.0, 1),
     ]
 }
 
@@ -80,17 +84,11 @@ pub fn caliop_regions() -> Vec<Region> {
 /// 583 bins twice, 16-bit words and 20.16 shots s⁻¹ the downlink is 315 kbit/s, CALIOP's
 /// 316 kbit/s (docs/model.md).
 pub fn caliop_1064_regions() -> Vec<Region> {
-    let r = |top_km, bottom_km, vertical_resolution_m, shots_averaged| Region {
-        top_km,
-        bottom_km,
-        vertical_resolution_m,
-        shots_averaged,
-    };
     vec![
-        r(30.1, 20.2, 180.0, 5),
-        r(20.2, 8.2, 60.0, 3),
-        r(8.2, -0.5, 60.0, 1),
-        r(-0.5, -2.0, 300.0, 1),
+        region(30.1, 20.2, 180.0, 5),
+        region(20.2, 8.2, 60.0, 3),
+        region(8.2, -0.5, 60.0, 1),
+        region(-0.5, -2.0, 300.0, 1),
     ]
 }
 

@@ -396,11 +396,9 @@ fn accumulate(
 ///
 /// Where the count is Poisson to 0.1 % in variance (κ2 = κ1: no jitter or dead time), `T`
 /// is Poisson(μ = Nκ1) and `z = (T − μ)/√μ` is Pearson's: `E z² = 1` and the excess
-/// kurtosis of z is `1/μ` exactly, and the probability of `|z| > z₀` is the Poisson law's
-/// own tail (statrs' CDF, a few µs a bin, 0.15 ms at μ = 10⁸); above μ = 10⁸ Edgeworth's
-/// with γ1 = μ^(−1/2), γ2 = 1/μ, which misses only the lattice term: measured 6e-5 off at
-/// μ = 2·10⁴ (why it is not used lower), < 1e-6 at 10⁷–10⁸, shrinking as μ^(−1/2). So `Σz²` has mean K and the Satterthwaite variance of
-/// [`calibration::check_calibrated`] at every count. (A z taken from the two-sided
+/// kurtosis of z is `1/μ` exactly ([`poisson_pearson_shape`] gives its tail). So `Σz²`
+/// has mean K and the Satterthwaite variance of [`calibration::check_calibrated`] at
+/// every count. (A z taken from the two-sided
 /// exact-test p-value instead has `E z² < 1` for a discrete law: 0.88 at μ = 40, 0.65 at
 /// μ = 4; its `Σz²` p-values crowded towards 1, which a uniformity test of
 /// `validation/reports/paper_scenarios.md` caught.) Elsewhere the normal z with the total's
@@ -419,8 +417,11 @@ fn mean_z(total: u128, n: f64, m: &BinModel) -> (Option<f64>, Option<Shape>) {
     (Some(z), Some(poisson_pearson_shape(mu)))
 }
 
-/// The law of Pearson's `z = (T − μ)/√μ` for `T ~ Poisson(μ)`: its probability outside
-/// the nominal interval and its excess kurtosis `1/μ`.
+/// The law of Pearson's `z = (T − μ)/√μ` for `T ~ Poisson(μ)`: its excess kurtosis `1/μ`
+/// and its probability outside the nominal interval, the Poisson law's own tail (statrs'
+/// CDF: a few µs a bin, 0.15 ms at μ = 10⁸). Above μ = 10⁸ Edgeworth's tail with
+/// γ1 = μ^(−1/2), γ2 = 1/μ, which misses the lattice term: measured 6e-5 off at μ = 2·10⁴
+/// (why it is not used lower), below 1e-6 at 10⁷–10⁸, shrinking as μ^(−1/2).
 fn poisson_pearson_shape(mu: f64) -> Shape {
     let excess_kurtosis = 1.0 / mu;
     let exact = Poisson::new(mu).ok().filter(|_| mu < 1e8);
@@ -429,12 +430,11 @@ fn poisson_pearson_shape(mu: f64) -> Shape {
             .unwrap_or_else(Shape::normal);
     };
     let half_width = calibration::z_interval() * mu.sqrt();
-    // |T − μ| > half_width: T < μ − half_width or T > μ + half_width
-    let below = mu - half_width;
-    let lower = if below > 0.0 {
-        // largest integer strictly below `below`
-        let t = below.ceil() - 1.0;
-        if t >= 0.0 { law.cdf(t as u64) } else { 0.0 }
+    // |T − μ| > half_width: T ≤ t_low (the largest integer below μ − half_width, none
+    // when that is negative) or T > μ + half_width
+    let t_low = (mu - half_width).ceil() - 1.0;
+    let lower = if t_low >= 0.0 {
+        law.cdf(t_low as u64)
     } else {
         0.0
     };

@@ -117,4 +117,3 @@ fn the_mean_check_rejects_a_one_percent_bias_at_large_totals() {
         .unzip();
     assert!(!check_calibrated("mean", &zs, &shapes).pass);
 }
-

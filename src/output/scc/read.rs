@@ -70,25 +70,20 @@ pub fn read_raw(path: &Path) -> Result<RawRun> {
         "the SCC export",
         8.0 * values + 32.0 * (n_channels * n_bins) as f64 + 24.0 * (n_profiles + n_bins) as f64,
     )?;
-    let counts_ds = dataset(path, &f, "counts")?;
     let time_ds = dataset(path, &f, "time")?;
     let run = RawRun {
         channels: header.channels.clone(),
         n_profiles,
         n_bins,
-        counts: counts_ds
-            .read_raw::<u64>()
-            .map_err(|e| unreadable(path, "counts", e))?,
-        time_s: f64s(path, &f, "time")?,
+        counts: read_values::<u64>(path, &f, "counts")?,
+        time_s: read_values::<f64>(path, &f, "time")?,
         time_units: str_attr(path, &time_ds, "time", "units")?,
-        n_shots: dataset(path, &f, "n_shots")?
-            .read_raw::<u64>()
-            .map_err(|e| unreadable(path, "n_shots", e))?,
-        range_m: f64s(path, &f, "range")?,
+        n_shots: read_values::<u64>(path, &f, "n_shots")?,
+        range_m: read_values::<f64>(path, &f, "range")?,
         expected_signal: over_profiles(
             path,
             "expected_signal",
-            f64s(path, &f, "expected_signal")?,
+            read_values::<f64>(path, &f, "expected_signal")?,
             (n_profiles, n_channels * n_bins),
             f64::max,
         )?,
@@ -96,11 +91,11 @@ pub fn read_raw(path: &Path) -> Result<RawRun> {
             &over_profiles(
                 path,
                 "expected_background",
-                f64s(path, &f, "expected_background")?,
+                read_values::<f64>(path, &f, "expected_background")?,
                 (n_profiles, n_channels * n_bins),
                 f64::min,
             )?,
-            &f64s(path, &f, "expected_dark")?,
+            &read_values::<f64>(path, &f, "expected_dark")?,
         ),
         pretrigger_bins: pretrigger_bins(path, &f, n_bins)?,
         wavelength_nm: f64_attr(path, &f, "wavelength_nm")?,
@@ -134,9 +129,10 @@ fn dataset(path: &Path, f: &hdf5::File, name: &str) -> Result<hdf5::Dataset> {
         .map_err(|_| bad(path, &format!("missing variable `{name}`")))
 }
 
-fn f64s(path: &Path, f: &hdf5::File, name: &str) -> Result<Vec<f64>> {
+/// A dataset's values, a one-line error naming it if they cannot be read as `T`.
+fn read_values<T: hdf5::H5Type>(path: &Path, f: &hdf5::File, name: &str) -> Result<Vec<T>> {
     dataset(path, f, name)?
-        .read_raw::<f64>()
+        .read_raw::<T>()
         .map_err(|e| unreadable(path, name, e))
 }
 
