@@ -68,6 +68,9 @@ fn main() {
         count_width: width,
         components: false,
         time_units: "seconds since 2000-01-01 00:00:00".into(),
+        channel_text: vec![],
+        n_columns: 0,
+        column_slots: 0,
         variables: truth
             .iter()
             .map(|(name, _)| Variable {
@@ -112,6 +115,8 @@ fn main() {
                     counts: &counts[p * row..(p + 1) * row],
                     components: None,
                     values,
+                    columns: &[],
+                    column_weights: &[],
                 })
                 .collect();
             w.write_profiles(&recs).unwrap();

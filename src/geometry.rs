@@ -331,6 +331,26 @@ impl Overlap {
         }
     }
 
+    /// The range from which η(r) = 1, m: 0 for full overlap everywhere, the step's range,
+    /// or for two circles the range where the beam comes to lie inside the field of view
+    /// (`d + R_L = R_T`); infinite where it never does (a field of view narrower than the
+    /// beam's divergence).
+    pub fn full_overlap_range_m(&self) -> f64 {
+        match self {
+            Overlap::Full => 0.0,
+            Overlap::Step { full_overlap_m } => *full_overlap_m,
+            Overlap::Geometric(b) => {
+                let gain = b.fov_half_angle_rad - b.beam_half_angle_rad;
+                let inside = b.axis_offset_m + b.beam_radius_m - b.telescope_radius_m;
+                match (inside <= 0.0, gain > 0.0) {
+                    (true, _) => 0.0,
+                    (false, true) => inside / gain,
+                    (false, false) => f64::INFINITY,
+                }
+            }
+        }
+    }
+
     /// True when η(r) > 0 for r → 0⁺ (the 1/r² divergence is then not removed).
     pub fn sees_zero_range(&self) -> bool {
         self.eta(0.0) > 0.0 || self.eta(1e-9) > 0.0

@@ -138,6 +138,13 @@ impl BeamPath {
         }
     }
 
+    /// The range where the beam's path through the atmosphere ends, m: a space-borne
+    /// beam's surface (sea level without one), or the top of the atmosphere or the
+    /// window's end looking up; infinite for an empty path.
+    pub fn end_range_m(&self) -> f64 {
+        self.segments.last().map_or(f64::INFINITY, |s| s.r_end)
+    }
+
     /// The surface's echo, if any.
     pub fn surface(&self) -> Option<SurfaceEcho> {
         self.surface

@@ -167,7 +167,7 @@ fn other_wavelengths_scale_like_rayleigh() {
         );
         let e = sc.expected().unwrap();
         assert!(e.signal.iter().all(|s| s.is_finite() && *s >= 0.0));
-        e.beta_mol[0]
+        e.point[0].beta_mol
     };
     let (b355, b532, b1064) = (at("355"), at("532"), at("1064"));
     // β_mol ∝ σ(λ)/S_mol(λ) (Bucholtz): 532→355 ≈ ×5.2, 532→1064 ≈ ÷16.7, from this

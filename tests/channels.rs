@@ -358,7 +358,8 @@ fn three_channels_in_one_file() {
     let dead: Vec<f64> = f.dataset("dead_time").unwrap().read_raw().unwrap();
     assert_eq!(dead, [3.5e-9, 3.5e-9, 5e-9]);
     assert_eq!(f.dataset("lidar_constant").unwrap().shape(), vec![3]);
-    assert_eq!(f.dataset("beta_mol").unwrap().shape(), vec![3, bins]);
+    // the truth: one column (a static scene), per channel
+    assert_eq!(f.dataset("beta_mol").unwrap().shape(), vec![1, 3, bins]);
     assert_eq!(f.dataset("expected_counts").unwrap().shape(), vec![3, bins]);
     let beta: Vec<f64> = f.dataset("beta_mol").unwrap().read_raw().unwrap();
     // Rayleigh: β_mol = N·σ(λ)/S_mol, about 16× less at 1064 nm; from this test's
@@ -390,7 +391,7 @@ fn three_channels_in_one_file() {
     ]);
     assert!(o.status.success());
     let f = hdf5::File::open(&single).unwrap();
-    assert_eq!(f.dataset("beta_mol").unwrap().shape().len(), 1);
+    assert_eq!(f.dataset("beta_mol").unwrap().shape()[..2], [1, 1]);
     assert_eq!(f.dataset("counts").unwrap().shape()[1], 1);
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -72,7 +72,7 @@ fn same_arguments_and_source_date_epoch_give_identical_bytes() {
 }
 
 #[test]
-fn the_layout_is_format_version_2() {
+fn the_layout_is_format_version_3() {
     let dir = scratch("layout");
     let out = dir.join("s1.h5");
     simulate(
@@ -91,7 +91,7 @@ fn the_layout_is_format_version_2() {
         .unwrap()
         .read_scalar()
         .unwrap();
-    assert_eq!(v, 2);
+    assert_eq!(v, 3);
     assert!(str_attr(&f, "Conventions").starts_with("CF-1."));
     let counts = f.dataset("counts").unwrap();
     assert_eq!(counts.shape(), vec![4, 1, 334]);

@@ -61,6 +61,9 @@ fn spec(
         count_width: width,
         components,
         time_units: "seconds since 2000-01-01 00:00:00".into(),
+        channel_text: vec![],
+        n_columns: 0,
+        column_slots: 0,
         variables: vec![
             pcb("truth_a"),
             Variable {
@@ -122,6 +125,8 @@ fn record<'a>(
             .components
             .then(|| [&d.parts[0][..], &d.parts[1][..], &d.parts[2][..]]),
         values,
+        columns: &[],
+        column_weights: &[],
     }
 }
 
@@ -516,6 +521,8 @@ fn refusals_name_the_file_and_leave_the_writer_usable() {
         counts,
         components: None,
         values: &[],
+        columns: &[],
+        column_weights: &[],
     };
     let ok = ProfileRecord {
         values: &values,

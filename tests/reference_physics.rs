@@ -249,9 +249,9 @@ fn signal_constant_and_molecular_backscatter_follow_their_formulas() {
             }
             let beta = r::us76_number_density_m3(z) * r::rayleigh_cross_section_m2(wl_nm) / s_mol;
             assert!(
-                rel(e.beta_mol[i], beta) < 1e-4,
+                rel(e.point[i].beta_mol, beta) < 1e-4,
                 "{wl} nm, filter {filter}, z {z}: {} vs {beta}",
-                e.beta_mol[i]
+                e.point[i].beta_mol
             );
         }
     }

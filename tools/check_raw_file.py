@@ -10,11 +10,19 @@ and with `ncdump -h` (if on PATH), and checks that:
     optional signal/background/dark components have its shape and type and sum to it;
   * the dimensions are named exactly `profile`, `channel` and `bin` (no `phony_dim_*`)
     in every reader, with the same lengths;
-  * format version 2: text attributes come back from h5py as `str`; xarray decodes
+  * format version 3: text attributes come back from h5py as `str`; xarray decodes
     `time` to datetime64 and attaches `time`, `altitude` and `range` as coordinates with
     no extra arguments; `expected_signal = lidar_constant * attenuated_backscatter *
     range_weight`; `expected_counts` is the sum of the three expectations (at most
     that sum for a channel with dead time);
+  * the truth (format 3): per column, channel and bin `alpha_total` is the sum of
+    `alpha_mol`, `alpha_o3`, `alpha_aer`, `alpha_cld` (1e-12), `beta_mol` times
+    `molecular_lidar_ratio` is `alpha_mol` (1e-12), the particle lidar ratios are
+    `alpha/beta` where the species is present, `number_density = pressure /
+    (k_B temperature)` (1e-12) where they are given, `t2` is in (0, 1]; every profile's
+    `profile_column` are columns of the file (or -1 with weight 0), its
+    `profile_column_weight` in [0, 1] summing to 1 (1e-12); and the xarray recipe of
+    docs/file-format.md expands the truth to (profile, channel, bin);
   * the root attributes are readable, and (unless --structure-only) every variable
     and root attribute named in docs/file-format.md is present.
 Prints one line per failed check and a summary; exits 1 if any check failed, 2 if the
@@ -27,17 +35,29 @@ import shutil
 import subprocess
 import sys
 
+TRUTH = ["alpha_mol", "alpha_aer", "alpha_cld", "alpha_o3", "alpha_total", "beta_mol", "beta_aer",
+         "beta_cld", "lidar_ratio_aer", "lidar_ratio_cld", "ms_factor_aer", "ms_factor_cld", "depol_aer",
+         "depol_cld", "depol_mol", "depol_volume", "t2"]
+STATE = ["pressure", "temperature", "number_density"]
+CHANNEL_TEXT = ["channel_kind", "channel_species", "polarization", "detection_mode", "dead_time_model",
+                "molecular_line"]
 REQUIRED_VARIABLES = [
     "counts", "channel", "altitude", "range", "time", "n_shots", "pulse_energy",
     "expected_signal", "expected_background", "expected_dark", "expected_counts", "snr_eq4",
     "lidar_constant", "range_weight", "attenuated_backscatter",
-]
+    "overlap", "emission_wavelength", "detection_wavelength", "crosstalk", "relative_gain",
+    "filter_width", "molecular_transmission", "particle_transmission", "molecular_lidar_ratio",
+    "profile_column", "profile_column_weight", "column", "k",
+] + TRUTH + STATE + CHANNEL_TEXT
+K_B = 1.380649e-23  # J/K, CODATA 2018 (exact)
 REQUIRED_ROOT_ATTRIBUTES = ["Conventions", "title", "source", "history", "date_created", "config",
-                            "seed", "method", "lidarsim_format_version"]
+                            "seed", "method", "lidarsim_format_version", "full_overlap_range_m"]
 COMPONENTS = ["signal_counts", "background_counts", "dark_counts"]
 DIMS = ("profile", "channel", "bin")
-# variables that need no units: string coordinates
-NO_UNITS = {"channel"}
+# the format-3 dimensions of the truth: the scene's columns and a profile's column slots
+TRUTH_DIMS = ("column", "k")
+# variables that need no units: strings
+NO_UNITS = {"channel"} | set(CHANNEL_TEXT)
 
 
 class Checker:
@@ -132,12 +152,51 @@ def check_h5py(path, c, structure_only):
             c.check(bool(ideal_ok), "h5py: expected_counts != signal + background + dark (ideal detector)")
             c.check(bool(np.all(counted[..., dead, :] <= total[..., dead, :] * (1 + 1e-9))),
                     "h5py: expected_counts above signal + background + dark (dead time)")
-            c.check(int(f.attrs["lidarsim_format_version"]) == 2, "h5py: lidarsim_format_version is not 2")
+            c.check(int(f.attrs["lidarsim_format_version"]) == 3, "h5py: lidarsim_format_version is not 3")
+            check_truth(data, c)
         for name in DIMS:
             if name in f:
                 c.check(f[name].attrs.get("CLASS") is not None and as_text(f[name].attrs["CLASS"]) == "DIMENSION_SCALE",
                         f"h5py: {name} is not a dimension scale")
     return dims
+
+
+def rel_dev(a, b):
+    """Largest relative difference of two arrays (0 where both are 0)."""
+    import numpy as np
+
+    scale = np.maximum(np.abs(a), np.abs(b))
+    return float(np.max(np.where(scale > 0, np.abs(a - b) / np.where(scale > 0, scale, 1), 0), initial=0))
+
+
+def check_truth(data, c):
+    """The identities of the format-3 truth (docs/file-format.md), per column."""
+    import numpy as np
+
+    total = data["alpha_mol"] + data["alpha_o3"] + data["alpha_aer"] + data["alpha_cld"]
+    c.check(rel_dev(total, data["alpha_total"]) <= 1e-12, "h5py: alpha_total != sum of alpha_*")
+    s_mol = data["molecular_lidar_ratio"][None, :, None]
+    c.check(rel_dev(data["beta_mol"] * s_mol, data["alpha_mol"]) <= 1e-12,
+            "h5py: beta_mol * molecular_lidar_ratio != alpha_mol")
+    for species in ("aer", "cld"):
+        beta, alpha, ratio = data[f"beta_{species}"], data[f"alpha_{species}"], data[f"lidar_ratio_{species}"]
+        present = beta > 0
+        c.check(rel_dev(beta[present] * ratio[present], alpha[present]) <= 1e-12,
+                f"h5py: lidar_ratio_{species} != alpha_{species} / beta_{species}")
+        c.check(bool(np.all(ratio[~present] == 0)), f"h5py: lidar_ratio_{species} not 0 where absent")
+    p, t, n = data["pressure"], data["temperature"], data["number_density"]
+    given = np.isfinite(p) & np.isfinite(t)
+    c.check(rel_dev(n[given], p[given] / (K_B * t[given])) <= 1e-12, "h5py: number_density != p / (k_B T)")
+    c.check(bool(np.all(np.isfinite(n)) and np.all(n >= 0)), "h5py: number_density not finite and >= 0")
+    t2 = data["t2"]
+    c.check(bool(np.all((t2 >= 0) & (t2 <= 1))), "h5py: t2 outside [0, 1]")
+    col, w = data["profile_column"], data["profile_column_weight"]
+    n_columns = data["alpha_total"].shape[0]
+    c.check(bool(np.all((col >= -1) & (col < n_columns))), "h5py: profile_column outside the columns")
+    c.check(bool(np.all(w[col < 0] == 0)), "h5py: an unused slot has a weight")
+    c.check(bool(np.all((w >= 0) & (w <= 1))), "h5py: profile_column_weight outside [0, 1]")
+    c.check(float(np.max(np.abs(w.sum(axis=1) - 1), initial=0)) <= 1e-12,
+            "h5py: profile_column_weight does not sum to 1")
 
 
 def check_xarray(path, engine, c, dims):
@@ -151,7 +210,8 @@ def check_xarray(path, engine, c, dims):
     with ds:
         names = list(ds.sizes)
         c.check(not any(n.startswith("phony_dim") for n in names), f"xarray[{engine}]: phony dimensions {names}")
-        c.check(set(names) == set(DIMS), f"xarray[{engine}]: dimensions are {names}, expected {list(DIMS)}")
+        c.check(set(DIMS) <= set(names) <= set(DIMS + TRUTH_DIMS),
+                f"xarray[{engine}]: dimensions are {names}, expected {list(DIMS + TRUTH_DIMS)}")
         for n, size in dims.items():
             c.check(ds.sizes.get(n) == size, f"xarray[{engine}]: dimension {n} has size {ds.sizes.get(n)}, expected {size}")
         if "counts" in ds:
@@ -161,13 +221,24 @@ def check_xarray(path, engine, c, dims):
         for coord in ("time", "altitude", "range"):
             c.check(coord in ds.coords, f"xarray[{engine}]: {coord} is not a coordinate")
         for name, var in ds.variables.items():
-            c.check(set(var.dims) <= set(DIMS), f"xarray[{engine}]: {name} has dims {var.dims}")
+            c.check(set(var.dims) <= set(DIMS + TRUTH_DIMS), f"xarray[{engine}]: {name} has dims {var.dims}")
             c.check(name in NO_UNITS or bool(var.attrs.get("units")) or bool(var.encoding.get("units")),
                     f"xarray[{engine}]: {name} has no units")
             c.check(bool(var.attrs.get("long_name")), f"xarray[{engine}]: {name} has no long_name")
             var.values  # noqa: B018 - read the data
         for name, value in ds.attrs.items():
             c.check(not isinstance(value, bytes), f"xarray[{engine}]: root attribute {name} came back as bytes")
+        if "profile_column" in ds and "beta_cld" in ds:
+            # the two-line recipe of docs/file-format.md
+            col, w = ds.profile_column.clip(min=0), ds.profile_column_weight
+            beta = (ds.beta_cld.isel(column=col) * w).sum("k")
+            c.check(beta.dims == DIMS, f"xarray[{engine}]: the recipe gives dims {beta.dims}")
+            if engine == "h5netcdf":
+                import numpy as np
+                c.check(bool(np.all(np.isfinite(beta.values))), f"xarray[{engine}]: the recipe gives NaN")
+        if "channel" in ds:
+            c.check(all(isinstance(x, str) for x in ds["channel"].values.tolist()),
+                    f"xarray[{engine}]: channel names are not str")
 
 
 def check_ncdump(path, c, dims, attr_names):

@@ -12,6 +12,7 @@ use crate::config::{
     Channel, ExtinctionSource, LayerKind, LoadedConfig, MolecularLine, MolecularModel,
     ScenarioConfig,
 };
+use crate::constants::BOLTZMANN_J_PER_K;
 use crate::error::Result;
 use profile_file::MolecularProfile;
 
@@ -40,6 +41,9 @@ pub struct Molecules {
     /// Linear depolarization ratio of that part's backscatter: `γ = ρn/(2−ρn)` for the
     /// whole line, `3ε/(180+4ε)` for the Cabannes line.
     pub depolarization: f64,
+    /// Whether the channel's filter passes the Cabannes line only (else the whole
+    /// Rayleigh line, rotational Raman wings included).
+    pub cabannes: bool,
     /// For a profile file that ends below the US76 top (86 km): the factor by which US76
     /// continues it above its top row, `N_file(top)/N_US76(top)`, so that the density is
     /// continuous there.
@@ -85,10 +89,51 @@ impl Molecules {
         }
     }
 
+    /// The molecular state at altitude `z_m`: US76's pressure and temperature, a
+    /// profile file's (interpolated log-linearly in p, `T = p/(k_B·N)`), or scaled US76
+    /// above a profile's top (p scaled as N is, US76's T).
+    pub fn state_at(&self, z_m: f64) -> MolecularState {
+        let n = self.number_density_m3(z_m);
+        let us76 = |z: f64, scale: f64| match us76::state(z.max(us76::BOTTOM_ALTITUDE_M)) {
+            Some(s) if n > 0.0 => (scale * s.pressure_pa, s.temperature_k),
+            _ => (f64::NAN, f64::NAN),
+        };
+        let (pressure_pa, temperature_k) = match &self.source {
+            MolecularSource::None => (f64::NAN, f64::NAN),
+            MolecularSource::Us76 => us76(z_m, 1.0),
+            MolecularSource::Profile(p) => match self.us76_above_scale {
+                Some(scale) if z_m > p.top_altitude_m() => us76(z_m, scale),
+                _ => match p.pressure_pa(z_m) {
+                    Some(pa) if n > 0.0 => (pa, pa / (BOLTZMANN_J_PER_K * n)),
+                    _ => (f64::NAN, f64::NAN),
+                },
+            },
+        };
+        MolecularState {
+            pressure_pa,
+            temperature_k,
+            number_density_m3: n,
+        }
+    }
+
     /// `α_mol = N·σ`, m⁻¹.
     pub fn extinction_per_m(&self, z_m: f64) -> f64 {
         self.number_density_m3(z_m) * self.cross_section_m2
     }
+}
+
+/// The molecular state at one altitude (model.md §8): what the number density comes
+/// from. Pressure and temperature are NaN where the source does not give them (a profile
+/// file of number densities, no molecules, above the US76 top); the raw file marks them
+/// missing there (`_FillValue`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MolecularState {
+    /// Pressure, Pa.
+    pub pressure_pa: f64,
+    /// Temperature, K.
+    pub temperature_k: f64,
+    /// Number density, m⁻³: the one the model uses, `p/(k_B·T)` where p and T are known.
+    pub number_density_m3: f64,
 }
 
 /// The background aerosol of Eq. 5–6: `α_aer(z) = α_aer(0)·Np(z)/Np(0)`.
@@ -134,21 +179,98 @@ impl Layer {
     }
 }
 
-/// Point optical properties at one altitude.
+/// Point optical properties at one altitude, by species (model.md §4 and §8): what the
+/// model integrates and what a retrieval compares with.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Optics {
-    /// Molecular backscatter, m⁻¹ sr⁻¹.
+    /// Molecular backscatter of the part of the line the channel sees, m⁻¹ sr⁻¹.
     pub beta_mol: f64,
     /// Aerosol backscatter (profile and aerosol layers), m⁻¹ sr⁻¹.
     pub beta_aer: f64,
     /// Cloud backscatter, m⁻¹ sr⁻¹.
     pub beta_cld: f64,
-    /// Total extinction, m⁻¹.
+    /// Molecular (Rayleigh) extinction, m⁻¹.
+    pub alpha_mol: f64,
+    /// Aerosol extinction (profile and aerosol layers), m⁻¹.
+    pub alpha_aer: f64,
+    /// Cloud extinction, m⁻¹.
+    pub alpha_cld: f64,
+    /// Ozone absorption, m⁻¹.
+    pub alpha_o3: f64,
+    /// Total extinction, `α_mol + α_o3 + α_aer + α_cld`, m⁻¹.
     pub alpha_total: f64,
-    /// Extinction that attenuates the signal: layers' extinction times their η_ms, m⁻¹.
+    /// Aerosol extinction weighted by each contribution's multiple-scattering factor,
+    /// `Σ η·α` (the background profile has η = 1), m⁻¹.
+    pub ms_alpha_aer: f64,
+    /// Cloud extinction weighted by each layer's multiple-scattering factor, m⁻¹.
+    pub ms_alpha_cld: f64,
+    /// Extinction that attenuates the signal, `α_mol + α_o3 + Σ η·α`, m⁻¹.
     pub alpha_effective: f64,
+    /// Cross-polarized part of the aerosol backscatter, `Σ β·δ/(1+δ)`, m⁻¹ sr⁻¹.
+    pub beta_perp_aer: f64,
+    /// Cross-polarized part of the cloud backscatter, m⁻¹ sr⁻¹.
+    pub beta_perp_cld: f64,
+    /// Linear depolarization ratio of the molecular backscatter the channel sees.
+    pub depol_mol: f64,
     /// Backscatter seen by the receiver channel, m⁻¹ sr⁻¹.
     pub beta_channel: f64,
+}
+
+/// `a/b`, or `absent` where `b` is 0 (the species is not there).
+fn ratio_or(a: f64, b: f64, absent: f64) -> f64 {
+    if b > 0.0 { a / b } else { absent }
+}
+
+/// Linear depolarization ratio `δ = β⊥/β∥` of a backscatter `beta` whose
+/// cross-polarized part is `perp`; 0 where there is no backscatter.
+fn depolarization(perp: f64, beta: f64) -> f64 {
+    ratio_or(perp, beta - perp, 0.0)
+}
+
+/// The cross-polarized part `β·δ/(1+δ)` of a backscatter `beta` of depolarization `delta`.
+fn perpendicular(beta: f64, delta: f64) -> f64 {
+    beta * delta / (1.0 + delta)
+}
+
+impl Optics {
+    /// Aerosol extinction-to-backscatter ratio `α_aer/β_aer`, sr (0 without aerosol).
+    pub fn lidar_ratio_aer(&self) -> f64 {
+        ratio_or(self.alpha_aer, self.beta_aer, 0.0)
+    }
+
+    /// Cloud extinction-to-backscatter ratio, sr (0 without cloud).
+    pub fn lidar_ratio_cld(&self) -> f64 {
+        ratio_or(self.alpha_cld, self.beta_cld, 0.0)
+    }
+
+    /// Effective multiple-scattering factor of the aerosol, `Σηα/Σα` (1 without aerosol).
+    pub fn ms_factor_aer(&self) -> f64 {
+        ratio_or(self.ms_alpha_aer, self.alpha_aer, 1.0)
+    }
+
+    /// Effective multiple-scattering factor of the cloud (1 without cloud).
+    pub fn ms_factor_cld(&self) -> f64 {
+        ratio_or(self.ms_alpha_cld, self.alpha_cld, 1.0)
+    }
+
+    /// Particle linear depolarization ratio of the aerosol, `β⊥/β∥` (0 without aerosol).
+    pub fn depol_aer(&self) -> f64 {
+        depolarization(self.beta_perp_aer, self.beta_aer)
+    }
+
+    /// Particle linear depolarization ratio of the cloud (0 without cloud).
+    pub fn depol_cld(&self) -> f64 {
+        depolarization(self.beta_perp_cld, self.beta_cld)
+    }
+
+    /// Volume linear depolarization ratio, `Σβ⊥/Σβ∥` over molecules (the line the
+    /// channel sees), aerosol and cloud: what an ideal ∥/⊥ pair of channels measures.
+    pub fn depol_volume(&self) -> f64 {
+        let beta = self.beta_mol + self.beta_aer + self.beta_cld;
+        let perp =
+            perpendicular(self.beta_mol, self.depol_mol) + self.beta_perp_aer + self.beta_perp_cld;
+        depolarization(perp, beta)
+    }
 }
 
 /// A slab `[z_lo, z_hi)` of constant optical properties.
@@ -244,6 +366,7 @@ impl Atmosphere {
             _ => None,
         };
         let molecules = Molecules {
+            cabannes,
             us76_above_scale,
             source,
             cross_section_m2: rayleigh::cross_section_m2(wl),
@@ -268,39 +391,51 @@ impl Atmosphere {
     /// Optical properties at altitude `z_m`: `β = β_mol + β_aer + β_cld`,
     /// `α = α_mol + α_aer + α_cld` (model.md §4).
     pub fn optics_at(&self, z_m: f64) -> Optics {
-        let mut o = Optics::default();
-        let alpha_mol = self.molecules.extinction_per_m(z_m);
-        o.beta_mol = alpha_mol / self.molecules.lidar_ratio_sr;
-        o.alpha_total = alpha_mol;
-        o.alpha_effective = alpha_mol;
-        o.beta_channel = o.beta_mol
-            * self
-                .channel
-                .share(self.molecules.depolarization, self.crosstalk);
+        let mut o = Optics {
+            alpha_mol: self.molecules.extinction_per_m(z_m),
+            depol_mol: self.molecules.depolarization,
+            ..Default::default()
+        };
+        o.beta_mol = o.alpha_mol / self.molecules.lidar_ratio_sr;
+        o.beta_channel = o.beta_mol * self.channel.share(o.depol_mol, self.crosstalk);
         if let Some(sigma) = self.ozone_cross_section_m2 {
             // absorption only: it attenuates, it does not backscatter
-            let alpha = sigma * ozone::number_density_m3(z_m);
-            o.alpha_total += alpha;
-            o.alpha_effective += alpha;
+            o.alpha_o3 = sigma * ozone::number_density_m3(z_m);
         }
         if let Some(a) = &self.aerosol {
             let alpha = a.extinction_per_m(z_m);
             let beta = alpha / a.lidar_ratio_sr;
+            o.alpha_aer += alpha;
+            o.ms_alpha_aer += alpha;
             o.beta_aer += beta;
-            o.alpha_total += alpha;
-            o.alpha_effective += alpha;
+            o.beta_perp_aer += perpendicular(beta, a.depolarization);
             o.beta_channel += beta * self.channel.share(a.depolarization, self.crosstalk);
         }
         for l in self.layers.iter().filter(|l| l.contains(z_m)) {
-            let beta = l.extinction_per_m / l.lidar_ratio_sr;
-            match l.kind {
-                LayerKind::Cloud => o.beta_cld += beta,
-                LayerKind::Aerosol => o.beta_aer += beta,
-            }
-            o.alpha_total += l.extinction_per_m;
-            o.alpha_effective += l.extinction_per_m * l.multiple_scattering;
+            let alpha = l.extinction_per_m;
+            let beta = alpha / l.lidar_ratio_sr;
+            let (a, ms, b, perp) = match l.kind {
+                LayerKind::Cloud => (
+                    &mut o.alpha_cld,
+                    &mut o.ms_alpha_cld,
+                    &mut o.beta_cld,
+                    &mut o.beta_perp_cld,
+                ),
+                LayerKind::Aerosol => (
+                    &mut o.alpha_aer,
+                    &mut o.ms_alpha_aer,
+                    &mut o.beta_aer,
+                    &mut o.beta_perp_aer,
+                ),
+            };
+            *a += alpha;
+            *ms += alpha * l.multiple_scattering;
+            *b += beta;
+            *perp += perpendicular(beta, l.depolarization);
             o.beta_channel += beta * self.channel.share(l.depolarization, self.crosstalk);
         }
+        o.alpha_total = o.alpha_mol + o.alpha_o3 + o.alpha_aer + o.alpha_cld;
+        o.alpha_effective = o.alpha_mol + o.alpha_o3 + o.ms_alpha_aer + o.ms_alpha_cld;
         o
     }
 

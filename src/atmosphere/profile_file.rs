@@ -43,6 +43,9 @@ pub struct MolecularProfile {
     pub altitude_m: Vec<f64>,
     /// Number densities at those altitudes, m⁻³, all > 0.
     pub number_density_m3: Vec<f64>,
+    /// Pressures at those altitudes, Pa, for a file that gives pressure and
+    /// temperature (`None` for one that gives number densities).
+    pub pressure_pa: Option<Vec<f64>>,
 }
 
 /// The two accepted column sets.
@@ -112,6 +115,7 @@ impl MolecularProfile {
         let mut columns: Option<(Columns, usize)> = None;
         let mut altitude_m = Vec::new();
         let mut number_density_m3 = Vec::new();
+        let mut pressure_pa = Vec::new();
         for (k, raw) in text.lines().enumerate() {
             let line_no = k + 1;
             let content = raw.split('#').next().unwrap_or("");
@@ -158,6 +162,7 @@ impl MolecularProfile {
                     let z_km = value(z, "altitude_km")?;
                     let p_hpa = positive(p, "pressure_hpa")?;
                     let t_k = positive(t, "temperature_k")?;
+                    pressure_pa.push(p_hpa * 100.0);
                     (z_km, p_hpa * 100.0 / (BOLTZMANN_J_PER_K * t_k))
                 }
                 Columns::NumberDensity { z, n } => {
@@ -196,6 +201,7 @@ impl MolecularProfile {
         Ok(Self {
             altitude_m,
             number_density_m3,
+            pressure_pa: (!pressure_pa.is_empty()).then_some(pressure_pa),
         })
     }
 
@@ -203,8 +209,23 @@ impl MolecularProfile {
     /// between rows, 0 above the top row, the bottom value below the bottom
     /// row; NaN for NaN.
     pub fn number_density_m3(&self, altitude_m: f64) -> f64 {
+        self.log_linear(&self.number_density_m3, altitude_m)
+    }
+
+    /// Pressure, Pa, at geometric altitude `altitude_m`, interpolated as the number
+    /// density is (log-linear; 0 above the top row); `None` for a file without
+    /// pressures. The temperature that goes with it is `p/(k_B·N)` (the ideal-gas law
+    /// the rows satisfy), so that the three agree between rows too.
+    pub fn pressure_pa(&self, altitude_m: f64) -> Option<f64> {
+        let p = self.pressure_pa.as_ref()?;
+        Some(self.log_linear(p, altitude_m))
+    }
+
+    /// `values` (one per row, all > 0) at `altitude_m`: log-linear between rows, 0
+    /// above the top row, the bottom value below the bottom row; NaN for NaN.
+    fn log_linear(&self, values: &[f64], altitude_m: f64) -> f64 {
         let z = &self.altitude_m;
-        let n = &self.number_density_m3;
+        let n = values;
         if altitude_m.is_nan() {
             return f64::NAN;
         }

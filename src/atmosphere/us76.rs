@@ -15,18 +15,22 @@
 //! * kinetic temperature `T = T_M·(M/M0)`, with the mean-molecular-weight ratio
 //!   `M/M0` of Table 8 (1 below 80 km, falling to 0.999579 at 86 km; linear
 //!   interpolation between its 0.5 km entries);
-//! * number density `N = N_A·P/(R*·T)` (Eq. 29).
+//! * number density `N = P/(k_B·T)` with the CODATA k_B of `crate::constants` (the
+//!   Standard's Eq. 29, `N_A·P/(R*·T)`, uses its own `N_A/R*`, 2e-5 above `1/k_B`: its
+//!   Table I's 2.5470e25 m⁻³ at sea level is 2.5469e25 here). So the raw file's
+//!   `number_density`, `pressure` and `temperature` satisfy the ideal-gas law with the
+//!   constant a reader has (docs/file-format.md).
 //!
 //! The defining constants of the Standard (`R* = 8.31432 J mol⁻¹ K⁻¹`,
-//! `M0 = 28.9644 kg kmol⁻¹`, `g0' = 9.80665 m² s⁻² m'⁻¹`,
-//! `N_A = 6.022169e26 kmol⁻¹`) are kept here, as part of the model's
-//! definition, rather than the CODATA values in `crate::constants`: they
-//! reproduce the published tables digit for digit (N_A/R* differs from the
-//! CODATA 1/k_B by 2e-5).
+//! `M0 = 28.9644 kg kmol⁻¹`, `g0' = 9.80665 m² s⁻² m'⁻¹`) are kept here, as part of the
+//! model's definition, rather than the CODATA values in `crate::constants`: they
+//! reproduce the published pressures and temperatures digit for digit.
 //!
 //! The layer structure extends the first layer (−6.5 K/km) down to −5 km, as the
 //! Standard does. Above 86 km the Standard switches to a different (non-hydrostatic,
 //! diffusive) formulation that this module does not implement.
+
+use crate::constants::BOLTZMANN_J_PER_K;
 
 /// Highest geometric altitude of the model, m.
 pub const TOP_ALTITUDE_M: f64 = 86_000.0;
@@ -41,8 +45,6 @@ const M0: f64 = 28.9644;
 const G0: f64 = 9.80665;
 /// Effective Earth radius for the geopotential conversion, m.
 const R0: f64 = 6_356_766.0;
-/// Avogadro constant as used by the Standard, kmol⁻¹.
-const AVOGADRO_US76_PER_KMOL: f64 = 6.022169e26;
 /// Sea-level pressure, Pa.
 const P0: f64 = 101_325.0;
 /// Sea-level (molecular-scale) temperature, K.
@@ -138,7 +140,7 @@ pub fn state(altitude_m: f64) -> Option<State> {
     let h = geopotential_altitude_m(altitude_m);
     let (t_molecular, pressure_pa) = molecular_temperature_and_pressure(h);
     let temperature_k = t_molecular * molecular_weight_ratio(altitude_m);
-    let number_density_m3 = AVOGADRO_US76_PER_KMOL * pressure_pa / (R_STAR * temperature_k);
+    let number_density_m3 = pressure_pa / (BOLTZMANN_J_PER_K * temperature_k);
     Some(State {
         pressure_pa,
         temperature_k,
@@ -201,8 +203,9 @@ mod tests {
                 "T at {z}: {} vs {t}",
                 s.temperature_k
             );
-            // N in Table I is N_A·P/(R*·T) of the tabulated P and T.
-            let n = AVOGADRO_US76_PER_KMOL * p / (R_STAR * t);
+            // N in Table I is N_A·P/(R*·T) of the tabulated P and T (N_A = 6.022169e26
+            // kmol⁻¹); the module's P/(k_B·T) is 2e-5 below it
+            let n = 6.022169e26 * p / (R_STAR * t);
             assert!(
                 rel(s.number_density_m3, n) < 2e-4,
                 "N at {z}: {} vs {n}",
@@ -218,7 +221,7 @@ mod tests {
         assert!(rel(number_density_m3(86_000.0), 1.4474e20) < 1e-3);
         // US76 sea level p/kT = 2.5469e25 m⁻³ (CODATA k_B).
         let s = state(0.0).unwrap();
-        let n_codata = s.pressure_pa / (crate::constants::BOLTZMANN_J_PER_K * s.temperature_k);
+        let n_codata = s.pressure_pa / (BOLTZMANN_J_PER_K * s.temperature_k);
         assert!(rel(n_codata, 2.5469e25) < 1e-4);
     }
 

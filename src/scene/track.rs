@@ -203,6 +203,36 @@ impl Track {
         runs
     }
 
+    /// An upper bound of the distinct columns one of the run's `profiles` profiles
+    /// sees: one more than the column boundaries (segment starts, cloudy cells' edges)
+    /// between its first and last shot, at most `n_columns` and the shots per profile.
+    /// O(profiles × broken layers × log cells): no shot is placed.
+    pub fn columns_per_profile_bound(&self, profiles: u64, n_columns: usize) -> usize {
+        let cap = n_columns.min(self.shots_per_profile as usize).max(1);
+        let last_shot = self.shots_per_profile.saturating_sub(1);
+        let mut most = 1;
+        for p in 0..profiles {
+            if most >= cap {
+                break;
+            }
+            let (a, b) = (self.position_m(p, 0), self.position_m(p, last_shot));
+            let starts_before = |x: f64| self.stretches.partition_point(|s| s.start_m <= x);
+            let (first, last) = (starts_before(a).saturating_sub(1), starts_before(b));
+            let mut edges = last.saturating_sub(first + 1);
+            for s in &self.stretches[first..last] {
+                for cells in &s.cells {
+                    let at_most = |x: f64, end: bool| {
+                        cells.partition_point(|c| if end { c.1 <= x } else { c.0 <= x })
+                    };
+                    edges += at_most(b, false) - at_most(a, false);
+                    edges += at_most(b, true) - at_most(a, true);
+                }
+            }
+            most = most.max(1 + edges);
+        }
+        most.min(cap)
+    }
+
     /// The config of one column: the segment's layers, aerosol and surface in place of
     /// the atmosphere's, its absent broken layers removed and its present ones whole.
     pub fn column_config(&self, base: &ScenarioConfig, c: Column) -> ScenarioConfig {

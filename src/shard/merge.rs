@@ -15,14 +15,16 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use hdf5::Dataset;
-use ndarray::{Ix1, Ix3, s};
+use ndarray::{Ix1, Ix2, Ix3, s};
 
 use super::{
     FileAttributes, Piece, RunIdentity, Shard, ShardKind, check_pieces, open_shard,
     require_disk_for_merge, run_id, stored_lidar,
 };
 use crate::error::{Error, Result};
-use crate::output::raw_file::{COMPONENT_NAMES, Dims, ProfileRecord, RawFileSpec, RawFileWriter};
+use crate::output::raw_file::{
+    COMPONENT_NAMES, Dims, PROFILE_COLUMN_NAMES, ProfileRecord, RawFileSpec, RawFileWriter,
+};
 use crate::output::safe_file::{OutputId, Outputs, describe_hdf5_error};
 use crate::scenario::Lidar;
 use crate::simulate::{self, ResolvedMethod, RunOptions, RunPlan};
@@ -239,6 +241,8 @@ struct RowSources {
     pulse_energy: Dataset,
     /// The spec's per-profile variables, with their dimensions.
     values: Vec<(Dataset, Dims)>,
+    /// `profile_column` and `profile_column_weight`, if the run has column slots.
+    profile_columns: Option<(Dataset, Dataset)>,
 }
 
 impl RowSources {
@@ -273,9 +277,14 @@ impl RowSources {
             .filter(|v| v.dims.per_profile())
             .map(|v| get(&v.name).map(|d| (d, v.dims)))
             .collect::<Result<_>>()?;
+        let profile_columns = match spec.column_slots {
+            0 => None,
+            _ => Some((get(PROFILE_COLUMN_NAMES[0])?, get(PROFILE_COLUMN_NAMES[1])?)),
+        };
         Ok(RowSources {
             counts,
             components,
+            profile_columns,
             time: get("time")?,
             n_shots: get("n_shots")?,
             pulse_energy: get("pulse_energy")?,
@@ -324,6 +333,18 @@ fn copy_rows(f: &ShardFile, spec: &RawFileSpec, writer: &mut RawFileWriter) -> R
             })
             .collect::<hdf5::Result<_>>()
             .map_err(fail)?;
+        let k = spec.column_slots;
+        let (columns, weights) = match &src.profile_columns {
+            Some((c, w)) => (
+                c.read_slice::<i32, _, Ix2>(s![a..b, ..])
+                    .map_err(fail)?
+                    .into_raw_vec(),
+                w.read_slice::<f64, _, Ix2>(s![a..b, ..])
+                    .map_err(fail)?
+                    .into_raw_vec(),
+            ),
+            None => (vec![], vec![]),
+        };
         for r in 0..b - a {
             let row_values: Vec<&[f64]> = values.iter().map(|(v, w)| row(v, r, *w)).collect();
             writer.write_profile(&ProfileRecord {
@@ -337,6 +358,8 @@ fn copy_rows(f: &ShardFile, spec: &RawFileSpec, writer: &mut RawFileWriter) -> R
                     _ => None,
                 },
                 values: &row_values,
+                columns: row(&columns, r, k),
+                column_weights: row(&weights, r, k),
             })?;
         }
     }

@@ -149,10 +149,7 @@ impl Fingerprint {
         self.str(&format!("{:?}", v.dims));
         self.str(&v.long_name);
         self.str(&v.units);
-        v.attributes.iter().for_each(|(k, x)| {
-            self.str(k);
-            self.str(x);
-        });
+        v.attributes.iter().for_each(|(k, x)| self.attr(k, x));
         self.f64s(&v.data);
     }
 
@@ -180,6 +177,12 @@ pub fn run_id(spec: &RawFileSpec) -> String {
     h.num(u64::from(spec.components));
     h.str(&spec.time_units);
     spec.variables.iter().for_each(|v| h.variable(v));
+    for t in &spec.channel_text {
+        h.str(&t.name);
+        t.values.iter().for_each(|v| h.str(v));
+    }
+    h.num(spec.n_columns as u64);
+    h.num(spec.column_slots as u64);
     spec.profile_coordinates.iter().for_each(|c| h.str(c));
     spec.root_attributes
         .iter()

@@ -693,6 +693,8 @@ pub fn run(
                     .as_ref()
                     .map(|[s, b, k]| [&s[..], &b[..], &k[..]]),
                 values: &values,
+                columns: &d.columns.0,
+                column_weights: &d.columns.1,
             })?;
         }
         progress.inc(drawn.len() as u64);
@@ -754,6 +756,9 @@ pub struct DrawnProfile {
     /// The rows of the per-profile variables (a changing scene's truth: expected signal,
     /// background, recorded counts per shot, S/N, attenuated backscatter).
     pub values: Vec<Vec<f64>>,
+    /// The columns the profile's shots saw and their shares (`profile_column`,
+    /// `profile_column_weight`), padded to the file's slots.
+    pub columns: (Vec<i32>, Vec<f64>),
 }
 
 /// Index in [`DrawnProfile::values`] of a changing scene's expected recorded counts per shot.
@@ -838,6 +843,7 @@ pub fn draw_scene_counts(
         components: None,
         energy_sum: energies.run_sums(&runs).iter().sum(),
         values: Vec::new(),
+        columns: profile_columns(&runs, sc.column_slots),
     };
     (
         drawn,
@@ -931,7 +937,30 @@ pub fn draw_profile(
         components: parts,
         energy_sum: energy.law.profile_sum(energy_seed, p, shots),
         values: Vec::new(),
+        columns: (vec![0], vec![1.0]),
     }
+}
+
+/// The distinct columns of a profile's `runs` (column, shots) in the order first seen,
+/// with the share of the shots that saw each, padded with (−1, 0) to `slots`.
+pub fn profile_columns(runs: &[(usize, u64)], slots: usize) -> (Vec<i32>, Vec<f64>) {
+    let shots: u64 = runs.iter().map(|r| r.1).sum();
+    let mut columns: Vec<i32> = Vec::with_capacity(slots);
+    let mut counts: Vec<u64> = Vec::with_capacity(slots);
+    for &(col, n) in runs {
+        let col = col as i32;
+        match columns.iter().position(|&c| c == col) {
+            Some(j) => counts[j] += n,
+            None => {
+                columns.push(col);
+                counts.push(n);
+            }
+        }
+    }
+    let mut weights: Vec<f64> = counts.iter().map(|&n| n as f64 / shots as f64).collect();
+    columns.resize(slots.max(columns.len()), -1);
+    weights.resize(columns.len(), 0.0);
+    (columns, weights)
 }
 
 /// Everything the raw file holds besides the profiles.
@@ -984,15 +1013,22 @@ fn raw_file_spec(
         })
         .fold(0.0f64, f64::max)
         * shots as f64;
+    let column_models: Vec<&[ExpectedProfile]> = match scene {
+        Some(sc) => sc.expected.iter().map(Vec::as_slice).collect(),
+        None => vec![expected],
+    };
     Ok(RawFileSpec {
         n_bins: first.geometry.n_bins,
         n_profiles: profiles,
         first_profile: 0,
+        channel_text: crate::output::raw_file::truth::channel_text(lidar),
+        n_columns: column_models.len(),
+        column_slots: scene.map_or(1, |sc| sc.column_slots),
         channels: lidar.channel_names(),
         count_width: CountWidth::for_max_count(max_mean)?,
         components,
         time_units: content::time_units(&first.loaded.config.acquisition.start_time)?,
-        variables: content::variables(lidar, expected, shots, changing)
+        variables: content::variables(lidar, expected, &column_models, shots, changing)
             .into_iter()
             .chain(
                 orbit_of(lidar)?

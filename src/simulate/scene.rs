@@ -27,9 +27,10 @@ use crate::scene::orbit::Orbit;
 use crate::scene::sun;
 use crate::scene::track::{AlongTrack, Column, MAX_COLUMNS, Track};
 
-/// Memory kept per bin of each column and channel for its expectations (13 f64 and
-/// more); `shot` adds its sampler's tables ([`sampling::table_bytes_bound`]).
-const COLUMN_BYTES_PER_BIN: f64 = 200.0;
+/// Memory kept per bin of each column and channel for its expectations and truth (about
+/// 30 f64, and the raw file's copy of the truth, 20 f64, while it is written); `shot`
+/// adds its sampler's tables ([`sampling::table_bytes_bound`]).
+const COLUMN_BYTES_PER_BIN: f64 = 400.0;
 
 /// Seed offset of a solar background's stream.
 const SKY_STREAM: u64 = 0x5C7B_ACC6_0000_0001;
@@ -124,6 +125,8 @@ pub struct SceneModel {
     channel_sun: Vec<(f64, f64)>,
     /// Per channel: the detector's dead time, if any.
     pub dead: Vec<Option<DeadTime>>,
+    /// The most distinct columns one profile can see (the raw file's `k` slots).
+    pub column_slots: usize,
 }
 
 /// What the solar background needs: where the sun is for each profile.
@@ -282,6 +285,7 @@ impl SceneModel {
             expected.push(e);
         }
         let columns = all.iter().enumerate().map(|(i, c)| (*c, i)).collect();
+        let column_slots = track.columns_per_profile_bound(profiles, all.len());
         let channel_sun = lidar
             .channels
             .iter()
@@ -307,6 +311,7 @@ impl SceneModel {
                 .iter()
                 .map(|c| c.instrument.dead_time)
                 .collect(),
+            column_slots,
         })
     }
 

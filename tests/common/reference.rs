@@ -21,7 +21,7 @@ pub const DOBSON_M2: f64 = 2.686_7e20;
 
 // ---------------------------------------------------------------------------------------
 // U.S. Standard Atmosphere 1976 (NOAA-S/T 76-1562), from its defining equations: the
-// geopotential layers of Table 4, hydrostatic pressure (Eqs. 33a/33b), N = N_A·P/(R*·T),
+// geopotential layers of Table 4, hydrostatic pressure (Eqs. 33a/33b), N = P/(k_B·T),
 // and the molecular-weight ratio M/M0 of Table 8 between 80 and 86 km.
 // ---------------------------------------------------------------------------------------
 
@@ -29,7 +29,9 @@ const US76_R_STAR: f64 = 8.31432e3; // J kmol⁻¹ K⁻¹
 const US76_M0: f64 = 28.9644; // kg kmol⁻¹
 const US76_G0: f64 = 9.80665; // m s⁻²
 const US76_R0: f64 = 6_356_766.0; // m, Earth radius of the geopotential conversion
-const US76_NA: f64 = 6.022169e26; // kmol⁻¹
+/// Boltzmann constant (CODATA 2018, exact), J K⁻¹: lidarsim's N = P/(k_B·T) of the
+/// Standard's P and T (its own N_A/R* is 2e-5 higher).
+const BOLTZMANN: f64 = 1.380649e-23;
 /// (base geopotential altitude m', lapse rate K/m') of Table 4.
 const US76_LAYERS: [(f64, f64); 7] = [
     (0.0, -6.5e-3),
@@ -86,7 +88,7 @@ pub fn us76_number_density_m3(z_m: f64) -> f64 {
         return 0.0;
     }
     let (t, p) = us76_t_p(z_m);
-    US76_NA * p / (US76_R_STAR * t)
+    p / (BOLTZMANN * t)
 }
 
 // ---------------------------------------------------------------------------------------

@@ -4,7 +4,7 @@
 //! `setrlimit(RLIMIT_AS)` before exec): each must be refused up front with the estimate
 //! and the limit it meets, one line, exit 2, an existing output untouched. Sizes: the
 //! scenario 1 window (0-100 km) with `instrument.bin_width_s = 1e-10` is 6,671,282 bins
-//! (refused at the model, 650 B per bin), with `1e-9` 667,129 bins (the model fits under
+//! (refused at the model, 1,100 B per bin), with `1e-9` 667,129 bins (the model fits under
 //! the limits below; the command's own estimate does not).
 //!
 //! [`a_signal_at_the_end_of_a_run_leaves_old_or_new_outputs`] sends signals around the
@@ -63,7 +63,7 @@ pub fn cases() -> Vec<Case> {
             "validate of 6.7e5 bins: model fits, sums do not",
             Refused("validating 667129 bins"),
             limited(
-                880_000,
+                1_180_000,
                 &with(&["validate", "@S1", "--realizations", "100"], &large),
             ),
         ),
@@ -82,7 +82,7 @@ pub fn cases() -> Vec<Case> {
             "onboard of 6.7e5 bins under ulimit -v",
             Refused("onboard draw"),
             limited(
-                1_270_000,
+                1_570_000,
                 &with(
                     &[
                         "onboard",
@@ -102,7 +102,7 @@ pub fn cases() -> Vec<Case> {
             "sweep of 6.7e5 bins under ulimit -v",
             Refused("sweeping 3 points"),
             limited(
-                750_000,
+                1_050_000,
                 &with(
                     &[
                         "sweep",

@@ -16,6 +16,10 @@ pub struct RecordShape {
     pub components: bool,
     /// Dimensions and values per profile of each per-profile variable, in the spec's order.
     pub per_profile: Vec<(Dims, usize)>,
+    /// Distinct columns of the scene (0: none).
+    pub n_columns: usize,
+    /// Column slots per profile (0: records carry none).
+    pub column_slots: usize,
 }
 
 /// One profile's row of one (profile, channel, bin) variable.
@@ -44,6 +48,8 @@ impl RecordShape {
                     _ => (v.dims, spec.counts_per_profile()),
                 })
                 .collect(),
+            n_columns: spec.n_columns,
+            column_slots: spec.column_slots,
         }
     }
 
@@ -63,6 +69,44 @@ impl RecordShape {
             }
         }
         (rows, columns)
+    }
+
+    /// The record's columns: as many as the file's slots, each a column of the file at
+    /// most once or −1 (unused, weight 0), weights in [0, 1] summing to 1 (to 1e-12).
+    fn check_columns(&self, rec: &ProfileRecord) -> Result<(), String> {
+        let i = rec.index;
+        let k = self.column_slots;
+        if rec.columns.len() != k || rec.column_weights.len() != k {
+            return Err(format!(
+                "profile {i}: {} columns and {} weights given, the file has {k} slots",
+                rec.columns.len(),
+                rec.column_weights.len()
+            ));
+        }
+        if k == 0 {
+            return Ok(());
+        }
+        for (j, (&c, &w)) in rec.columns.iter().zip(rec.column_weights).enumerate() {
+            let used = c >= 0;
+            let repeated = used && rec.columns[..j].contains(&c);
+            let valid = (0.0..=1.0).contains(&w)
+                && i64::from(c) < self.n_columns as i64
+                && c >= -1
+                && (used || w == 0.0)
+                && !repeated;
+            if !valid {
+                return Err(format!(
+                    "profile {i}: slot {j} holds column {c} of weight {w} (the file has {} columns; \
+                     −1 for an unused slot of weight 0, each column once)",
+                    self.n_columns
+                ));
+            }
+        }
+        let sum: f64 = rec.column_weights.iter().sum();
+        if (sum - 1.0).abs() > 1e-12 {
+            return Err(format!("profile {i}: column weights sum to {sum}, not 1"));
+        }
+        Ok(())
     }
 
     /// Every check of a record but whether its profile was written before: its index is
@@ -100,6 +144,7 @@ impl RecordShape {
         if !rec.time_s.is_finite() {
             return Err(format!("profile {i}: time {} s is not finite", rec.time_s));
         }
+        self.check_columns(rec)?;
         let n = self.n_per_profile;
         let max = self.count_width.max_value();
         let check = |what: &str, data: &[u64]| {

@@ -4,7 +4,7 @@
 
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
-use super::{AttrValue, CONVENTIONS, Dims, FORMAT_VERSION, Variable};
+use super::{AttrValue, CONVENTIONS, Dims, FORMAT_VERSION, Variable, truth};
 use crate::error::{Error, Result};
 use crate::scenario::{ExpectedProfile, Lidar, Scenario};
 
@@ -81,7 +81,7 @@ pub fn creation_time() -> Result<String> {
     Ok(humantime::format_rfc3339_seconds(t).to_string())
 }
 
-fn var(
+pub(super) fn var(
     name: &str,
     dims: Dims,
     long_name: &str,
@@ -96,24 +96,20 @@ fn var(
         units: units.into(),
         attributes: attributes
             .iter()
-            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .map(|(k, v)| (k.to_string(), AttrValue::Str(v.to_string())))
             .collect(),
         data,
     }
 }
-
-/// A per-bin field of the expected profile.
-type Field = fn(&ExpectedProfile) -> &Vec<f64>;
 
 /// The values of `f` for every channel, channel-major.
 fn per_channel(expected: &[ExpectedProfile], f: impl Fn(&ExpectedProfile) -> Vec<f64>) -> Vec<f64> {
     expected.iter().flat_map(f).collect()
 }
 
-/// The variables of docs/file-format.md (format version 2) for every channel of `lidar`:
-/// coordinates, the expectations, the instrument constants and the atmosphere's truth.
-/// The point truth is (bin) when every channel sees one wavelength, (channel, bin) when
-/// the wavelengths differ.
+/// The variables of docs/file-format.md for every channel of `lidar`: coordinates, the
+/// expectations, the instrument constants, and the truth of each of the scene's
+/// `columns` ([`truth::column_variables`]).
 /// With `changing` (a scene that changes along the track, or a solar background)
 /// `expected_signal`, `expected_background`, `expected_counts`, `snr_eq4` and
 /// `attenuated_backscatter` are (profile, channel, bin),
@@ -122,6 +118,7 @@ fn per_channel(expected: &[ExpectedProfile], f: impl Fn(&ExpectedProfile) -> Vec
 pub fn variables(
     lidar: &Lidar,
     expected: &[ExpectedProfile],
+    columns: &[&[ExpectedProfile]],
     shots: u64,
     changing: bool,
 ) -> Vec<Variable> {
@@ -129,17 +126,6 @@ pub fn variables(
     let e0 = &expected[0];
     let channels = &lidar.channels;
     let instrument = |f: fn(&Scenario) -> f64| channels.iter().map(f).collect::<Vec<f64>>();
-    let one_wavelength = channels
-        .iter()
-        .all(|c| c.instrument.wavelength_nm == channels[0].instrument.wavelength_nm);
-    let truth_dims = if one_wavelength { Bin } else { ChannelBin };
-    let truth = |f: Field| {
-        if one_wavelength {
-            f(e0).clone()
-        } else {
-            per_channel(expected, |e| f(e).clone())
-        }
-    };
     let mut vars = vec![
         var(
             "altitude",
@@ -249,41 +235,8 @@ pub fn variables(
             per_channel(expected, |e| e.attenuated_backscatter.clone()),
         ),
     ];
-    let point_truth: [(&str, &str, &str, Field); 5] = [
-        (
-            "beta_mol",
-            "molecular backscatter coefficient at the bin centre",
-            "m-1 sr-1",
-            |e| &e.beta_mol,
-        ),
-        (
-            "beta_aer",
-            "aerosol backscatter coefficient at the bin centre",
-            "m-1 sr-1",
-            |e| &e.beta_aer,
-        ),
-        (
-            "beta_cld",
-            "cloud backscatter coefficient at the bin centre",
-            "m-1 sr-1",
-            |e| &e.beta_cld,
-        ),
-        (
-            "alpha_total",
-            "total extinction coefficient at the bin centre",
-            "m-1",
-            |e| &e.alpha_total,
-        ),
-        (
-            "t2",
-            "two-way transmission to the bin centre (multiple-scattering factors applied)",
-            "1",
-            |e| &e.t2,
-        ),
-    ];
-    for (name, long_name, units, f) in point_truth {
-        vars.push(var(name, truth_dims, long_name, units, &[], truth(f)));
-    }
+    vars.extend(truth::instrument_variables(lidar, e0));
+    vars.extend(truth::column_variables(lidar, columns));
     if changing {
         // per profile, in the order the simulation gives their rows
         for name in [
@@ -372,6 +325,10 @@ pub fn root_attributes(sc: &Scenario, run: &RunInfo) -> Result<Vec<(String, Attr
         f("rep_rate_hz", sc.instrument.rep_rate_hz),
         f("bin_width_s", sc.instrument.bin_width_s),
         f("accumulation_time_s", sc.accumulation_time_s()),
+        f(
+            "full_overlap_range_m",
+            sc.path.overlap().full_overlap_range_m(),
+        ),
     ];
     attrs.extend(run.method_attributes.iter().cloned());
     Ok(attrs)

@@ -22,8 +22,8 @@ use hdf5::{Dataset, File, Group, H5Type};
 use super::chunk;
 use super::hdf5_ds::{attach_scales, set_scale, write_attr, write_str_attr};
 use super::{
-    BIN_DIM, CHANNEL_DIM, COMPONENT_NAMES, CountWidth, Dims, PROFILE_DIM, RESERVED_NAMES,
-    RawFileSpec,
+    BIN_DIM, CHANNEL_DIM, COLUMN_DIM, COMPONENT_NAMES, CountWidth, Dims, PROFILE_COLUMN_NAMES,
+    PROFILE_DIM, RESERVED_NAMES, RawFileSpec, SLOT_DIM,
 };
 
 /// Target size of one chunk of a (profile, channel, bin) variable, in bytes, for that
@@ -66,6 +66,8 @@ pub struct OpenFile {
     pub pulse_energy: Dataset,
     /// The spec's (profile) variables, in its order.
     pub columns: Vec<Dataset>,
+    /// `profile_column` and `profile_column_weight`, if the spec has column slots.
+    pub profile_columns: Option<(Dataset, Dataset)>,
 }
 
 impl OpenFile {
@@ -78,8 +80,9 @@ impl OpenFile {
             n_shots,
             pulse_energy,
             columns,
+            profile_columns,
         } = self;
-        drop((rows, time, n_shots, pulse_energy, columns));
+        drop((rows, time, n_shots, pulse_energy, columns, profile_columns));
         file.close()
     }
 }
@@ -95,6 +98,26 @@ pub fn validate_spec(spec: &RawFileSpec) -> Result<(), String> {
         ));
     }
     let mut seen: Vec<&str> = Vec::new();
+    for text in &spec.channel_text {
+        if text.values.len() != spec.channels.len() {
+            return Err(format!(
+                "variable `{}` has {} values, the file has {} channels",
+                text.name,
+                text.values.len(),
+                spec.channels.len()
+            ));
+        }
+        if text.values.iter().any(|v| v.contains('\0')) {
+            return Err(format!("variable `{}` holds a NUL", text.name));
+        }
+        seen.push(&text.name);
+    }
+    if spec.n_columns > i32::MAX as usize || (spec.column_slots > 0) != (spec.n_columns > 0) {
+        return Err(format!(
+            "{} columns with {} slots per profile: both or neither, at most 2^31 − 1 columns",
+            spec.n_columns, spec.column_slots
+        ));
+    }
     for var in &spec.variables {
         if var.name.is_empty() || var.name.contains(['/', '\0']) {
             return Err(format!("invalid variable name {:?}", var.name));
@@ -110,8 +133,13 @@ pub fn validate_spec(spec: &RawFileSpec) -> Result<(), String> {
             Dims::Bin => spec.n_bins,
             Dims::Channel => spec.channels.len(),
             Dims::ChannelBin => spec.counts_per_profile(),
+            Dims::ColumnBin => spec.n_columns * spec.n_bins,
+            Dims::ColumnChannelBin => spec.n_columns * spec.counts_per_profile(),
             Dims::Profile | Dims::ProfileChannelBin => 0,
         };
+        if matches!(var.dims, Dims::ColumnBin | Dims::ColumnChannelBin) && spec.n_columns == 0 {
+            return Err(format!("variable `{}` needs a column dimension", var.name));
+        }
         if var.data.len() != want {
             return Err(format!(
                 "variable `{}` has {} values, its dimensions hold {want}",
@@ -276,6 +304,39 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
     write_attrs(&bin, &[("long_name", "range bin index"), ("units", "1")])?;
     set_scale(&bin, BIN_DIM)?;
 
+    for text in &spec.channel_text {
+        write_channel_text(&file, text, &channel)?;
+    }
+    let column = match spec.n_columns {
+        0 => None,
+        n => {
+            let column = create_var::<i64>(&file, COLUMN_DIM, &[n])?;
+            write_index(&column, 0, n)?;
+            write_attrs(
+                &column,
+                &[
+                    (
+                        "long_name",
+                        "distinct column of the scene (segment and cloud cells present)",
+                    ),
+                    ("units", "1"),
+                ],
+            )?;
+            set_scale(&column, COLUMN_DIM)?;
+            Some(column)
+        }
+    };
+    let profile_columns = match spec.column_slots {
+        0 => None,
+        k => Some(create_profile_columns(
+            &file,
+            spec,
+            k,
+            &profile,
+            coords_profile,
+        )?),
+    };
+
     let dims3 = [&profile, &channel, &bin];
     let counts = create_count_var(&file, "counts", spec)?;
     write_attrs(
@@ -353,7 +414,15 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
 
     let mut columns = Vec::new();
     for var in &spec.variables {
+        let (c, b, n) = (spec.channels.len(), spec.n_bins, spec.n_columns);
         let (shape, scales, coords): (Vec<usize>, Vec<&Dataset>, Option<&str>) = match var.dims {
+            Dims::ColumnBin | Dims::ColumnChannelBin => {
+                let col = column.as_ref().ok_or("a column variable without columns")?;
+                match var.dims {
+                    Dims::ColumnBin => (vec![n, b], vec![col, &bin], Some(COORDS_BIN)),
+                    _ => (vec![n, c, b], vec![col, &channel, &bin], Some(COORDS_BIN)),
+                }
+            }
             Dims::Bin => (vec![spec.n_bins], vec![&bin], Some(COORDS_BIN)),
             Dims::Channel => (vec![spec.channels.len()], vec![&channel], None),
             Dims::ChannelBin => (
@@ -373,6 +442,9 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
                 let v = create_rows::<f64>(&file, &var.name, spec)?;
                 (v.ds.clone(), Some(v))
             }
+            Dims::ColumnBin | Dims::ColumnChannelBin => {
+                (create_deflated(&file, &var.name, &shape)?, None)
+            }
             _ => (create_var::<f64>(&file, &var.name, &shape)?, None),
         };
         if !var.dims.per_profile() {
@@ -380,7 +452,7 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
         }
         write_attrs(&ds, &[("long_name", &var.long_name), ("units", &var.units)])?;
         for (k, v) in &var.attributes {
-            write_str_attr(&ds, k, v)?;
+            write_attr(&ds, k, v)?;
         }
         // a coordinate itself (altitude, range, latitude, ...) lists no coordinates
         let is_coordinate = matches!(var.name.as_str(), "altitude" | "range")
@@ -403,5 +475,88 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
         n_shots,
         pulse_energy,
         columns,
+        profile_columns,
     })
+}
+
+/// A string variable of the channel dimension.
+fn write_channel_text(
+    file: &File,
+    text: &super::TextVariable,
+    channel: &Dataset,
+) -> hdf5::Result<()> {
+    let ds = create_var::<VarLenUnicode>(file, &text.name, &[text.values.len()])?;
+    let values: Vec<VarLenUnicode> = text
+        .values
+        .iter()
+        .map(|v| {
+            v.parse()
+                .map_err(|_| hdf5::Error::from("a text value holds NUL"))
+        })
+        .collect::<hdf5::Result<_>>()?;
+    ds.write(&values[..])?;
+    write_attrs(&ds, &[("long_name", &text.long_name)])?;
+    attach_scales(&ds, &[channel])
+}
+
+/// The `k` dimension and the (profile, k) variables `profile_column` (i32, −1 unused)
+/// and `profile_column_weight` (f64), filled as profiles come.
+fn create_profile_columns(
+    file: &File,
+    spec: &RawFileSpec,
+    k: usize,
+    profile: &Dataset,
+    coords_profile: &str,
+) -> hdf5::Result<(Dataset, Dataset)> {
+    let slot = create_var::<i64>(file, SLOT_DIM, &[k])?;
+    write_index(&slot, 0, k)?;
+    write_attrs(
+        &slot,
+        &[("long_name", "slot of a profile's columns"), ("units", "1")],
+    )?;
+    set_scale(&slot, SLOT_DIM)?;
+    let columns = create_var::<i32>(file, PROFILE_COLUMN_NAMES[0], &[spec.n_profiles, k])?;
+    write_attrs(
+        &columns,
+        &[
+            (
+                "long_name",
+                "columns the profile's shots saw (index of the column dimension; -1 = unused slot)",
+            ),
+            ("units", "1"),
+            ("coordinates", coords_profile),
+        ],
+    )?;
+    let weights = create_var::<f64>(file, PROFILE_COLUMN_NAMES[1], &[spec.n_profiles, k])?;
+    write_attrs(
+        &weights,
+        &[
+            (
+                "long_name",
+                "share of the profile's shots that saw the column (sums to 1 over k)",
+            ),
+            ("units", "1"),
+            ("coordinates", coords_profile),
+        ],
+    )?;
+    attach_scales(&columns, &[profile, &slot])?;
+    attach_scales(&weights, &[profile, &slot])?;
+    Ok((columns, weights))
+}
+
+/// A (column, …) f64 variable: chunked along columns (about [`TARGET_CHUNK_BYTES`] a
+/// chunk), shuffled and deflated (most of a scene's truth is zeros or repeats).
+fn create_deflated(file: &File, name: &str, shape: &[usize]) -> hdf5::Result<Dataset> {
+    let row: usize = shape[1..].iter().product::<usize>().max(1);
+    let rows = (TARGET_CHUNK_BYTES / (8 * row)).clamp(1, shape[0].max(1));
+    let mut chunk = shape.to_vec();
+    chunk[0] = rows;
+    file.new_dataset::<f64>()
+        .shape(shape)
+        .chunk(chunk)
+        .shuffle()
+        .deflate(chunk::DEFLATE_LEVEL)
+        .obj_track_times(false)
+        .attr_creation_order(AttrCreationOrder::Indexed)
+        .create(name)
 }

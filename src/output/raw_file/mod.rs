@@ -1,4 +1,4 @@
-//! The raw lidar file, format version 2: HDF5 readable as netCDF-4, with CF-1.10
+//! The raw lidar file, format version 3: HDF5 readable as netCDF-4, with CF-1.10
 //! metadata (`docs/file-format.md` lists every variable and attribute).
 //!
 //! | name | dims | type |
@@ -10,14 +10,17 @@
 //! | `time` | (profile) | f64, CF time (`seconds since <start>`) |
 //! | `n_shots` | (profile) | u64 |
 //! | `pulse_energy` | (profile) | f64, J |
-//! | one per [`Variable`] | (bin), (channel) or (channel, bin) | f64 |
+//! | one per [`Variable`] | (bin), (channel), (channel, bin), (column, bin) or (column, channel, bin) | f64 |
+//! | one per [`TextVariable`] | (channel) | string |
+//! | `column` | (column) | i64 index coordinate of the scene's distinct columns, with [`RawFileSpec::n_columns`] |
+//! | `profile_column`, `profile_column_weight` | (profile, k) | i32, f64: the columns each profile's shots saw and their shares, with [`RawFileSpec::column_slots`] |
 //!
 //! The modules: [`layout`] creates the file and everything known up front,
 //! [`writer`] streams the profiles, [`check`] checks a profile record before it is
 //! buffered, [`chunk`] fills and encodes whole chunks as HDF5's shuffle and deflate
 //! filters would ([`planes`] the counts' chunks, byte plane by byte plane, their noise
 //! planes stored), [`content`] decides what a simulation puts in the
-//! file, `hdf5_ds` makes the HDF5 calls the `hdf5` crate does not.
+//! file ([`truth`] the truth beside the counts), `hdf5_ds` makes the HDF5 calls the `hdf5` crate does not.
 //!
 //! The writer creates the file at exactly the path it is given: where the file goes, its
 //! temporary name, the final rename, locks and signals are decided by
@@ -30,6 +33,7 @@ pub(crate) mod hdf5_ds;
 pub mod layout;
 pub mod planes;
 pub mod read;
+pub mod truth;
 pub mod writer;
 
 pub use writer::RawFileWriter;
@@ -37,7 +41,7 @@ pub use writer::RawFileWriter;
 use crate::error::{Error, Result};
 
 /// `lidarsim_format_version` of the files this code writes.
-pub const FORMAT_VERSION: i32 = 2;
+pub const FORMAT_VERSION: i32 = 3;
 /// The CF version the files declare (CF-1.9 and later allow the unsigned counts).
 pub const CONVENTIONS: &str = "CF-1.10";
 /// Name of the profile dimension (and of its coordinate variable).
@@ -46,14 +50,25 @@ pub const PROFILE_DIM: &str = "profile";
 pub const CHANNEL_DIM: &str = "channel";
 /// Name of the range-bin dimension (and of its coordinate variable).
 pub const BIN_DIM: &str = "bin";
+/// Name of the dimension of the scene's distinct columns (and of its coordinate).
+pub const COLUMN_DIM: &str = "column";
+/// Name of the dimension of a profile's column slots.
+pub const SLOT_DIM: &str = "k";
+/// Names of the (profile, k) variables: which columns a profile's shots saw, and the
+/// share of its shots that saw each.
+pub const PROFILE_COLUMN_NAMES: [&str; 2] = ["profile_column", "profile_column_weight"];
 /// Names of the per-component count variables, in the order of
 /// [`ProfileRecord::components`]: signal, background, dark.
 pub const COMPONENT_NAMES: [&str; 3] = ["signal_counts", "background_counts", "dark_counts"];
 /// Variable names the layout itself defines; a [`Variable`] may not use them.
-pub const RESERVED_NAMES: [&str; 10] = [
+pub const RESERVED_NAMES: [&str; 14] = [
     PROFILE_DIM,
     CHANNEL_DIM,
     BIN_DIM,
+    COLUMN_DIM,
+    SLOT_DIM,
+    PROFILE_COLUMN_NAMES[0],
+    PROFILE_COLUMN_NAMES[1],
     "counts",
     "time",
     "n_shots",
@@ -145,6 +160,11 @@ pub enum Dims {
     /// (profile, channel, bin): written with each profile, e.g. the expectations of a
     /// scene that changes along the track.
     ProfileChannelBin,
+    /// (column, bin), column-major: e.g. the molecular state of each column.
+    ColumnBin,
+    /// (column, channel, bin), column-major then channel-major: the truth of each
+    /// distinct column of the scene.
+    ColumnChannelBin,
 }
 
 impl Dims {
@@ -165,11 +185,22 @@ pub struct Variable {
     pub long_name: String,
     /// CF `units` (UDUNITS string, `"1"` for dimensionless).
     pub units: String,
-    /// Further text attributes (`standard_name`, `positive`, `comment`, ...).
-    pub attributes: Vec<(String, String)>,
+    /// Further attributes (`standard_name`, `positive`, `comment`, a `_FillValue`, ...).
+    pub attributes: Vec<(String, AttrValue)>,
     /// The values, channel-major for (channel, bin); empty for a per-profile variable,
     /// whose rows come with each profile.
     pub data: Vec<f64>,
+}
+
+/// A string variable of the channel dimension, written at creation (e.g. `polarization`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextVariable {
+    /// Name in the file (not one of [`RESERVED_NAMES`]).
+    pub name: String,
+    /// CF `long_name`.
+    pub long_name: String,
+    /// One value per channel.
+    pub values: Vec<String>,
 }
 
 /// The value of a root (global) attribute.
@@ -208,6 +239,15 @@ pub struct RawFileSpec {
     pub time_units: String,
     /// Variables written at creation, in this order.
     pub variables: Vec<Variable>,
+    /// String variables of the channel dimension, written at creation after `channel`.
+    pub channel_text: Vec<TextVariable>,
+    /// Distinct columns of the scene (the `column` dimension of the truth variables;
+    /// 0: no such dimension).
+    pub n_columns: usize,
+    /// Column slots per profile (the `k` dimension of `profile_column` and
+    /// `profile_column_weight`; 0: no such variables); each [`ProfileRecord`] then
+    /// carries this many of each.
+    pub column_slots: usize,
     /// Root attributes, in this order.
     pub root_attributes: Vec<(String, AttrValue)>,
     /// Further coordinates of the profile dimension (e.g. `latitude longitude`), listed in
@@ -241,4 +281,10 @@ pub struct ProfileRecord<'a> {
     /// This profile's row of every per-profile variable of the spec, in the spec's order
     /// (one value for (profile), channels × bins channel-major for (profile, channel, bin)).
     pub values: &'a [&'a [f64]],
+    /// The columns this profile's shots saw (indices of the `column` dimension, each
+    /// once, −1 for an unused slot), [`RawFileSpec::column_slots`] of them.
+    pub columns: &'a [i32],
+    /// The share of the profile's shots that saw each of `columns` (0 for an unused
+    /// slot), summing to 1.
+    pub column_weights: &'a [f64],
 }

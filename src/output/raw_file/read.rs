@@ -5,16 +5,18 @@
 //!
 //! [`check`] looks at the file before anything sized by it is allocated:
 //!
-//! 1. the root attribute `lidarsim_format_version` is [`FORMAT_VERSION`];
+//! 1. the root attribute `lidarsim_format_version` is [`FORMAT_VERSION`] or 2 (whose
+//!    files have the same counts, coordinates and per-profile variables);
 //! 2. `counts` is (profile, channel, bin) of unsigned integers, no dimension empty;
 //! 3. every dataset is stored with the filters lidarsim uses (shuffle, deflate,
 //!    Fletcher-32) and holds the values it declares: its declared bytes are at most
 //!    [`MAX_DEFLATE_RATIO`] times the bytes stored for it (plus [`STORAGE_SLACK_BYTES`]),
 //!    so a file that declares 1e12 profiles it does not hold is refused at once;
 //! 4. the variables of the layout have their dimensions and types (`time` (profile)
-//!    float, `n_shots` (profile) unsigned, `altitude` (bin) float, ...), and every other
-//!    dataset is (profile), (channel), (bin), (channel, bin) or (profile, channel, bin)
-//!    of floats;
+//!    float, `n_shots` (profile) unsigned, `altitude` (bin) float, the channel's strings,
+//!    `profile_column` (profile, k) signed, ...), and every other dataset is (profile),
+//!    (channel), (bin), (channel, bin), (profile, channel, bin), (column, bin) or
+//!    (column, channel, bin) of floats;
 //! 5. the coordinates `time`, `altitude`, `range`, `latitude`, `longitude` and
 //!    `along_track_distance` are finite, `pulse_energy` finite and ≥ 0, and every
 //!    `n_shots` ≥ 1, read [`SCAN_BLOCK`] values at a time (memory does not grow with
@@ -29,7 +31,10 @@ use hdf5::filters::Filter;
 use hdf5::types::{TypeDescriptor, VarLenAscii, VarLenUnicode};
 use ndarray::{Ix1, s};
 
-use super::{BIN_DIM, CHANNEL_DIM, COMPONENT_NAMES, FORMAT_VERSION, PROFILE_DIM};
+use super::{
+    BIN_DIM, CHANNEL_DIM, COLUMN_DIM, COMPONENT_NAMES, FORMAT_VERSION, PROFILE_COLUMN_NAMES,
+    PROFILE_DIM, SLOT_DIM,
+};
 use crate::error::{Error, Result};
 use crate::resources::{human_bytes, require_memory};
 
@@ -118,6 +123,10 @@ enum Dim {
     P,
     C,
     B,
+    /// The scene's distinct columns (format 3), the length of `column`.
+    Col,
+    /// A profile's column slots (format 3), the length of `k`.
+    K,
 }
 
 /// What [`check`] asks of a value of a variable.
@@ -159,8 +168,35 @@ const fn known(
     }
 }
 
+/// A string variable of the channel dimension (format 3).
+const fn channel_text(name: &'static str) -> Known {
+    known(name, &[Dim::C], Class::Text, false, Values::Any)
+}
+
 /// The variables of the layout [`check`] knows by name (docs/file-format.md).
-const KNOWN: [Known; 15] = [
+const KNOWN: [Known; 25] = [
+    known(COLUMN_DIM, &[Dim::Col], Class::Signed, false, Values::Any),
+    known(SLOT_DIM, &[Dim::K], Class::Signed, false, Values::Any),
+    known(
+        PROFILE_COLUMN_NAMES[0],
+        &[Dim::P, Dim::K],
+        Class::Signed,
+        false,
+        Values::Any,
+    ),
+    known(
+        PROFILE_COLUMN_NAMES[1],
+        &[Dim::P, Dim::K],
+        Class::Float,
+        false,
+        Values::Any,
+    ),
+    channel_text("channel_kind"),
+    channel_text("channel_species"),
+    channel_text("polarization"),
+    channel_text("detection_mode"),
+    channel_text("dead_time_model"),
+    channel_text("molecular_line"),
     known(
         "counts",
         &[Dim::P, Dim::C, Dim::B],
@@ -221,12 +257,14 @@ const KNOWN: [Known; 15] = [
 ];
 
 /// The shapes any other dataset of a raw file may have.
-const OTHER_SHAPES: [&[Dim]; 5] = [
+const OTHER_SHAPES: [&[Dim]; 7] = [
     &[Dim::P],
     &[Dim::C],
     &[Dim::B],
     &[Dim::C, Dim::B],
     &[Dim::P, Dim::C, Dim::B],
+    &[Dim::Col, Dim::B],
+    &[Dim::Col, Dim::C, Dim::B],
 ];
 
 /// A shape for a message: `3 × 1 × 334`.
@@ -246,6 +284,8 @@ fn dims_name(dims: &[Dim]) -> String {
             Dim::P => PROFILE_DIM,
             Dim::C => CHANNEL_DIM,
             Dim::B => BIN_DIM,
+            Dim::Col => COLUMN_DIM,
+            Dim::K => SLOT_DIM,
         })
         .collect();
     format!("({})", names.join(", "))
@@ -279,10 +319,18 @@ pub fn check(path: &Path, f: &hdf5::File) -> Result<RawHeader> {
             "`counts` is empty ({n_profiles} profiles × {n_channels} channels × {n_bins} bins)"
         )));
     }
+    // the format-3 dimensions: the lengths of their 1-D coordinates (none without them)
+    let coordinate_len = |name: &str| match f.dataset(name).map(|d| d.shape()) {
+        Ok(shape) if shape.len() == 1 => shape[0],
+        _ => usize::MAX,
+    };
+    let (n_columns, n_slots) = (coordinate_len(COLUMN_DIM), coordinate_len(SLOT_DIM));
     let len = |d: Dim| match d {
         Dim::P => n_profiles,
         Dim::C => n_channels,
         Dim::B => n_bins,
+        Dim::Col => n_columns,
+        Dim::K => n_slots,
     };
     let datasets = f
         .datasets()
@@ -320,6 +368,7 @@ pub fn check(path: &Path, f: &hdf5::File) -> Result<RawHeader> {
         if !want.iter().any(fits) {
             let expected: Vec<String> = want
                 .iter()
+                .filter(|dims| dims.iter().all(|&d| len(d) != usize::MAX))
                 .map(|dims| {
                     let lens: Vec<String> = dims.iter().map(|&d| len(d).to_string()).collect();
                     format!("{} = {}", dims_name(dims), lens.join(" × "))
@@ -361,7 +410,7 @@ pub fn check(path: &Path, f: &hdf5::File) -> Result<RawHeader> {
     })
 }
 
-/// The root attribute `lidarsim_format_version` must be [`FORMAT_VERSION`].
+/// The root attribute `lidarsim_format_version` must be [`FORMAT_VERSION`] or 2.
 fn check_version(path: &Path, f: &hdf5::File) -> Result<()> {
     let bad = |why: String| Error::output(path, why);
     let attr = f.attr("lidarsim_format_version").map_err(|_| {
@@ -381,10 +430,10 @@ fn check_version(path: &Path, f: &hdf5::File) -> Result<()> {
             ));
         }
     };
-    if v != i64::from(FORMAT_VERSION) {
+    if !(2..=i64::from(FORMAT_VERSION)).contains(&v) {
         return Err(bad(format!(
-            "lidarsim raw file format version {v}; this lidarsim reads format version \
-             {FORMAT_VERSION} only (re-run `lidarsim simulate` with this version)"
+            "lidarsim raw file format version {v}; this lidarsim reads format versions 2 \
+             to {FORMAT_VERSION} (re-run `lidarsim simulate` with this version)"
         )));
     }
     Ok(())
@@ -637,10 +686,10 @@ mod tests {
         let e = refusal("version", |f| {
             f.attr("lidarsim_format_version")
                 .unwrap()
-                .write_scalar(&3)
+                .write_scalar(&4)
                 .unwrap()
         });
-        assert!(e.contains("format version 3"), "{e}");
+        assert!(e.contains("format version 4"), "{e}");
         let e = refusal("float-counts", |f| {
             f.unlink("counts").unwrap();
             f.new_dataset::<f64>()

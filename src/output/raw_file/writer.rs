@@ -89,6 +89,9 @@ struct ColumnBlock {
     pulse_energy: Vec<f64>,
     /// The spec's (profile) variables, in its order.
     values: Vec<Vec<f64>>,
+    /// `profile_column` and `profile_column_weight`, slots × profiles, row-major.
+    columns: Vec<i32>,
+    weights: Vec<f64>,
     present: usize,
 }
 
@@ -402,13 +405,18 @@ impl RawFileWriter {
         let (b, r) = (rec.index / COLUMN_BLOCK, rec.index % COLUMN_BLOCK);
         let start = b * COLUMN_BLOCK;
         let len = COLUMN_BLOCK.min(self.shape.n_profiles - start);
+        let slots = self.shape.column_slots;
         let block = self.blocks.entry(b).or_insert_with(|| ColumnBlock {
             time: vec![0.0; len],
             n_shots: vec![0; len],
             pulse_energy: vec![0.0; len],
             values: vec![vec![0.0; len]; values.len()],
+            columns: vec![0; len * slots],
+            weights: vec![0.0; len * slots],
             present: 0,
         });
+        block.columns[r * slots..(r + 1) * slots].copy_from_slice(rec.columns);
+        block.weights[r * slots..(r + 1) * slots].copy_from_slice(rec.column_weights);
         block.time[r] = rec.time_s;
         block.n_shots[r] = rec.n_shots;
         block.pulse_energy[r] = rec.pulse_energy_j;
@@ -432,6 +440,16 @@ impl RawFileWriter {
                 .write_slice(&block.pulse_energy[..], range.clone())?;
             for (ds, column) in open.columns.iter().zip(&block.values) {
                 ds.write_slice(&column[..], range.clone())?;
+            }
+            if let Some((columns, weights)) = &open.profile_columns {
+                let shape = (len, slots);
+                let as_2d = |e: ndarray::ShapeError| hdf5::Error::from(e.to_string());
+                let c =
+                    ndarray::ArrayView2::from_shape(shape, &block.columns[..]).map_err(as_2d)?;
+                let w =
+                    ndarray::ArrayView2::from_shape(shape, &block.weights[..]).map_err(as_2d)?;
+                columns.write_slice(c, (range.clone(), ..))?;
+                weights.write_slice(w, (range.clone(), ..))?;
             }
             Ok(())
         })()

@@ -1,0 +1,332 @@
+//! The truth a raw file carries beside the counts (format 3, docs/file-format.md "The
+//! truth of each profile"): per distinct column of the scene, the optics by species at
+//! each bin centre, the particle properties, `t2` and the molecular state; and the
+//! channel's description (kind, polarization, filter, detector, molecular line).
+
+use super::content::var;
+use super::{AttrValue, Dims, TextVariable, Variable};
+use crate::detector::DeadTimeModel;
+use crate::scenario::{ExpectedProfile, Lidar, Scenario};
+
+/// A point truth of one bin of a column's channel.
+type Truth = fn(&ExpectedProfile, usize) -> f64;
+
+/// The point truth at the bin centre by species (model.md §8), each (column, channel,
+/// bin): name, long name, units, value.
+const COLUMN_TRUTH: [(&str, &str, &str, Truth); 17] = [
+    (
+        "alpha_mol",
+        "molecular (Rayleigh) extinction coefficient at the bin centre",
+        "m-1",
+        |e, i| e.point[i].alpha_mol,
+    ),
+    (
+        "alpha_aer",
+        "aerosol extinction coefficient at the bin centre",
+        "m-1",
+        |e, i| e.point[i].alpha_aer,
+    ),
+    (
+        "alpha_cld",
+        "cloud extinction coefficient at the bin centre",
+        "m-1",
+        |e, i| e.point[i].alpha_cld,
+    ),
+    (
+        "alpha_o3",
+        "ozone absorption coefficient at the bin centre",
+        "m-1",
+        |e, i| e.point[i].alpha_o3,
+    ),
+    (
+        "alpha_total",
+        "total extinction coefficient at the bin centre: alpha_mol + alpha_o3 + alpha_aer + alpha_cld",
+        "m-1",
+        |e, i| e.point[i].alpha_total,
+    ),
+    (
+        "beta_mol",
+        "molecular backscatter coefficient at the bin centre, of the part of the line the channel sees",
+        "m-1 sr-1",
+        |e, i| e.point[i].beta_mol,
+    ),
+    (
+        "beta_aer",
+        "aerosol backscatter coefficient at the bin centre",
+        "m-1 sr-1",
+        |e, i| e.point[i].beta_aer,
+    ),
+    (
+        "beta_cld",
+        "cloud backscatter coefficient at the bin centre",
+        "m-1 sr-1",
+        |e, i| e.point[i].beta_cld,
+    ),
+    (
+        "lidar_ratio_aer",
+        "aerosol extinction-to-backscatter ratio alpha_aer/beta_aer (0 without aerosol)",
+        "sr",
+        |e, i| e.point[i].lidar_ratio_aer(),
+    ),
+    (
+        "lidar_ratio_cld",
+        "cloud extinction-to-backscatter ratio alpha_cld/beta_cld (0 without cloud)",
+        "sr",
+        |e, i| e.point[i].lidar_ratio_cld(),
+    ),
+    (
+        "ms_factor_aer",
+        "effective multiple-scattering factor of the aerosol extinction (1 without aerosol)",
+        "1",
+        |e, i| e.point[i].ms_factor_aer(),
+    ),
+    (
+        "ms_factor_cld",
+        "effective multiple-scattering factor of the cloud extinction (1 without cloud)",
+        "1",
+        |e, i| e.point[i].ms_factor_cld(),
+    ),
+    (
+        "depol_aer",
+        "aerosol particle linear depolarization ratio (0 without aerosol)",
+        "1",
+        |e, i| e.point[i].depol_aer(),
+    ),
+    (
+        "depol_cld",
+        "cloud particle linear depolarization ratio (0 without cloud)",
+        "1",
+        |e, i| e.point[i].depol_cld(),
+    ),
+    (
+        "depol_mol",
+        "molecular linear depolarization ratio of the part of the line the channel sees",
+        "1",
+        |e, i| e.point[i].depol_mol,
+    ),
+    (
+        "depol_volume",
+        "volume linear depolarization ratio (what an ideal parallel/perpendicular channel pair measures)",
+        "1",
+        |e, i| e.point[i].depol_volume(),
+    ),
+    (
+        "t2",
+        "two-way transmission to the bin centre: exp(-2 integral of (alpha_mol + alpha_o3 + ms_factor_aer alpha_aer + ms_factor_cld alpha_cld))",
+        "1",
+        |e, i| e.t2[i],
+    ),
+];
+
+/// The molecular state at the bin centre, each (column, bin): name, long name, units,
+/// standard name, value.
+const COLUMN_STATE: [(&str, &str, &str, &str, Truth); 3] = [
+    (
+        "pressure",
+        "air pressure at the bin centre",
+        "Pa",
+        "air_pressure",
+        |e, i| e.state[i].pressure_pa,
+    ),
+    (
+        "temperature",
+        "air temperature at the bin centre",
+        "K",
+        "air_temperature",
+        |e, i| e.state[i].temperature_k,
+    ),
+    (
+        "number_density",
+        "air molecule number density at the bin centre (pressure / (k_B temperature), k_B = 1.380649e-23 J K-1)",
+        "m-3",
+        "",
+        |e, i| e.state[i].number_density_m3,
+    ),
+];
+
+/// The truth of every column of the scene: `columns[c][k]` is column `c`'s model of
+/// channel `k` (one column in a static scene). The species' optics and `t2` are
+/// (column, channel, bin), the molecular state (column, bin); pressure and temperature
+/// are NaN (their `_FillValue`) where the molecular source gives none.
+pub fn column_variables(lidar: &Lidar, columns: &[&[ExpectedProfile]]) -> Vec<Variable> {
+    let mut vars = Vec::new();
+    for (name, long_name, units, f) in COLUMN_TRUTH {
+        let mut data = Vec::new();
+        for e in columns.iter().flat_map(|col| col.iter()) {
+            data.extend((0..e.n_bins()).map(|i| f(e, i)));
+        }
+        let mut v = var(name, Dims::ColumnChannelBin, long_name, units, &[], data);
+        if name == "beta_mol" {
+            v.attributes = beta_mol_attributes(lidar);
+        }
+        vars.push(v);
+    }
+    for (name, long_name, units, standard_name, f) in COLUMN_STATE {
+        let mut data = Vec::new();
+        for e in columns.iter().map(|col| &col[0]) {
+            data.extend((0..e.n_bins()).map(|i| f(e, i)));
+        }
+        let attrs: &[(&str, &str)] = match standard_name {
+            "" => &[],
+            s => &[("standard_name", s)],
+        };
+        let mut v = var(name, Dims::ColumnBin, long_name, units, attrs, data);
+        if name != "number_density" {
+            v.attributes
+                .push(("_FillValue".into(), AttrValue::F64(f64::NAN)));
+        }
+        vars.push(v);
+    }
+    vars
+}
+
+/// `beta_mol`'s attributes: the part of the line the channels see and its lidar ratio
+/// (one value when every channel agrees; else see `molecular_line` and
+/// `molecular_lidar_ratio`).
+fn beta_mol_attributes(lidar: &Lidar) -> Vec<(String, AttrValue)> {
+    let m = |k: usize| &lidar.channels[k].atmosphere.molecules;
+    let same = |f: &dyn Fn(usize) -> String| (1..lidar.channels.len()).all(|k| f(k) == f(0));
+    let line = |k: usize| line_name(m(k).cabannes).to_string();
+    let ratio = |k: usize| m(k).lidar_ratio_sr.to_string();
+    let mut attrs = vec![(
+        "line".to_string(),
+        AttrValue::Str(if same(&line) {
+            line(0)
+        } else {
+            "per channel: see molecular_line".into()
+        }),
+    )];
+    if same(&ratio) {
+        attrs.push(("lidar_ratio_sr".into(), AttrValue::F64(m(0).lidar_ratio_sr)));
+    }
+    attrs
+}
+
+/// `cabannes` or `whole`: the part of the molecular line a channel sees.
+fn line_name(cabannes: bool) -> &'static str {
+    if cabannes { "cabannes" } else { "whole" }
+}
+
+/// The string variables of the channel dimension (format 3): kind, species,
+/// polarization, detection mode, dead-time model, molecular line.
+pub fn channel_text(lidar: &Lidar) -> Vec<TextVariable> {
+    let text = |name: &str, long_name: &str, f: &dyn Fn(&Scenario) -> String| TextVariable {
+        name: name.into(),
+        long_name: long_name.into(),
+        values: lidar.channels.iter().map(f).collect(),
+    };
+    vec![
+        text(
+            "channel_kind",
+            "kind of scattering the channel sees: elastic, raman or hsrl_molecular",
+            &|_| "elastic".into(),
+        ),
+        text(
+            "channel_species",
+            "Raman-scattering species of a raman channel (empty otherwise)",
+            &|_| String::new(),
+        ),
+        text(
+            "polarization",
+            "polarization the channel sees: total, parallel or perpendicular",
+            &|c| c.loaded.config.instrument.channel.name().into(),
+        ),
+        text("detection_mode", "photon_counting, analog or both", &|_| {
+            "photon_counting".into()
+        }),
+        text(
+            "dead_time_model",
+            "detector dead-time model: none, nonparalyzable or paralyzable",
+            &|c| match c.instrument.dead_time.map(|d| d.model) {
+                None => "none".into(),
+                Some(DeadTimeModel::Nonparalyzable) => "nonparalyzable".into(),
+                Some(DeadTimeModel::Paralyzable) => "paralyzable".into(),
+            },
+        ),
+        text(
+            "molecular_line",
+            "part of the molecular line the channel sees: cabannes or whole",
+            &|c| line_name(c.atmosphere.molecules.cabannes).into(),
+        ),
+    ]
+}
+
+/// The numeric variables of the channel dimension added in format 3 and `overlap`.
+pub fn instrument_variables(lidar: &Lidar, e0: &ExpectedProfile) -> Vec<Variable> {
+    use Dims::{Bin, Channel};
+    let per = |f: fn(&Scenario) -> f64| lidar.channels.iter().map(f).collect::<Vec<f64>>();
+    vec![
+        var(
+            "emission_wavelength",
+            Channel,
+            "wavelength of the laser line",
+            "nm",
+            &[],
+            per(|c| c.instrument.wavelength_nm),
+        ),
+        var(
+            "detection_wavelength",
+            Channel,
+            "wavelength of the detected line",
+            "nm",
+            &[],
+            per(|c| c.instrument.wavelength_nm),
+        ),
+        var(
+            "crosstalk",
+            Channel,
+            "fraction of the other polarization's light the channel sees",
+            "1",
+            &[],
+            per(|c| c.loaded.config.instrument.crosstalk),
+        ),
+        var(
+            "relative_gain",
+            Channel,
+            "gain of the channel relative to its nominal lidar constant",
+            "1",
+            &[],
+            per(|_| 1.0),
+        ),
+        var(
+            "filter_width",
+            Channel,
+            "interference filter bandwidth (FWHM)",
+            "nm",
+            &[],
+            per(|c| c.loaded.config.instrument.filter_width_nm),
+        ),
+        var(
+            "molecular_transmission",
+            Channel,
+            "filter transmission of the molecular (Cabannes) line relative to the particle line (1 but in hsrl_molecular channels)",
+            "1",
+            &[],
+            per(|_| 1.0),
+        ),
+        var(
+            "particle_transmission",
+            Channel,
+            "filter transmission of the particle line (1 but in hsrl_molecular channels)",
+            "1",
+            &[],
+            per(|_| 1.0),
+        ),
+        var(
+            "molecular_lidar_ratio",
+            Channel,
+            "extinction-to-backscatter ratio of the part of the molecular line the channel sees: alpha_mol / beta_mol",
+            "sr",
+            &[],
+            per(|c| c.atmosphere.molecules.lidar_ratio_sr),
+        ),
+        var(
+            "overlap",
+            Bin,
+            "overlap function eta(r) at the bin centre",
+            "1",
+            &[],
+            e0.overlap.clone(),
+        ),
+    ]
+}
