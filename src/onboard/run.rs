@@ -70,7 +70,10 @@ pub struct NativeRun {
 
 impl NativeRun {
     /// The native run of `config` with `overrides`: `acquisition.profiles` profiles of
-    /// the config's shots each, drawn as single shots.
+    /// the config's shots each, drawn as single shots, with `seed` (`--seed`, else
+    /// `simulation.seed`). The native config (the product's `config`) holds the run's
+    /// shots and seed, so that running `onboard` on it again with no `--seed` draws the
+    /// same shots.
     pub fn load(
         config: &Path,
         overrides: &[String],
@@ -84,8 +87,11 @@ impl NativeRun {
         let mut native = overrides.to_vec();
         native.push(format!("acquisition.accumulation_time_s={}", 1.0 / fl));
         native.push(format!("acquisition.profiles={total}"));
+        let seed = seed.unwrap_or(first.loaded.config.simulation.seed);
+        // as text, parsed as `--set` parses it: a seed beyond a TOML integer becomes the
+        // string of its digits, as `config::seed_value` writes it
+        native.push(format!("simulation.seed={seed}"));
         let lidar = Lidar::load(config, &native)?;
-        let seed = seed.unwrap_or(lidar.first().loaded.config.simulation.seed);
         let schemes = schemes
             .iter()
             .map(|s| Scheme::parse(s))

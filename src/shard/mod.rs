@@ -269,8 +269,9 @@ pub fn check_same_run(pieces: &[(&Path, &RunIdentity)], kind: &str, total: &str)
     };
     for &(path, p) in pieces {
         let pair = |a: &dyn std::fmt::Display, b: &dyn std::fmt::Display| format!(" ({a} vs {b})");
+        // the fields with values first: the stored config holds the seed and profiles
+        // too, so a seed that differs makes the config differ as well
         let differs = [
-            ("config", f.config != p.config, String::new()),
             ("seed", f.seed != p.seed, pair(&p.seed, &f.seed)),
             ("method", f.method != p.method, pair(&p.method, &f.method)),
             (
@@ -279,6 +280,7 @@ pub fn check_same_run(pieces: &[(&Path, &RunIdentity)], kind: &str, total: &str)
                 pair(&p.shard_count, &f.shard_count),
             ),
             (total, f.total != p.total, pair(&p.total, &f.total)),
+            ("config", f.config != p.config, String::new()),
             ("run_id", f.run_id != p.run_id, pair(&p.run_id, &f.run_id)),
         ];
         if let Some((what, _, values)) = differs.into_iter().find(|d| d.1) {

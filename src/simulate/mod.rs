@@ -512,20 +512,94 @@ pub struct RunPlan {
     pub spec: RawFileSpec,
 }
 
+/// The values of a run that a command-line option may set in place of its config key
+/// ([`RunOptions`] over the loaded config): what [`plan`] runs with.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunValues {
+    /// `acquisition.profiles` (`--profiles`).
+    pub profiles: usize,
+    /// `simulation.seed` (`--seed`).
+    pub seed: u64,
+    /// `simulation.method` as asked (`--method`), before `auto` is resolved.
+    pub method: Method,
+    /// `simulation.components` (`--components`).
+    pub components: bool,
+    /// `simulation.tolerance` (`--tolerance`).
+    pub tolerance: Option<f64>,
+}
+
+impl RunValues {
+    /// Each option of `opts` that is given, else its key in `cfg` (or that key's default).
+    pub fn resolve(opts: &RunOptions, cfg: &crate::config::ScenarioConfig) -> Self {
+        RunValues {
+            profiles: opts.profiles.unwrap_or(cfg.acquisition.profiles),
+            seed: opts.seed.unwrap_or(cfg.simulation.seed),
+            method: opts.method.unwrap_or(cfg.simulation.method),
+            components: opts.components.unwrap_or(cfg.simulation.components),
+            tolerance: opts.tolerance.or(cfg.simulation.tolerance),
+        }
+    }
+
+    /// The config a run stores (the raw file's `config` attribute): `resolved_toml` (the
+    /// loaded config after every `--set`) with these values written into their keys, so
+    /// that simulating it again with no option reproduces the file. Every value is
+    /// written, from an option, the file or a default alike, so that a stored config
+    /// planned again (`merge`) stores the same text.
+    pub fn stored_config(&self, resolved_toml: &str) -> Result<String> {
+        let unwritable =
+            |why: String| Error::Unsupported(format!("cannot store the run's config: {why}"));
+        let mut table: toml::Table = resolved_toml
+            .parse()
+            .map_err(|e: toml::de::Error| unwritable(e.message().to_string()))?;
+        let mut set = |section: &str, key: &str, value: toml::Value| {
+            let slot = table
+                .entry(section)
+                .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+            match slot {
+                toml::Value::Table(t) => {
+                    t.insert(key.to_string(), value);
+                    Ok(())
+                }
+                _ => Err(unwritable(format!("`{section}` is not a table"))),
+            }
+        };
+        let profiles = i64::try_from(self.profiles).map_err(|e| unwritable(e.to_string()))?;
+        set("acquisition", "profiles", toml::Value::Integer(profiles))?;
+        set("simulation", "seed", crate::config::seed_value(self.seed))?;
+        let method = match self.method {
+            Method::Auto => "auto",
+            Method::Shot => "shot",
+            Method::Aggregate => "aggregate",
+        };
+        set("simulation", "method", toml::Value::String(method.into()))?;
+        set(
+            "simulation",
+            "components",
+            toml::Value::Boolean(self.components),
+        )?;
+        if let Some(t) = self.tolerance {
+            set("simulation", "tolerance", toml::Value::Float(t))?;
+        }
+        toml::to_string(&table).map_err(|e| unwritable(e.to_string()))
+    }
+}
+
 /// Resolves a run's options against its config and builds everything but the counts.
 /// `resolved` is the method of a run already drawn (`merge`, from the shards' `method`);
 /// `None` resolves `opts.method` (and `auto`'s tolerance) as `simulate` does.
 pub fn plan(lidar: &Lidar, opts: &RunOptions, resolved: Option<ResolvedMethod>) -> Result<RunPlan> {
     let first = lidar.first();
-    let cfg = &first.loaded.config;
-    let seed = opts.seed.unwrap_or(cfg.simulation.seed);
-    let profiles = opts.profiles.unwrap_or(cfg.acquisition.profiles);
+    let values = RunValues::resolve(opts, &first.loaded.config);
+    let RunValues {
+        profiles,
+        seed,
+        method: requested,
+        components,
+        tolerance,
+    } = values;
     if profiles == 0 {
         return Err(Error::Unsupported("--profiles must be at least 1".into()));
     }
-    let components = opts.components.unwrap_or(cfg.simulation.components);
-    let requested = opts.method.unwrap_or(cfg.simulation.method);
-    let tolerance = opts.tolerance.or(cfg.simulation.tolerance);
     check_detector(lidar, components)?;
     let mut method = match resolved {
         Some(m) => m,
@@ -551,11 +625,8 @@ pub fn plan(lidar: &Lidar, opts: &RunOptions, resolved: Option<ResolvedMethod>) 
         lidar,
         &expected,
         method,
-        seed,
-        profiles,
-        components,
+        &values,
         energy,
-        tolerance,
         opts,
         scene.as_ref(),
     )?;
@@ -964,19 +1035,22 @@ pub fn profile_columns(runs: &[(usize, u64)], slots: usize) -> (Vec<i32>, Vec<f6
 }
 
 /// Everything the raw file holds besides the profiles.
-#[allow(clippy::too_many_arguments)]
 fn raw_file_spec(
     lidar: &Lidar,
     expected: &[ExpectedProfile],
     method: ResolvedMethod,
-    seed: u64,
-    profiles: usize,
-    components: bool,
+    values: &RunValues,
     energy: RunEnergy,
-    tolerance: Option<f64>,
     opts: &RunOptions,
     scene: Option<&scene::SceneModel>,
 ) -> Result<RawFileSpec> {
+    let RunValues {
+        seed,
+        profiles,
+        components,
+        tolerance,
+        ..
+    } = *values;
     let changing = scene.is_some();
     let first = lidar.first();
     let shots = first.shots_per_profile();
@@ -1042,8 +1116,23 @@ fn raw_file_spec(
             Some(_) => content::GEOLOCATION.iter().map(|s| s.to_string()).collect(),
             None => vec![],
         },
-        root_attributes: content::root_attributes(first, &run_info)?,
+        root_attributes: with_config(
+            content::root_attributes(first, &run_info)?,
+            values.stored_config(&first.loaded.resolved_toml)?,
+        ),
     })
+}
+
+/// `attributes` with `config` holding `config` (the run's [`RunValues::stored_config`]).
+fn with_config(
+    mut attributes: Vec<(String, AttrValue)>,
+    config: String,
+) -> Vec<(String, AttrValue)> {
+    match attributes.iter_mut().find(|(name, _)| name == "config") {
+        Some((_, value)) => *value = AttrValue::Str(config),
+        None => attributes.push(("config".into(), AttrValue::Str(config))),
+    }
+    attributes
 }
 
 /// Bytes per stored count beyond the Poisson entropy: deflate after shuffle stores
@@ -1130,4 +1219,42 @@ pub fn progress_bar(show: bool, profiles: usize) -> indicatif::ProgressBar {
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     bar
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_stored_config_planned_again_stores_the_same_text() {
+        // what `merge` relies on: the stored config, loaded and resolved with the run's
+        // values (or no option), gives those values and the same text
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("configs")
+            .join("paper")
+            .join("scenario1.toml");
+        let loaded = crate::config::load(&path, &[]).unwrap();
+        let values = RunValues {
+            profiles: 400,
+            seed: u64::MAX,
+            method: Method::Auto,
+            components: true,
+            tolerance: Some(1e-3),
+        };
+        let stored = values.stored_config(&loaded.resolved_toml).unwrap();
+        assert!(
+            stored.contains("seed = \"18446744073709551615\""),
+            "{stored}"
+        );
+        let again = crate::config::load_str(&stored, &path, &[]).unwrap();
+        assert_eq!(
+            RunValues::resolve(&RunOptions::default(), &again.config),
+            values
+        );
+        assert_eq!(values.stored_config(&again.resolved_toml).unwrap(), stored);
+        // the file's own values, written in when no option is given
+        let own = RunValues::resolve(&RunOptions::default(), &loaded.config);
+        let written = own.stored_config(&loaded.resolved_toml).unwrap();
+        assert!(written.contains("profiles = 100"), "{written}");
+    }
 }
