@@ -361,3 +361,49 @@ fn a_scheme_file_is_read_and_checked() {
     assert!(Scheme::parse(bad.to_str().unwrap()).is_err());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The product declares its conventions and describes every variable: `Conventions`, and
+/// a `long_name` on every dataset of every region, `units` on all but the channel names
+/// (compliance-checker `cf:1.10` then finds no error in it; docs/file-format.md).
+#[test]
+fn the_product_describes_its_variables() {
+    let dir = std::env::temp_dir().join(format!("lidarsim-product-cf-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("p.h5");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_lidarsim"))
+        .args(["onboard"])
+        .arg(common::config_path("instruments/caliop_532.toml"))
+        .args(["--scheme", "caliop", "-o"])
+        .arg(&out)
+        .args([
+            "--set",
+            "acquisition.profiles=2",
+            "--set",
+            "acquisition.bottom_altitude_km=-2",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let f = hdf5::File::open(&out).unwrap();
+    let text = |loc: &hdf5::Location, name: &str| -> Option<String> {
+        let v: hdf5::types::VarLenUnicode = loc.attr(name).ok()?.read_scalar().ok()?;
+        Some(v.as_str().to_string())
+    };
+    assert_eq!(text(&f, "Conventions").as_deref(), Some("CF-1.10"));
+    let groups = f.groups().unwrap();
+    assert_eq!(groups.len(), 5);
+    for g in groups {
+        for d in g.datasets().unwrap() {
+            assert!(
+                text(&d, "long_name").is_some(),
+                "{} has no long_name",
+                d.name()
+            );
+            if !d.name().ends_with("/channel") {
+                assert!(text(&d, "units").is_some(), "{} has no units", d.name());
+            }
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

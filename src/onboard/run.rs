@@ -282,6 +282,7 @@ pub fn product_attributes(
 ) -> Vec<(String, AttrValue)> {
     let text = |k: &str, v: String| (k.to_string(), AttrValue::Str(v));
     vec![
+        text("Conventions", crate::output::raw_file::CONVENTIONS.into()),
         text(
             "title",
             format!("lidarsim onboard product, scheme {scheme}"),

@@ -169,8 +169,15 @@ impl ProductWriter {
 
 /// A region's dimension scales `profile` (the run's indices), `channel` and `bin`.
 fn dimension_scales(g: &Group, r: &RegionSpec, channels: &[String]) -> hdf5::Result<[Dataset; 3]> {
+    let text = |ds: &Dataset, k: &str, v: &str| hdf5_ds::write_str_attr(ds, k, v);
     let profile = create_var::<i64>(g, "profile", &[r.profiles])?;
     write_index(&profile, r.first_profile, r.profiles)?;
+    text(
+        &profile,
+        "long_name",
+        "index of the region's downlinked profile in the run",
+    )?;
+    text(&profile, "units", "1")?;
     hdf5_ds::set_scale(&profile, "profile")?;
     let channel = create_var::<VarLenUnicode>(g, "channel", &[channels.len()])?;
     let names: Vec<VarLenUnicode> = channels
@@ -178,9 +185,16 @@ fn dimension_scales(g: &Group, r: &RegionSpec, channels: &[String]) -> hdf5::Res
         .map(|c| c.parse().unwrap_or_default())
         .collect();
     channel.write_raw(&names)?;
+    text(&channel, "long_name", "receiver channel")?;
     hdf5_ds::set_scale(&channel, "channel")?;
     let bin = create_var::<i64>(g, "bin", &[r.altitude_m.len()])?;
     write_index(&bin, 0, r.altitude_m.len())?;
+    text(
+        &bin,
+        "long_name",
+        "downlinked range bin index, from the top",
+    )?;
+    text(&bin, "units", "1")?;
     hdf5_ds::set_scale(&bin, "bin")?;
     Ok([profile, channel, bin])
 }
@@ -197,18 +211,34 @@ fn region_layout(
     let bins = r.altitude_m.len();
     let altitude = create_var::<f64>(g, "altitude", &[bins])?;
     altitude.write_raw(&r.altitude_m)?;
+    text(
+        &altitude,
+        "long_name",
+        "bin-centre altitude above sea level",
+    )?;
     text(&altitude, "units", "m")?;
     text(&altitude, "standard_name", "altitude")?;
+    text(&altitude, "positive", "up")?;
     hdf5_ds::attach_scales(&altitude, &[&bin])?;
     let time = create_var::<f64>(g, "time", &[r.profiles])?;
+    text(&time, "long_name", "profile centre time")?;
     text(&time, "units", &header.time_units)?;
     text(&time, "standard_name", "time")?;
+    text(&time, "calendar", "standard")?;
+    text(&time, "axis", "T")?;
     hdf5_ds::attach_scales(&time, &[&profile])?;
     let n_shots = create_var::<u32>(g, "n_shots", &[r.profiles])?;
     for start in (0..r.profiles).step_by(TIME_BLOCK) {
         let end = (start + TIME_BLOCK).min(r.profiles);
         n_shots.write_slice(&vec![r.shots; end - start][..], start..end)?;
     }
+    text(
+        &n_shots,
+        "long_name",
+        "native laser shots summed in the profile",
+    )?;
+    text(&n_shots, "units", "1")?;
+    text(&n_shots, "coordinates", "time")?;
     hdf5_ds::attach_scales(&n_shots, &[&profile])?;
     let c = r.channels.len();
     let counts = g
@@ -224,6 +254,11 @@ fn region_layout(
         .obj_track_times(false)
         .attr_creation_order(hdf5::plist::dataset_create::AttrCreationOrder::Indexed)
         .create("counts")?;
+    text(
+        &counts,
+        "long_name",
+        "photon counts summed over the region's shots and native bins (onboard averaging)",
+    )?;
     text(&counts, "units", "count")?;
     text(&counts, "coordinates", "time altitude")?;
     hdf5_ds::attach_scales(&counts, &[&profile, &channel, &bin])?;
