@@ -172,9 +172,9 @@ impl SunlightPath {
         let mut scattering_depth = 0.0;
         if top > reflector_m {
             for slab in atmosphere.slabs(reflector_m, top) {
-                let mid = 0.5 * (slab.z_lo + slab.z_hi);
-                let absorbing = sigma_o3 * ozone::number_density_m3(mid);
-                scattering_depth += (slab.optics.alpha_total - absorbing) * (slab.z_hi - slab.z_lo);
+                let o = slab.optics;
+                let scattering = o.alpha_mol + o.alpha_aer + o.alpha_cld;
+                scattering_depth += scattering * (slab.z_hi - slab.z_lo);
             }
         }
         SunlightPath::Slant {

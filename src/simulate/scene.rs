@@ -286,6 +286,11 @@ impl SceneModel {
         }
         let columns = all.iter().enumerate().map(|(i, c)| (*c, i)).collect();
         let column_slots = track.columns_per_profile_bound(profiles, all.len());
+        // the raw file's writer holds a block of profiles' columns and weights
+        crate::resources::require_memory(
+            &format!("the raw file's profile columns ({column_slots} slots a profile)"),
+            (crate::output::raw_file::writer::COLUMN_BLOCK * column_slots * 12) as f64,
+        )?;
         let channel_sun = lidar
             .channels
             .iter()
