@@ -448,13 +448,42 @@ pub fn validate_combine(partials: &[PathBuf], json: Option<&Path>) -> Result<boo
     publish_report(outputs, json_id, json, &report)
 }
 
+/// `lidarsim validate --file RAW.h5`: the raw file's counts against the expectation and
+/// detector law it carries ([`validate::file`]); `Ok(consistent)`.
+pub fn validate_file(raw: &Path, json: Option<&Path>) -> Result<bool> {
+    let mut outputs = Outputs::new(std::iter::once(raw));
+    let json_id = json
+        .map(|p| outputs.add("--json", p, Stream::Text))
+        .transpose()?;
+    let (report, notes) = validate::file::check_file(raw)?;
+    publish(outputs, json_id, json, &report, &|w, r| {
+        validate::file::write_file_table(w, r, &notes)
+    })
+}
+
+/// A table writer of a validation report.
+type Table<'a> = &'a dyn Fn(&mut dyn Write, &validate::Report) -> std::io::Result<()>;
+
 /// Writes a validation's JSON (output `json` of `outputs`, at `json_path`) and prints
 /// its table (on stderr when the JSON holds stdout) and warning; `Ok(consistent)`.
 fn publish_report(
+    outputs: Outputs,
+    json: Option<crate::output::safe_file::OutputId>,
+    json_path: Option<&Path>,
+    report: &validate::Report,
+) -> Result<bool> {
+    publish(outputs, json, json_path, report, &|w, r| {
+        validate::write_table(w, r)
+    })
+}
+
+/// [`publish_report`] with the table `table`.
+fn publish(
     mut outputs: Outputs,
     json: Option<crate::output::safe_file::OutputId>,
     json_path: Option<&Path>,
     report: &validate::Report,
+    table: Table,
 ) -> Result<bool> {
     if let Some(id) = json {
         outputs.write(id, |w| {
@@ -466,12 +495,12 @@ fn publish_report(
     outputs.commit()?;
     if table_to_stderr {
         // the JSON holds standard output; the table for a person goes to stderr
-        validate::write_table(&mut std::io::stderr(), report).map_err(|e| Error::Io {
+        table(&mut std::io::stderr(), report).map_err(|e| Error::Io {
             path: "<stderr>".into(),
             source: e,
         })?;
     } else {
-        to_stdout(|w| validate::write_table(w, report))?;
+        to_stdout(|w| table(w, report))?;
     }
     if let Some(w) = &report.warning {
         eprintln!("{w}");

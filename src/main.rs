@@ -124,8 +124,8 @@ enum Command {
     },
     /// Onboard averaging of shot-level counts: the downlinked product and the report.
     Onboard {
-        /// Scenario config (TOML); not with --combine.
-        #[arg(required_unless_present = "combine")]
+        /// Scenario config (TOML); not with --combine or --file.
+        #[arg(required_unless_present_any = ["combine", "file"])]
         config: Option<PathBuf>,
         /// Override a config key (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -212,10 +212,11 @@ enum Command {
         #[arg(long, value_delimiter = ',', value_name = "ID,...")]
         channel_ids: Option<Vec<i32>>,
     },
-    /// Statistical check of the simulator against Eq. 4; exit 0 when consistent, 1 when not.
+    /// Statistical check of the simulator against Eq. 4, or (--file) of a raw file's counts
+    /// against the expectation it carries; exit 0 when consistent, 1 when not.
     Validate {
-        /// Scenario config (TOML); not with --combine.
-        #[arg(required_unless_present = "combine")]
+        /// Scenario config (TOML); not with --combine or --file.
+        #[arg(required_unless_present_any = ["combine", "file"])]
         config: Option<PathBuf>,
         /// Override a config key (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -243,6 +244,15 @@ enum Command {
         #[arg(long, value_name = "PART.json", num_args = 1..,
               conflicts_with_all = ["config", "set", "shard", "partial", "method", "seed", "realizations"])]
         combine: Vec<PathBuf>,
+        /// Check the counts of a raw file (simulate -o, a merge, a copy) against the
+        /// expectation and detector law the file carries (expected_*, n_shots,
+        /// pulse_energy, dead_time), profile by profile, with validate's calibrated mean
+        /// and variance tests; exit 0 CONSISTENT, 1 INCONSISTENT (false-alarm rate below
+        /// 1e-3), 2 for a file that is not a raw file. Dead-time channels are judged only
+        /// in profiles at the nominal pulse energy (validation/README.md §1c).
+        #[arg(long, value_name = "RAW.h5",
+              conflicts_with_all = ["config", "set", "shard", "partial", "method", "seed", "realizations", "combine"])]
+        file: Option<PathBuf>,
     },
 }
 
@@ -385,6 +395,7 @@ fn main() -> ExitCode {
             shard,
             partial,
             combine,
+            file,
         } => {
             let opts = lidarsim::validate::ValidateOptions {
                 realizations: *realizations,
@@ -393,6 +404,9 @@ fn main() -> ExitCode {
                 json: json.clone(),
             };
             match (config, shard, partial) {
+                _ if let Some(raw) = file => {
+                    lidarsim::commands::validate_file(raw, json.as_deref())
+                }
                 _ if !combine.is_empty() => {
                     lidarsim::commands::validate_combine(combine, json.as_deref())
                 }

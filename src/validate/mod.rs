@@ -42,6 +42,7 @@ use crate::simulate::{self, ResolvedMethod, RunEnergy, StreamSampler};
 
 pub mod calibration;
 pub mod exact;
+pub mod file;
 pub mod partial;
 mod run;
 pub mod scene;
@@ -643,6 +644,20 @@ pub fn write_table(w: &mut dyn Write, r: &Report) -> std::io::Result<()> {
         }
     )?;
     writeln!(w)?;
+    write_body(w, r)?;
+    writeln!(
+        w,
+        "{}",
+        if r.consistent {
+            "CONSISTENT: the simulated counts agree with the Poisson model and Eq. 4."
+        } else {
+            "INCONSISTENT: at least one statistic departs from the model (false-alarm rate < 2e-3)."
+        }
+    )
+}
+
+/// The verdicts' table and a sample of the bins, then a blank line.
+fn write_body(w: &mut dyn Write, r: &Report) -> std::io::Result<()> {
     writeln!(
         w,
         "{:<26} {:>6} {:>8} {:>8} {:>12} {:>10}  verdict",
@@ -709,16 +724,7 @@ pub fn write_table(w: &mut dyn Write, r: &Report) -> std::io::Result<()> {
     if step > 1 {
         writeln!(w, "(every {step}th bin shown; --json has all)")?;
     }
-    writeln!(w)?;
-    writeln!(
-        w,
-        "{}",
-        if r.consistent {
-            "CONSISTENT: the simulated counts agree with the Poisson model and Eq. 4."
-        } else {
-            "INCONSISTENT: at least one statistic departs from the model (false-alarm rate < 2e-3)."
-        }
-    )
+    writeln!(w)
 }
 
 #[cfg(test)]

@@ -1,5 +1,6 @@
 //! What a reader of a lidarsim raw file accepts: ONE check of a file's header, used by
-//! every command that reads raw files (`merge` of raw shards, `curtain`, `export-scc`),
+//! every command that reads raw files (`merge` of raw shards, `curtain`, `export-scc`,
+//! `validate --file`),
 //! so that they accept exactly the same files (`docs/file-format.md`, "What a reader
 //! accepts").
 //!

@@ -1,0 +1,327 @@
+//! `lidarsim validate --file RAW.h5`: a raw file's counts against the expectation and
+//! detector law the file itself carries, with `validate`'s calibrated statistics, so that
+//! a merge, a copy or a file another tool has touched can be checked without its config.
+//!
+//! Per profile p, channel k and bin i the file gives the count `c`, the shots `M_p =
+//! n_shots`, the energy factor `f_p = pulse_energy_p / nominal_pulse_energy[0]` (the mean
+//! of exactly the shots' factors the counts were drawn with; every channel sees the same
+//! pulses) and the per-shot expectations at the nominal energy (`expected_*`, (channel,
+//! bin) or, in a changing scene, (profile, channel, bin)). The law of `c`:
+//!
+//! * **ideal detector** (`dead_time` 0): given the shots' energies, a sum of independent
+//!   Poisson counts, so `c ~ Poisson(μ)` exactly, with
+//!   `μ = M_p·(expected_counts + (f_p − 1)·expected_signal)`;
+//! * **dead time**: mean `M_p·expected_counts`, variance `M_p·v(λ)` with `v` the renewal
+//!   variance per shot ([`DeadTime::recorded_variance`]) at the arriving mean
+//!   `λ = expected_signal + expected_background + expected_dark`, the higher cumulants
+//!   those of a Poisson law of that variance (as `validate` takes them).
+//!
+//! What the file cannot say is not judged, and the table says so: a dead-time channel in
+//! a profile whose pulse energy is not the nominal one (the recorded mean is non-linear in
+//! each shot's energy, which the file does not keep), and any channel in a profile that
+//! mixes columns (`profile_column_weight`) with a varying energy (which shots saw which
+//! column is not in the file).
+//!
+//! The statistics are those of [`super::scene`] with each count's own variance: per bin,
+//! the total `Σc` against `Σμ` (exact Poisson tail for an ideal detector, normal
+//! otherwise) and `V = Σ(c − μ)²` against `Σ var` with the cumulants of `(c − μ)²`
+//! (Edgeworth-calibrated, tested where `Σμ ≥ 100`); per statistic the outside count and
+//! `Σz²` at level 2.5·10⁻⁴ each ([`super::calibration`]), so a consistent file is called
+//! INCONSISTENT with probability below 10⁻³ (four checks; the S/N is not tested).
+//!
+//! The file is opened through [`read::check`] and read [`BLOCK_VALUES`] counts at a time:
+//! memory grows with channels × bins, not with the profiles.
+
+use std::path::Path;
+
+use super::exact::ExactSum;
+use super::{BinModel, BinReport, MIN_TOTAL_COUNTS, Report, Stat, calibration, mean_z};
+use crate::detector::{DeadTime, DeadTimeModel};
+use crate::error::{Error, Result};
+use crate::output::raw_file::read::{self, RawHeader};
+
+mod reader;
+use reader::{Reader, read_all, text_var};
+
+/// Counts read at once (with their expectations: 8 bytes each, five arrays at most).
+pub const BLOCK_VALUES: usize = 1 << 20;
+/// Memory held per bin: the sums and the report.
+const BYTES_PER_BIN: f64 = 1200.0;
+
+/// Per-bin sums over the judged profiles.
+#[derive(Debug, Clone, Default)]
+struct Sums {
+    total: u128,
+    mu: ExactSum,
+    var: ExactSum,
+    v: ExactSum,
+    var_y: ExactSum,
+    k3: ExactSum,
+    k4: ExactSum,
+}
+
+impl Sums {
+    /// A count `c` of mean `mu` and variance `var` (Poisson-shaped at that variance):
+    /// `Y = (c − μ)²` has `E Y = var` and the cumulants of [`super::scene`] at `var`.
+    fn push(&mut self, c: u64, mu: f64, var: f64) {
+        let d = c as f64 - mu;
+        self.total += u128::from(c);
+        self.mu.add(mu);
+        self.var.add(var);
+        self.v.add(d * d);
+        self.var_y.add(var + 2.0 * var * var);
+        self.k3.add(var + 22.0 * var * var + 8.0 * var.powi(3));
+        self.k4
+            .add(var + 112.0 * var * var + 384.0 * var.powi(3) + 48.0 * var.powi(4));
+    }
+}
+
+/// What the file says of its channels.
+struct Channels {
+    names: Vec<String>,
+    /// `nominal_pulse_energy` of the first channel: the energy `pulse_energy` is relative to.
+    reference_energy: f64,
+    /// Each channel's dead time, None for an ideal detector.
+    dead: Vec<Option<DeadTime>>,
+}
+
+/// The file's check and its report; `Err` for a file that is not a raw file or carries
+/// impossible expectations (exit 2), never an INCONSISTENT verdict for those.
+pub fn check_file(path: &Path) -> Result<(Report, Vec<String>)> {
+    crate::input_file::check("--file", path)?;
+    let f = hdf5::File::open(path)
+        .map_err(|_| Error::output(path, "not a lidarsim raw file (not HDF5)"))?;
+    let header = read::check(path, &f)?;
+    let bins = header.counts_per_profile() as f64;
+    header.require_memory(
+        path,
+        "checking its counts",
+        bins * BYTES_PER_BIN + 48.0 * BLOCK_VALUES as f64,
+    )?;
+    let channels = channels(path, &f, &header)?;
+    let mut reader = Reader::new(path, &f, &header)?;
+    let mut sums = vec![Sums::default(); header.counts_per_profile()];
+    let mut judged = vec![0usize; channels.names.len()];
+    let rows = (BLOCK_VALUES / header.counts_per_profile()).max(1);
+    for first in (0..header.n_profiles).step_by(rows) {
+        let end = (first + rows).min(header.n_profiles);
+        let block = reader.block(first..end)?;
+        block.validate(path, &header)?;
+        block.accumulate(path, &channels, header.n_bins, &mut sums, &mut judged)?;
+    }
+    let names = &channels.names;
+    let n_bins = header.n_bins;
+    let altitude = reader.altitude()?;
+    let bins: Vec<BinReport> = sums
+        .iter()
+        .enumerate()
+        .map(|(j, s)| {
+            let (k, i) = (j / n_bins, j % n_bins);
+            bin_report(
+                s,
+                judged[k],
+                &names[k],
+                i,
+                altitude[i],
+                channels.dead[k].is_some(),
+            )
+        })
+        .collect();
+    let checks = super::verdicts(&bins);
+    let notes = not_judged(&channels, &judged, header.n_profiles);
+    if judged.iter().all(|&n| n == 0) {
+        return Err(Error::output(
+            path,
+            format!(
+                "no profile can be judged from the file alone: {}",
+                notes.join("; ")
+            ),
+        ));
+    }
+    let report = Report {
+        scenario: path.display().to_string(),
+        method: reader.text_attr("method").unwrap_or_else(|| "?".into()),
+        seed: f
+            .attr("seed")
+            .and_then(|a| a.read_scalar::<u64>())
+            .unwrap_or(0),
+        realizations: judged.iter().copied().max().unwrap_or(0),
+        shots_per_profile: reader.first_shots,
+        background_bins: 0,
+        channels: names.clone(),
+        consistent: checks.iter().all(|c| c.pass),
+        bins,
+        checks,
+        warning: None,
+    };
+    Ok((report, notes))
+}
+
+/// One line per channel with profiles left out, and why.
+fn not_judged(channels: &Channels, judged: &[usize], n: usize) -> Vec<String> {
+    channels
+        .names
+        .iter()
+        .zip(judged)
+        .zip(&channels.dead)
+        .filter(|&((_, &j), _)| j < n)
+        .map(|((name, &j), dead)| {
+            let why = if dead.is_some() {
+                "a dead-time detector with a pulse energy other than the nominal one, or \
+                 mixed columns"
+            } else {
+                "mixed columns with a varying pulse energy"
+            };
+            format!(
+                "channel {name}: {} of {n} profiles not judged from the file alone ({why})",
+                n - j
+            )
+        })
+        .collect()
+}
+
+/// The channels' names, reference energy and detectors, refused where impossible.
+fn channels(path: &Path, f: &hdf5::File, h: &RawHeader) -> Result<Channels> {
+    let bad = |why: String| Error::output(path, why);
+    let energy = read_all(path, f, "nominal_pulse_energy")?;
+    let tau = read_all(path, f, "dead_time")?;
+    for (name, v) in [("nominal_pulse_energy", &energy), ("dead_time", &tau)] {
+        if v.len() != h.channels.len() {
+            return Err(bad(format!("`{name}` is not (channel)")));
+        }
+        if let Some(k) = v.iter().position(|x| !(x.is_finite() && *x >= 0.0)) {
+            return Err(bad(format!(
+                "`{name}` of channel {} is {}; it must be finite and not negative",
+                h.channels[k], v[k]
+            )));
+        }
+    }
+    if energy[0] == 0.0 {
+        return Err(bad(
+            "`nominal_pulse_energy` of the first channel is 0".into()
+        ));
+    }
+    let dead = if tau.iter().any(|&t| t > 0.0) {
+        let models = text_var(path, f, "dead_time_model")?;
+        if models.len() != tau.len() {
+            return Err(bad("`dead_time_model` is not (channel)".into()));
+        }
+        let width = f
+            .attr("bin_width_s")
+            .and_then(|a| a.read_scalar::<f64>())
+            .ok()
+            .filter(|w| w.is_finite() && *w > 0.0)
+            .ok_or_else(|| bad("has no positive root attribute `bin_width_s`".into()))?;
+        tau.iter()
+            .zip(&models)
+            .map(|(&t, m)| {
+                let model = match m.as_str() {
+                    "paralyzable" => DeadTimeModel::Paralyzable,
+                    _ => DeadTimeModel::Nonparalyzable,
+                };
+                (t > 0.0).then_some(DeadTime {
+                    tau_s: t,
+                    model,
+                    bin_width_s: width,
+                })
+            })
+            .collect()
+    } else {
+        vec![None; tau.len()]
+    };
+    Ok(Channels {
+        names: h.channels.clone(),
+        reference_energy: energy[0],
+        dead,
+    })
+}
+
+/// One bin's statistics from its sums over `n` judged profiles (as [`super::scene`]).
+fn bin_report(
+    s: &Sums,
+    n: usize,
+    channel: &str,
+    bin: usize,
+    altitude_m: f64,
+    dead: bool,
+) -> BinReport {
+    let nf = (n as f64).max(1.0);
+    let (mu, var, v, var_y) = (s.mu.value(), s.var.value(), s.v.value(), s.var_y.value());
+    let model = if dead {
+        BinModel::recorded(0.0, 0.0, mu, var, 1.0)
+    } else {
+        BinModel::new(0.0, mu, 1.0, 0.0)
+    };
+    let (z, shape) = if n == 0 {
+        (None, None)
+    } else {
+        mean_z(s.total, 1.0, &model)
+    };
+    let mean = Stat {
+        empirical: s.total as f64 / nf,
+        model: mu / nf,
+        z,
+        shape,
+    };
+    let enough = n > 0 && mu >= MIN_TOTAL_COUNTS && var_y > 0.0;
+    let shape = calibration::outside_probability(
+        s.k3.value() / var_y.powf(1.5),
+        s.k4.value() / (var_y * var_y),
+    );
+    let variance = Stat {
+        empirical: v / nf,
+        model: var / nf,
+        z: (enough && shape.is_some()).then(|| (v - var) / var_y.sqrt()),
+        shape,
+    };
+    let untested = Stat {
+        empirical: f64::NAN,
+        model: f64::NAN,
+        z: None,
+        shape: None,
+    };
+    BinReport {
+        channel: channel.to_string(),
+        bin,
+        altitude_m,
+        mean,
+        variance,
+        snr_known_background: untested,
+        snr_estimated_background: untested,
+    }
+}
+
+/// The checks' table, the channels not judged, and the verdict.
+pub fn write_file_table(
+    w: &mut dyn std::io::Write,
+    r: &Report,
+    notes: &[String],
+) -> std::io::Result<()> {
+    writeln!(
+        w,
+        "{} — counts against the file's own expectation: {} profiles judged (first of {} \
+         shots), method {}, seed {}, channels {}",
+        r.scenario,
+        r.realizations,
+        r.shots_per_profile,
+        r.method,
+        r.seed,
+        r.channels.join(", ")
+    )?;
+    writeln!(w)?;
+    super::write_body(w, r)?;
+    for n in notes {
+        writeln!(w, "{n}")?;
+    }
+    writeln!(
+        w,
+        "{}",
+        if r.consistent {
+            "CONSISTENT: the file's counts agree with the expectation and detector law it \
+             carries (false-alarm rate < 1e-3)."
+        } else {
+            "INCONSISTENT: the file's counts depart from the expectation and detector law it \
+             carries (false-alarm rate < 1e-3)."
+        }
+    )
+}
