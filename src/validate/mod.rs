@@ -704,11 +704,19 @@ fn write_body(w: &mut dyn Write, r: &Report) -> std::io::Result<()> {
         s.z.map(|z| format!("{z:8.2}"))
             .unwrap_or_else(|| format!("{:>8}", "-"))
     };
+    // an S/N not computed (`validate --file`) shows as "-", never as NaN
+    let snr = |x: f64| {
+        if x.is_finite() {
+            format!("{x:9.3}")
+        } else {
+            format!("{:>9}", "-")
+        }
+    };
     let step = (r.bins.len() / 40).max(1);
     for b in r.bins.iter().step_by(step) {
         writeln!(
             w,
-            "{}{:9.3} {:12.5e} {:12.5e} {} {:12.5e} {} {:9.3} {:9.3} {}",
+            "{}{:9.3} {:12.5e} {:12.5e} {} {:12.5e} {} {} {} {}",
             label(&b.channel),
             b.altitude_m / 1e3,
             b.mean.empirical,
@@ -716,8 +724,8 @@ fn write_body(w: &mut dyn Write, r: &Report) -> std::io::Result<()> {
             z(&b.mean),
             b.variance.empirical,
             z(&b.variance),
-            b.snr_known_background.empirical,
-            b.snr_known_background.model,
+            snr(b.snr_known_background.empirical),
+            snr(b.snr_known_background.model),
             z(&b.snr_known_background)
         )?;
     }
