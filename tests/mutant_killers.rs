@@ -573,3 +573,157 @@ fn a_curtain_is_read_column_by_column() {
         "{e}"
     );
 }
+
+/// A window whose mean-rate grid would pass `MAX_GRID_STEPS` (5e7 steps) takes the
+/// stationary formulas per bin (docs/model.md §4b, `DeadTime::recorded_means`): a 1 ms
+/// bin with τ = 1 ns needs 64·Δt/τ = 6.4e7 steps, so its mean recorded count is
+/// `n·Δt/(1 + nτ)` (non-paralyzable) and `n·Δt·e^(−nτ)` (paralyzable), written here, to
+/// 1e-13 — where the solver, whose detector starts live, gives the first bin 0.004
+/// counts more (4.5e-8 and 5.1e-8 of it at n = 1e8 s⁻¹, computed with the solver's
+/// recurrence on a 1 µs bin: the transient does not depend on Δt) (survivor "replace >
+/// with ==" at the switch, which ran the solver on every window).
+#[test]
+fn a_window_past_the_grid_limit_takes_the_stationary_formulas() {
+    use lidarsim::detector::{DeadTime, DeadTimeModel};
+    let (tau, dt, n) = (1e-9, 1e-3, 1e8);
+    assert!(64.0 * dt / tau > lidarsim::detector::dead_time::MAX_GRID_STEPS);
+    for model in [DeadTimeModel::Nonparalyzable, DeadTimeModel::Paralyzable] {
+        let dead = DeadTime {
+            tau_s: tau,
+            model,
+            bin_width_s: dt,
+        };
+        let want = match model {
+            DeadTimeModel::Nonparalyzable => n * dt / (1.0 + n * tau),
+            DeadTimeModel::Paralyzable => n * dt * (-n * tau).exp(),
+        };
+        let got = dead.recorded_means(&[n * dt]);
+        assert!(
+            (got[0] / want - 1.0).abs() < 1e-13,
+            "{model:?}: {} vs {want}",
+            got[0]
+        );
+    }
+}
+
+/// Dead time crosses bin edges (docs/model.md §4b): in a window of 50 bins of 10 ns with
+/// λ = 2 photons a bin and τ = 5 ns (nτ = 1), the sampler's mean recorded count per bin
+/// past the first ten (the live start's transient has died out) is the stationary one,
+/// Müller's `nΔt/(1 + nτ)` = 1 (non-paralyzable) and `nΔt·e^(−nτ)` = 0.736 (paralyzable),
+/// written here. 30 profiles of 200 shots, each from its own streams; the check is the
+/// mean of the 30 within 6 standard errors (their own spread): a false alarm with
+/// probability 1.6e-6 per model (Student's t, 29 degrees of freedom; fixed seeds). A
+/// detector made live again at each bin's start records 13 % and 36 % more (a Monte Carlo
+/// of this window) (survivor "replace < with >" in `record_shot`'s runs of adjacent bins).
+#[test]
+fn dead_time_carries_across_bin_edges() {
+    use lidarsim::detector::dead_time::recorded_profile;
+    use lidarsim::detector::{DeadTime, DeadTimeModel};
+    use lidarsim::sampling::ShotSampler;
+    let (tau, dt, lambda) = (5e-9, 1e-8, 2.0);
+    let n: f64 = lambda / dt;
+    let sampler = ShotSampler::new(&[lambda; 50]);
+    for (model, want) in [
+        (DeadTimeModel::Nonparalyzable, n * dt / (1.0 + n * tau)),
+        (DeadTimeModel::Paralyzable, n * dt * (-n * tau).exp()),
+    ] {
+        let dead = DeadTime {
+            tau_s: tau,
+            model,
+            bin_width_s: dt,
+        };
+        let means: Vec<f64> = (0..30)
+            .map(|profile| {
+                let mut acc = vec![0u64; 50];
+                recorded_profile(&sampler, &dead, 25, profile, 200, &mut acc);
+                acc[10..].iter().sum::<u64>() as f64 / (200.0 * 40.0)
+            })
+            .collect();
+        let mean = means.iter().sum::<f64>() / 30.0;
+        let var = means.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / 29.0;
+        let error = (var / 30.0).sqrt();
+        assert!(
+            (mean - want).abs() < 6.0 * error,
+            "{model:?}: {mean} ± {error} recorded a bin, want {want}"
+        );
+    }
+}
+
+/// The scene along the track (docs/model.md §4f, `src/scene/track.rs`), from the orbit
+/// example's segments with values worked out by hand: a scene of segments is a changing
+/// scene even without broken layers, a scene without `[scene]` is not; at 6.9 km/s and
+/// 20.16 shots a second a shot every 342.26 m, so the first 250 km segment holds shots
+/// 0–730 (250 km·20.16/6.9 km = 730.4) and a 1,000-shot profile is two runs of 731 and
+/// 269 shots; a broken layer of cloud fraction f = 0.4 in 4 km cells (clear stretches of
+/// 6 km on average) covers 0.4 of 20,000 km sampled every 200 m, within 5σ, σ² =
+/// 2f(1−f)/((1/4 km + 1/6 km)·20,000 km) = (0.0076)² (two-state Markov process, Cox 1962
+/// §7.2; a false alarm with probability 6e-7, normal tail, fixed seed); 1.2e7 cells of
+/// 1 m are refused, naming the count (survivors in `is_changing` (`i > 0` → `i < 0`),
+/// `column_at` (which cell holds x), `runs` (a run split at each column change) and
+/// `check_cell_count` (`cell_length_km·1e3` → `+`)).
+#[test]
+fn a_track_sees_its_segments_and_broken_cells() {
+    use lidarsim::config::SegmentConfig;
+    use lidarsim::scene::track::{AlongTrack, Column, Track};
+    let base = lidarsim::config::load(&common::config_path("instruments/caliop_orbit.toml"), &[])
+        .unwrap()
+        .config;
+    let with_segments = |segments: Vec<SegmentConfig>| {
+        let mut cfg = base.clone();
+        cfg.scene.as_mut().unwrap().segments = segments;
+        cfg
+    };
+    let segments = &base.scene.as_ref().unwrap().segments;
+    let (clear, cirrus, broken) = (&segments[0], &segments[1], &segments[2]);
+    assert_eq!((clear.length_km, cirrus.length_km), (250.0, 250.0));
+    // segments without broken layers still change along the track
+    let two = with_segments(vec![clear.clone(), cirrus.clone()]);
+    assert!(Track::is_changing(&two));
+    let plain = common::scenario("instruments/caliop_532.toml", &[])
+        .loaded
+        .config;
+    assert!(!Track::is_changing(&plain));
+    // 1,000 shots at 6.9 km/s: the segment boundary at 250 km after shot 730
+    assert_eq!(two.instrument.rep_rate_hz, 20.16);
+    let track = Track::new(&two, 1, AlongTrack::Speed(6_900.0), 1_000, 1).unwrap();
+    let column = |segment| Column {
+        segment,
+        present: 0,
+    };
+    assert_eq!(track.runs(0), [(column(0), 731), (column(1), 269)]);
+    // a broken layer's cloudy fraction, 20,000 km of it
+    let mut long = broken.clone();
+    long.length_km = 20_000.0;
+    let layer = &long.layers.as_ref().unwrap()[0];
+    assert_eq!(
+        (layer.cloud_fraction, layer.cell_length_km),
+        (Some(0.4), Some(4.0))
+    );
+    let cfg = with_segments(vec![long.clone()]);
+    let track = Track::new(&cfg, 7, AlongTrack::Speed(6_900.0), 1, 1).unwrap();
+    let samples = 100_000;
+    let cloudy = (0..samples)
+        .filter(|k| track.column_at(200.0 * *k as f64 + 100.0).present == 1)
+        .count() as f64
+        / samples as f64;
+    let sigma = (2.0f64 * 0.4 * 0.6 / ((1.0 / 4.0 + 1.0 / 6.0) * 20_000.0)).sqrt();
+    assert!(
+        (cloudy - 0.4).abs() < 5.0 * sigma,
+        "cloudy fraction {cloudy}, σ = {sigma}"
+    );
+    // 1.2e7 one-metre cells: refused
+    let mut tiny = long;
+    tiny.length_km = 30_000.0;
+    let l = &mut tiny.layers.as_mut().unwrap()[0];
+    l.cell_length_km = Some(0.001);
+    let e = Track::new(
+        &with_segments(vec![tiny]),
+        7,
+        AlongTrack::Speed(6_900.0),
+        1,
+        1,
+    )
+    .expect_err("1.2e7 cells accepted")
+    .to_string();
+    assert!(e.contains("1.2e7 cells"), "{e}");
+}

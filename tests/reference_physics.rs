@@ -602,8 +602,11 @@ fn the_sun_is_where_meeus_puts_it() {
 /// optics and AFGL ozone integrated here by the midpoint rule at 1 m, to 1e-4: paper
 /// scenario 2 with ozone (US76 molecules, the background aerosol, cirrus at 9–11 and
 /// 16–17 km) from the ground, inside the lower cirrus and between the two; above the
-/// atmosphere both are 0 (survivor "replace - with /" in `SunlightPath::above`, which
-/// divided the extinction by ozone's).
+/// atmosphere both are 0. And the factor on the reflected sunlight `T(μ)`, written here
+/// from the module docs with these depths, to 1e-3 at μ = 1, 0.5, 0.1 (survivors "replace
+/// - with /" in `SunlightPath::above`, which divided the extinction by ozone's, and
+/// "replace / with %" in `transmission`, which took ozone's slant path in the diffuse
+/// light as τ_abs mod μ).
 #[test]
 fn the_sunlight_path_is_the_optical_depth_above_the_reflector() {
     use lidarsim::scene::sun::SunlightPath;
@@ -635,6 +638,20 @@ fn the_sunlight_path_is_the_optical_depth_above_the_reflector() {
             rel(abs, absorbing) < 1e-4,
             "{reflector} m: τ_abs {abs} vs {absorbing}"
         );
+        // the factor on the reflected sunlight, written here from the module docs:
+        // exp(−τ)·[exp(−τ/μ) + ½·exp(−τ_abs/μ)·(1 − exp(−τ_sca/μ))]
+        let path = SunlightPath::above(&sc.atmosphere, reflector);
+        for mu in [1.0, 0.5, 0.1] {
+            let tau = scattering + absorbing;
+            let want = (-tau).exp()
+                * ((-tau / mu).exp()
+                    + 0.5 * (-absorbing / mu).exp() * (1.0 - (-scattering / mu).exp()));
+            let got = path.transmission(mu);
+            assert!(
+                rel(got, want) < 1e-3,
+                "{reflector} m, μ = {mu}: T {got} vs {want}"
+            );
+        }
     }
     // the ground's τ_sca holds the cirrus (0.4 + 0.025) and ~0.11 of molecules
     assert!(depths(0.0).0 > 0.5);
