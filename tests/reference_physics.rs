@@ -603,10 +603,10 @@ fn the_sun_is_where_meeus_puts_it() {
 /// scenario 2 with ozone (US76 molecules, the background aerosol, cirrus at 9–11 and
 /// 16–17 km) from the ground, inside the lower cirrus and between the two; above the
 /// atmosphere both are 0. And the factor on the reflected sunlight `T(μ)`, written here
-/// from the module docs with these depths, to 1e-3 at μ = 1, 0.5, 0.1 (survivors "replace
-/// - with /" in `SunlightPath::above`, which divided the extinction by ozone's, and
-/// "replace / with %" in `transmission`, which took ozone's slant path in the diffuse
-/// light as τ_abs mod μ).
+/// from the module docs with these depths, to 1e-3 at μ = 1, 0.5, 0.1 (survivors in
+/// `SunlightPath::above`, `−` → `/`, which divided the extinction by ozone's, and in
+/// `transmission`, `/` → `%`, which took ozone's slant path in the diffuse light as
+/// τ_abs mod μ).
 #[test]
 fn the_sunlight_path_is_the_optical_depth_above_the_reflector() {
     use lidarsim::scene::sun::SunlightPath;
