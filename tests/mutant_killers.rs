@@ -376,3 +376,354 @@ fn recorded_moments_follow_the_law_of_total_variance() {
         }
     }
 }
+
+/// A profile of one and a half shot blocks (`SHOT_BLOCK` = 65,536 shots per block, so
+/// 98,304 shots) through the dead-time stage (`recorded_profile`) records those shots'
+/// photons, no more: the photons are the shot path's own, shot for shot (the same
+/// `stream_rng(seed, profile, block)`), so with any dead time each bin records at most
+/// the shot path's count for the same seed — exactly. And the total is the expected
+/// one: 4 bins of λ = 0.25 per shot give 98,304 photons on average (Poisson, σ = 314);
+/// with τ = 1 ns in 1 µs bins the dead time loses at most the pairs closer than τ,
+/// n²·W·τ = (2.5e5 s⁻¹)²·4 µs·1 ns = 2.5e-4 a shot, ≤ 25 in all, and the recorded count
+/// varies less than the Poisson one. Tolerance 5σ + 25: a false alarm with probability
+/// 6e-7 (two-sided normal tail at 5σ; the seed is fixed). A last block drawn whole, as
+/// if 131,072 shots had been fired, is 105σ off (survivor "replace - with +" in
+/// `recorded_profile`'s shots of the last block).
+#[test]
+fn a_profile_longer_than_a_shot_block_records_each_shot_once() {
+    use lidarsim::detector::dead_time::recorded_profile;
+    use lidarsim::detector::{DeadTime, DeadTimeModel};
+    use lidarsim::sampling::{SHOT_BLOCK, ShotSampler, shot_profile};
+    let shots = SHOT_BLOCK + SHOT_BLOCK / 2;
+    assert_eq!(shots, 98_304);
+    let sampler = ShotSampler::new(&[0.25; 4]);
+    let (seed, profile) = (2026, 11);
+    let mut photons = vec![0u64; 4];
+    shot_profile(&sampler, seed, profile, shots, &mut photons);
+    for model in [DeadTimeModel::Nonparalyzable, DeadTimeModel::Paralyzable] {
+        let dead = DeadTime {
+            tau_s: 1e-9,
+            model,
+            bin_width_s: 1e-6,
+        };
+        let mut recorded = vec![0u64; 4];
+        recorded_profile(&sampler, &dead, seed, profile, shots, &mut recorded);
+        for (b, (r, p)) in recorded.iter().zip(&photons).enumerate() {
+            assert!(r <= p, "{model:?} bin {b}: {r} recorded of {p} photons");
+        }
+        let total = recorded.iter().sum::<u64>() as f64;
+        let mean = 0.25 * 4.0 * shots as f64;
+        assert!(
+            (total - mean).abs() < 5.0 * mean.sqrt() + 25.0,
+            "{model:?}: {total} recorded, {mean} expected"
+        );
+    }
+}
+
+/// A longitude is wrapped to [−180°, 180°) (`GroundPoint::longitude_deg`): the start
+/// point of an equatorial orbit comes back as given at t = 0, wrapped by hand here:
+/// 190° → −170°, 180° → −180°, −540.5° → 179.5°, and one float below −180°
+/// (−180 − 2.8e-14), where `rem_euclid` rounds up to exactly 360 and the guard branch
+/// must give −180°, not 540° (survivor "replace - with +" in `wrap_longitude_deg`; the
+/// unit test's −1e-17 does not reach that branch).
+#[test]
+fn longitudes_are_wrapped_to_minus_180_to_180() {
+    use lidarsim::scene::orbit::Orbit;
+    let just_below = f64::from_bits((-180.0f64).to_bits() + 1);
+    assert!(just_below < -180.0 && just_below > -180.000_000_000_001);
+    for (start, want) in [
+        (10.0, 10.0),
+        (190.0, -170.0),
+        (180.0, -180.0),
+        (-540.5, 179.5),
+        (just_below, -180.0),
+    ] {
+        let orbit = Orbit::new(600e3, 0.0, 0.0, start, true).unwrap();
+        let got = orbit.position(0.0).longitude_deg;
+        assert!((-180.0..180.0).contains(&got), "{start}: {got}");
+        assert!((got - want).abs() < 1e-9, "{start}: {got} vs {want}");
+    }
+}
+
+/// The curtain of [`a_curtain_is_read_column_by_column`]: 3 columns × 3 altitudes.
+struct Curtain {
+    along_track_km: Vec<f64>,
+    altitude_km: Vec<f64>,
+    /// Row i is column i, altitude index k within it (as `extinction_aerosol`'s
+    /// (along_track, altitude) layout).
+    extinction: Vec<f64>,
+    lidar_ratio: Vec<f64>,
+    depolarization: Vec<f64>,
+    wavelength_nm: f64,
+}
+
+impl Curtain {
+    fn new() -> Curtain {
+        Curtain {
+            along_track_km: vec![0.0, 5.0, 12.0],
+            altitude_km: vec![0.25, 0.75, 1.25],
+            extinction: vec![0.1, 0.0, 0.3, 0.4, 0.5, 0.6, 0.0, 0.8, 0.9],
+            lidar_ratio: vec![20.0, 0.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0],
+            depolarization: vec![0.01, 0.02, 0.03, 0.04, 0.05, 0.06, 0.07, 0.08, 0.09],
+            wavelength_nm: 532.0,
+        }
+    }
+
+    /// Written as an HDF5 curtain file at `path` (Ångström exponent 1.2), then read.
+    fn read(
+        &self,
+        path: &std::path::Path,
+    ) -> lidarsim::error::Result<Vec<lidarsim::config::SegmentConfig>> {
+        let f = hdf5::File::create(path).unwrap();
+        let (nx, nz) = (self.along_track_km.len(), self.altitude_km.len());
+        let dataset = |name: &str, shape: &[usize], v: &[f64]| {
+            f.new_dataset::<f64>()
+                .shape(shape)
+                .create(name)
+                .unwrap()
+                .write_raw(v)
+                .unwrap()
+        };
+        dataset("along_track_km", &[nx], &self.along_track_km);
+        dataset("altitude_km", &[nz], &self.altitude_km);
+        dataset("extinction_aerosol", &[nx, nz], &self.extinction);
+        dataset("lidar_ratio_aerosol", &[nx, nz], &self.lidar_ratio);
+        dataset("depolarization_aerosol", &[nx, nz], &self.depolarization);
+        f.dataset("extinction_aerosol")
+            .unwrap()
+            .new_attr::<f64>()
+            .shape(())
+            .create("angstrom_exponent")
+            .unwrap()
+            .write_scalar(&1.2)
+            .unwrap();
+        f.new_attr::<f64>()
+            .shape(())
+            .create("wavelength_nm")
+            .unwrap()
+            .write_scalar(&self.wavelength_nm)
+            .unwrap();
+        drop(f);
+        lidarsim::scene::curtain::segments(path)
+    }
+}
+
+/// A tabulated curtain written here, 3 columns × 3 altitudes (docs/scenes.md,
+/// `src/scene/curtain.rs`), read into segments and compared with the columns worked out
+/// by hand: columns start at 0, 5 and 12 km, so the segments are 5, 7 and 7 km long (the
+/// last one takes the previous spacing); cells centred at 0.25, 0.75, 1.25 km with
+/// 0.5 km spacing span 0–0.5, 0.5–1, 1–1.5 km; a zero-extinction cell is left out (its
+/// lidar ratio of 0 is then allowed); each layer carries its own cell's extinction, lidar
+/// ratio and depolarization, the Ångström exponent and the file's wavelength. Then the
+/// refusals: a lidar ratio of 0.5 sr or a negative extinction in a cell, a wavelength of
+/// 0, altitudes not increasing (survivors in `segments`: the last column's length, the
+/// cell index `i·nz + k`, the wavelength check; in `check_axis` and `check_values`).
+#[test]
+fn a_curtain_is_read_column_by_column() {
+    use lidarsim::config::LayerKind;
+    let dir = tempfile::tempdir().unwrap();
+    let c = Curtain::new();
+    let segments = c.read(&dir.path().join("good.h5")).unwrap();
+    let lengths: Vec<f64> = segments.iter().map(|s| s.length_km).collect();
+    assert_eq!(lengths, [5.0, 7.0, 7.0]);
+    for (i, segment) in segments.iter().enumerate() {
+        let layers = segment.layers.as_ref().unwrap();
+        let cells: Vec<usize> = (0..3).filter(|k| c.extinction[3 * i + k] > 0.0).collect();
+        assert_eq!(layers.len(), cells.len(), "column {i}");
+        for (layer, &k) in layers.iter().zip(&cells) {
+            let cell = 3 * i + k;
+            assert_eq!(layer.kind, LayerKind::Aerosol);
+            assert_eq!(
+                (layer.base_km, layer.top_km),
+                (0.5 * k as f64, 0.5 * (k + 1) as f64)
+            );
+            assert_eq!(
+                (
+                    layer.extinction_per_km,
+                    layer.lidar_ratio_sr,
+                    layer.depolarization
+                ),
+                (
+                    c.extinction[cell],
+                    c.lidar_ratio[cell],
+                    c.depolarization[cell]
+                ),
+                "column {i}, cell {k}"
+            );
+            assert_eq!(layer.angstrom_exponent, Some(1.2));
+            assert_eq!(layer.reference_wavelength_nm, Some(532.0));
+        }
+    }
+    let refused = |name: &str, edit: fn(&mut Curtain)| {
+        let mut bad = Curtain::new();
+        edit(&mut bad);
+        bad.read(&dir.path().join(name))
+            .expect_err(name)
+            .to_string()
+    };
+    let e = refused("ratio.h5", |c| c.lidar_ratio[4] = 0.5);
+    assert!(e.contains("`lidar_ratio_aerosol` cell 4"), "{e}");
+    let e = refused("negative.h5", |c| c.extinction[7] = -0.1);
+    assert!(e.contains("`extinction_aerosol` cell 7"), "{e}");
+    let e = refused("wavelength.h5", |c| c.wavelength_nm = 0.0);
+    assert!(e.contains("`wavelength_nm` is 0"), "{e}");
+    let e = refused("decreasing.h5", |c| c.altitude_km.reverse());
+    assert!(
+        e.contains("`altitude_km` is not strictly increasing"),
+        "{e}"
+    );
+}
+
+/// A window whose mean-rate grid would pass `MAX_GRID_STEPS` (5e7 steps) takes the
+/// stationary formulas per bin (docs/model.md §4b, `DeadTime::recorded_means`): a 1 ms
+/// bin with τ = 1 ns needs 64·Δt/τ = 6.4e7 steps, so its mean recorded count is
+/// `n·Δt/(1 + nτ)` (non-paralyzable) and `n·Δt·e^(−nτ)` (paralyzable), written here, to
+/// 1e-13 — where the solver, whose detector starts live, gives the first bin 0.004
+/// counts more (4.5e-8 and 5.1e-8 of it at n = 1e8 s⁻¹, computed with the solver's
+/// recurrence on a 1 µs bin: the transient does not depend on Δt) (survivor "replace >
+/// with ==" at the switch, which ran the solver on every window).
+#[test]
+fn a_window_past_the_grid_limit_takes_the_stationary_formulas() {
+    use lidarsim::detector::{DeadTime, DeadTimeModel};
+    let (tau, dt, n) = (1e-9, 1e-3, 1e8);
+    assert!(64.0 * dt / tau > lidarsim::detector::dead_time::MAX_GRID_STEPS);
+    for model in [DeadTimeModel::Nonparalyzable, DeadTimeModel::Paralyzable] {
+        let dead = DeadTime {
+            tau_s: tau,
+            model,
+            bin_width_s: dt,
+        };
+        let want = match model {
+            DeadTimeModel::Nonparalyzable => n * dt / (1.0 + n * tau),
+            DeadTimeModel::Paralyzable => n * dt * (-n * tau).exp(),
+        };
+        let got = dead.recorded_means(&[n * dt]);
+        assert!(
+            (got[0] / want - 1.0).abs() < 1e-13,
+            "{model:?}: {} vs {want}",
+            got[0]
+        );
+    }
+}
+
+/// Dead time crosses bin edges (docs/model.md §4b): in a window of 50 bins of 10 ns with
+/// λ = 2 photons a bin and τ = 5 ns (nτ = 1), the sampler's mean recorded count per bin
+/// past the first ten (the live start's transient has died out) is the stationary one,
+/// Müller's `nΔt/(1 + nτ)` = 1 (non-paralyzable) and `nΔt·e^(−nτ)` = 0.736 (paralyzable),
+/// written here. 30 profiles of 200 shots, each from its own streams; the check is the
+/// mean of the 30 within 6 standard errors (their own spread): a false alarm with
+/// probability 1.6e-6 per model (Student's t, 29 degrees of freedom; fixed seeds). A
+/// detector made live again at each bin's start records 13 % and 36 % more (a Monte Carlo
+/// of this window) (survivor "replace < with >" in `record_shot`'s runs of adjacent bins).
+#[test]
+fn dead_time_carries_across_bin_edges() {
+    use lidarsim::detector::dead_time::recorded_profile;
+    use lidarsim::detector::{DeadTime, DeadTimeModel};
+    use lidarsim::sampling::ShotSampler;
+    let (tau, dt, lambda) = (5e-9, 1e-8, 2.0);
+    let n: f64 = lambda / dt;
+    let sampler = ShotSampler::new(&[lambda; 50]);
+    for (model, want) in [
+        (DeadTimeModel::Nonparalyzable, n * dt / (1.0 + n * tau)),
+        (DeadTimeModel::Paralyzable, n * dt * (-n * tau).exp()),
+    ] {
+        let dead = DeadTime {
+            tau_s: tau,
+            model,
+            bin_width_s: dt,
+        };
+        let means: Vec<f64> = (0..30)
+            .map(|profile| {
+                let mut acc = vec![0u64; 50];
+                recorded_profile(&sampler, &dead, 25, profile, 200, &mut acc);
+                acc[10..].iter().sum::<u64>() as f64 / (200.0 * 40.0)
+            })
+            .collect();
+        let mean = means.iter().sum::<f64>() / 30.0;
+        let var = means.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / 29.0;
+        let error = (var / 30.0).sqrt();
+        assert!(
+            (mean - want).abs() < 6.0 * error,
+            "{model:?}: {mean} ± {error} recorded a bin, want {want}"
+        );
+    }
+}
+
+/// The scene along the track (docs/model.md §4f, `src/scene/track.rs`), from the orbit
+/// example's segments with values worked out by hand: a scene of segments is a changing
+/// scene even without broken layers, a scene without `[scene]` is not; at 6.9 km/s and
+/// 20.16 shots a second a shot every 342.26 m, so the first 250 km segment holds shots
+/// 0–730 (250 km·20.16/6.9 km = 730.4) and a 1,000-shot profile is two runs of 731 and
+/// 269 shots; a broken layer of cloud fraction f = 0.4 in 4 km cells (clear stretches of
+/// 6 km on average) covers 0.4 of 20,000 km sampled every 200 m, within 5σ, σ² =
+/// 2f(1−f)/((1/4 km + 1/6 km)·20,000 km) = (0.0076)² (two-state Markov process, Cox 1962
+/// §7.2; a false alarm with probability 6e-7, normal tail, fixed seed); 1.2e7 cells of
+/// 1 m are refused, naming the count (survivors in `is_changing` (`i > 0` → `i < 0`),
+/// `column_at` (which cell holds x), `runs` (a run split at each column change) and
+/// `check_cell_count` (`cell_length_km·1e3` → `+`)).
+#[test]
+fn a_track_sees_its_segments_and_broken_cells() {
+    use lidarsim::config::SegmentConfig;
+    use lidarsim::scene::track::{AlongTrack, Column, Track};
+    let base = lidarsim::config::load(&common::config_path("instruments/caliop_orbit.toml"), &[])
+        .unwrap()
+        .config;
+    let with_segments = |segments: Vec<SegmentConfig>| {
+        let mut cfg = base.clone();
+        cfg.scene.as_mut().unwrap().segments = segments;
+        cfg
+    };
+    let segments = &base.scene.as_ref().unwrap().segments;
+    let (clear, cirrus, broken) = (&segments[0], &segments[1], &segments[2]);
+    assert_eq!((clear.length_km, cirrus.length_km), (250.0, 250.0));
+    // segments without broken layers still change along the track
+    let two = with_segments(vec![clear.clone(), cirrus.clone()]);
+    assert!(Track::is_changing(&two));
+    let plain = common::scenario("instruments/caliop_532.toml", &[])
+        .loaded
+        .config;
+    assert!(!Track::is_changing(&plain));
+    // 1,000 shots at 6.9 km/s: the segment boundary at 250 km after shot 730
+    assert_eq!(two.instrument.rep_rate_hz, 20.16);
+    let track = Track::new(&two, 1, AlongTrack::Speed(6_900.0), 1_000, 1).unwrap();
+    let column = |segment| Column {
+        segment,
+        present: 0,
+    };
+    assert_eq!(track.runs(0), [(column(0), 731), (column(1), 269)]);
+    // a broken layer's cloudy fraction, 20,000 km of it
+    let mut long = broken.clone();
+    long.length_km = 20_000.0;
+    let layer = &long.layers.as_ref().unwrap()[0];
+    assert_eq!(
+        (layer.cloud_fraction, layer.cell_length_km),
+        (Some(0.4), Some(4.0))
+    );
+    let cfg = with_segments(vec![long.clone()]);
+    let track = Track::new(&cfg, 7, AlongTrack::Speed(6_900.0), 1, 1).unwrap();
+    let samples = 100_000;
+    let cloudy = (0..samples)
+        .filter(|k| track.column_at(200.0 * *k as f64 + 100.0).present == 1)
+        .count() as f64
+        / samples as f64;
+    let sigma = (2.0f64 * 0.4 * 0.6 / ((1.0 / 4.0 + 1.0 / 6.0) * 20_000.0)).sqrt();
+    assert!(
+        (cloudy - 0.4).abs() < 5.0 * sigma,
+        "cloudy fraction {cloudy}, σ = {sigma}"
+    );
+    // 1.2e7 one-metre cells: refused
+    let mut tiny = long;
+    tiny.length_km = 30_000.0;
+    let l = &mut tiny.layers.as_mut().unwrap()[0];
+    l.cell_length_km = Some(0.001);
+    let e = Track::new(
+        &with_segments(vec![tiny]),
+        7,
+        AlongTrack::Speed(6_900.0),
+        1,
+        1,
+    )
+    .expect_err("1.2e7 cells accepted")
+    .to_string();
+    assert!(e.contains("1.2e7 cells"), "{e}");
+}

@@ -653,3 +653,59 @@ pub fn march(
     }
     (tau, integral)
 }
+
+// ---------------------------------------------------------------------------------------
+// The sun: Meeus, *Astronomical Algorithms* (2nd ed., 1998), ch. 25 (the low-accuracy
+// solar coordinates, Eqs. 25.2–25.5 and 25.8), ch. 22 (the mean obliquity, Eq. 22.2) and
+// ch. 28 (the equation of time, Eq. 28.3), as the NOAA Solar Calculator uses them; the
+// local hour angle and the zenith angle as in the NOAA calculator. Meeus's Examples 25.a
+// and 28.b (1992 October 13.0) check this transcription in `reference_physics`.
+// ---------------------------------------------------------------------------------------
+
+/// The sun at Julian date `jd` (TT, here taken for UT): apparent declination δ (degrees),
+/// equation of time E (radians, apparent minus mean solar time) and the Earth–Sun
+/// distance R (AU).
+pub fn meeus_sun(jd: f64) -> (f64, f64, f64) {
+    let deg = f64::to_radians;
+    let t = (jd - 2_451_545.0) / 36_525.0;
+    let t2 = t * t;
+    // 25.2–25.4: geometric mean longitude, mean anomaly, eccentricity
+    let l0 = 280.466_46 + 36_000.769_83 * t + 0.000_303_2 * t2;
+    let m = 357.529_11 + 35_999.050_29 * t - 0.000_153_7 * t2;
+    let e = 0.016_708_634 - 0.000_042_037 * t - 0.000_000_126_7 * t2;
+    // the equation of centre, the true longitude and anomaly
+    let c = (1.914_602 - 0.004_817 * t - 0.000_014 * t2) * deg(m).sin()
+        + (0.019_993 - 0.000_101 * t) * deg(2.0 * m).sin()
+        + 0.000_289 * deg(3.0 * m).sin();
+    let (sun_longitude, nu) = (l0 + c, m + c);
+    // 25.5: the radius vector
+    let r = 1.000_001_018 * (1.0 - e * e) / (1.0 + e * deg(nu).cos());
+    // 25.8 ff.: apparent longitude, obliquity corrected for nutation, declination
+    let omega = 125.04 - 1_934.136 * t;
+    let lambda = sun_longitude - 0.005_69 - 0.004_78 * deg(omega).sin();
+    let eps0_arcsec = 21.448 - 46.815_0 * t - 0.000_59 * t2 + 0.001_813 * t2 * t; // 22.2
+    let eps = 23.0 + 26.0 / 60.0 + eps0_arcsec / 3_600.0 + 0.002_56 * deg(omega).cos();
+    let declination = (deg(eps).sin() * deg(lambda).sin()).asin().to_degrees();
+    // 28.3 (Smart): the equation of time in radians
+    let y = (deg(eps) / 2.0).tan().powi(2);
+    let (l0r, mr) = (deg(l0), deg(m));
+    let eot = y * (2.0 * l0r).sin() - 2.0 * e * mr.sin()
+        + 4.0 * e * y * mr.sin() * (2.0 * l0r).cos()
+        - 0.5 * y * y * (4.0 * l0r).sin()
+        - 1.25 * e * e * (2.0 * mr).sin();
+    (declination, eot, r)
+}
+
+/// cos θ_s, the cosine of the geocentric solar zenith angle at Unix time `unix_s` (UTC,
+/// taken for TT) at latitude `lat_deg` and east longitude `lon_deg`: true solar time
+/// `UTC minutes + E + 4·longitude`, hour angle `t_s/4 − 180°` (NOAA), and
+/// `cos θ_s = sin φ·sin δ + cos φ·cos δ·cos h`.
+pub fn cos_solar_zenith(unix_s: f64, lat_deg: f64, lon_deg: f64) -> f64 {
+    let jd = 2_440_587.5 + unix_s / 86_400.0;
+    let (declination, eot, _) = meeus_sun(jd);
+    let minutes = unix_s.rem_euclid(86_400.0) / 60.0; // of the UTC day
+    let true_solar_minutes = minutes + 4.0 * eot.to_degrees() + 4.0 * lon_deg;
+    let h = (true_solar_minutes / 4.0 - 180.0).to_radians();
+    let (phi, delta) = (lat_deg.to_radians(), declination.to_radians());
+    phi.sin() * delta.sin() + phi.cos() * delta.cos() * h.cos()
+}
