@@ -94,9 +94,10 @@ impl Molecules {
     /// above a profile's top (p scaled as N is, US76's T).
     pub fn state_at(&self, z_m: f64) -> MolecularState {
         let n = self.number_density_m3(z_m);
+        // US76 has a state up to its top (where its N > 0), none above
         let us76 = |z: f64, scale: f64| match us76::state(z.max(us76::BOTTOM_ALTITUDE_M)) {
-            Some(s) if n > 0.0 => (scale * s.pressure_pa, s.temperature_k),
-            _ => (f64::NAN, f64::NAN),
+            Some(s) => (scale * s.pressure_pa, s.temperature_k),
+            None => (f64::NAN, f64::NAN),
         };
         let (pressure_pa, temperature_k) = match &self.source {
             MolecularSource::None => (f64::NAN, f64::NAN),
