@@ -188,19 +188,13 @@ fn bin_report(sums: &Sums, n: usize, channel: &str, bin: usize, altitude_m: f64)
         z: (enough && shape.is_some()).then(|| (s.v - s.mu) / s.var.sqrt()),
         shape,
     };
-    let untested = Stat {
-        empirical: f64::NAN,
-        model: f64::NAN,
-        z: None,
-        shape: None,
-    };
     BinReport {
         channel: channel.to_string(),
         bin,
         altitude_m,
         mean,
         variance,
-        snr_known_background: untested,
-        snr_estimated_background: untested,
+        snr_known_background: Stat::untested(),
+        snr_estimated_background: Stat::untested(),
     }
 }

@@ -274,20 +274,14 @@ fn bin_report(
         z: (enough && shape.is_some()).then(|| (v - var) / var_y.sqrt()),
         shape,
     };
-    let untested = Stat {
-        empirical: f64::NAN,
-        model: f64::NAN,
-        z: None,
-        shape: None,
-    };
     BinReport {
         channel: channel.to_string(),
         bin,
         altitude_m,
         mean,
         variance,
-        snr_known_background: untested,
-        snr_estimated_background: untested,
+        snr_known_background: Stat::untested(),
+        snr_estimated_background: Stat::untested(),
     }
 }
 
