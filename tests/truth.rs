@@ -460,3 +460,59 @@ fn a_profile_files_state_and_a_geometric_overlap_are_in_the_file() {
         }
     }
 }
+
+/// A profile file that ends below the US76 top is continued by US76 scaled to match its
+/// number density at the top row: above it the file's `temperature` is US76's, its
+/// `pressure` US76's times that scale, and the ideal-gas law still holds.
+#[test]
+fn a_short_profile_file_is_continued_by_scaled_us76() {
+    let dir = scratch("short-profile");
+    let full = std::fs::read_to_string(config_path("atmospheres/us76_1km.txt")).unwrap();
+    // the header and the rows up to 11 km, then a 12 km row 6.5 K warmer than US76's
+    let mut text: String = full
+        .lines()
+        .filter(|l| {
+            let first = l.split_whitespace().next().unwrap_or("");
+            first.parse::<f64>().map_or(true, |z| z <= 11.0)
+        })
+        .map(|l| format!("{l}\n"))
+        .collect();
+    text.push_str("12.0 1.939945e2 223.150\n");
+    std::fs::write(dir.join("short.txt"), &text).unwrap();
+    let cfg = std::fs::read_to_string(config_path("ground/profile_file_example.toml"))
+        .unwrap()
+        .replace("../atmospheres/us76_1km.txt", "short.txt");
+    std::fs::write(dir.join("short.toml"), cfg).unwrap();
+    let path = simulate(&dir, &dir.join("short.toml"), "s.h5", &["--profiles", "2"]);
+    let f = hdf5::File::open(&path).unwrap();
+    let v = |name: &str| read(&f, name).0;
+    let (p, t, n, altitude) = (
+        v("pressure"),
+        v("temperature"),
+        v("number_density"),
+        v("altitude"),
+    );
+    let top = 12_000.0;
+    let (t_top, p_top) = reference::us76_t_p(top);
+    let scale = (193.9945 * 100.0 / (K_B * 223.15)) / (p_top / (K_B * t_top));
+    assert!(
+        (scale - 216.65 / 223.15).abs() < 1e-3,
+        "the scale is the warmer row's {scale}"
+    );
+    let mut above = 0;
+    for (b, &z) in altitude.iter().enumerate() {
+        assert!(rel(n[b], p[b] / (K_B * t[b])) <= 1e-12, "N = p/kT at {z}");
+        if z > top {
+            let (t_ref, p_ref) = reference::us76_t_p(z);
+            assert!(rel(t[b], t_ref) < 1e-9, "T at {z}: {} vs {t_ref}", t[b]);
+            assert!(
+                rel(p[b], scale * p_ref) < 1e-6,
+                "p at {z}: {} vs {}",
+                p[b],
+                scale * p_ref
+            );
+            above += 1;
+        }
+    }
+    assert!(above > 100, "{above} bins above the file's top");
+}
