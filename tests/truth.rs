@@ -516,3 +516,44 @@ fn a_short_profile_file_is_continued_by_scaled_us76() {
     }
     assert!(above > 100, "{above} bins above the file's top");
 }
+
+/// A shard whose `profile_column` names a column the run does not have, or whose weight
+/// is NaN, is refused by `merge` in one line naming the shard, and nothing is written.
+#[test]
+fn merge_refuses_a_shard_with_impossible_columns() {
+    let dir = scratch("merge-columns");
+    let cfg = config_path("instruments/caliop_orbit.toml");
+    let cfg = cfg.to_str().unwrap();
+    for k in ["0/2", "1/2"] {
+        let out = format!("s{}.h5", &k[..1]);
+        let args = [
+            "simulate",
+            cfg,
+            "--profiles",
+            "20",
+            "--shard",
+            k,
+            "-o",
+            &out,
+        ];
+        ok(lidarsim(&dir, &args, &[]));
+    }
+    for (value, weight) in [(99, 1.0), (0, f64::NAN)] {
+        let f = hdf5::File::open_rw(dir.join("s1.h5")).unwrap();
+        let columns = f.dataset("profile_column").unwrap();
+        let mut c: Vec<i32> = columns.read_raw().unwrap();
+        c[0] = value;
+        columns.write_raw(&c).unwrap();
+        let weights = f.dataset("profile_column_weight").unwrap();
+        let mut w: Vec<f64> = weights.read_raw().unwrap();
+        w[0] = weight;
+        weights.write_raw(&w).unwrap();
+        drop((columns, weights, f));
+        common::cli::refused(
+            &dir,
+            &["merge", "m.h5", "s0.h5", "s1.h5"],
+            &["s1.h5", "row 0", "slot 0"],
+            "m.h5",
+        );
+    }
+}

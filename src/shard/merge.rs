@@ -22,6 +22,7 @@ use super::{
     require_disk_for_merge, run_id, stored_lidar,
 };
 use crate::error::{Error, Result};
+use crate::output::raw_file::check::RecordShape;
 use crate::output::raw_file::{
     COMPONENT_NAMES, Dims, PROFILE_COLUMN_NAMES, ProfileRecord, RawFileSpec, RawFileWriter,
 };
@@ -296,6 +297,7 @@ impl RowSources {
 /// Streams the rows of shard `f` into `writer`, block by block, at their rows of the run.
 fn copy_rows(f: &ShardFile, spec: &RawFileSpec, writer: &mut RawFileWriter) -> Result<()> {
     let src = RowSources::of(f, spec)?;
+    let shape = RecordShape::of(spec);
     let n = spec.counts_per_profile();
     let wide = 1 + src.components.len() + src.values.len();
     let block = (BLOCK_BYTES / (8 * n * wide).max(1)).max(1);
@@ -347,7 +349,7 @@ fn copy_rows(f: &ShardFile, spec: &RawFileSpec, writer: &mut RawFileWriter) -> R
         };
         for r in 0..b - a {
             let row_values: Vec<&[f64]> = values.iter().map(|(v, w)| row(v, r, *w)).collect();
-            writer.write_profile(&ProfileRecord {
+            let record = ProfileRecord {
                 index: f.first_profile + a + r,
                 time_s: time[r],
                 n_shots: shots[r],
@@ -360,7 +362,12 @@ fn copy_rows(f: &ShardFile, spec: &RawFileSpec, writer: &mut RawFileWriter) -> R
                 values: &row_values,
                 columns: row(&columns, r, k),
                 column_weights: row(&weights, r, k),
-            })?;
+            };
+            // a shard's bad row is the shard's fault: named there, not as the output's
+            shape
+                .check(&record)
+                .map_err(|why| Error::output(&f.path, format!("row {}: {why}", a + r)))?;
+            writer.write_profile(&record)?;
         }
     }
     Ok(())
