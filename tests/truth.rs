@@ -435,6 +435,27 @@ fn a_profile_files_state_and_a_geometric_overlap_are_in_the_file() {
         checked += 1;
     }
     assert!(checked > 100, "{checked} bins below the profile's top");
+    // above a profile that reaches the US76 top there is no air: N = 0, p and T missing
+    let high = simulate(
+        &dir,
+        &cfg,
+        "high.h5",
+        &["--profiles", "2", "--set", "acquisition.top_altitude_km=95"],
+    );
+    let g = hdf5::File::open(&high).unwrap();
+    let w = |name: &str| read(&g, name).0;
+    let (p_high, t_high, n_high) = (w("pressure"), w("temperature"), w("number_density"));
+    let high_altitude = w("altitude");
+    let above: Vec<usize> = (0..n_high.len())
+        .filter(|&b| high_altitude[b] > top)
+        .collect();
+    assert!(!above.is_empty());
+    for b in above {
+        assert!(
+            n_high[b] == 0.0 && p_high[b].is_nan() && t_high[b].is_nan(),
+            "bin {b}"
+        );
+    }
     let (overlap, weight, range) = (v("overlap"), v("range_weight"), v("range"));
     let full: f64 = f
         .attr("full_overlap_range_m")
