@@ -92,12 +92,57 @@ fn the_truth_satisfies_its_identities_in_every_column() {
                 );
             }
         }
+        // the particle and molecular depolarization against the configs' (every aerosol
+        // 0.05; the cirrus 0.4, the stratocumulus 0.03) and the reference's molecular line
+        // (the 532 nm etalon passes the Cabannes line, 1064 nm's filter the whole line),
+        // and the volume depolarization as the mix of the species' ∥ and ⊥ parts
+        let (d_aer, d_cld, d_mol, d_vol) = (
+            v("depol_aer"),
+            v("depol_cld"),
+            v("depol_mol"),
+            v("depol_volume"),
+        );
+        let wavelength = v("detection_wavelength");
+        let altitude = v("altitude");
+        for i in 0..alpha_total.len() {
+            let channel = (i / n_bins) % n_channels;
+            let wl = wavelength[channel];
+            let (_, delta_mol) = reference::molecular_lidar_ratio_and_depolarization(
+                reference::rayleigh_rho_n(wl),
+                wl < 1000.0,
+            );
+            assert!(
+                rel(d_mol[i], delta_mol) < 1e-9,
+                "{cfg} depol_mol[{i}] at {wl} nm"
+            );
+            let want_aer = if beta_aer[i] > 0.0 { 0.05 } else { 0.0 };
+            assert!(rel(d_aer[i], want_aer) < 1e-12, "{cfg} depol_aer[{i}]");
+            if beta_cld[i] > 0.0 {
+                let want = if altitude[i % n_bins] > 5_000.0 {
+                    0.4
+                } else {
+                    0.03
+                };
+                assert!(rel(d_cld[i], want) < 1e-12, "{cfg} depol_cld[{i}]");
+            } else {
+                assert_eq!(d_cld[i], 0.0);
+            }
+            let parts = [
+                (beta_mol[i], delta_mol),
+                (beta_aer[i], 0.05),
+                (beta_cld[i], d_cld[i]),
+            ];
+            let perp: f64 = parts.iter().map(|(b, d)| b * d / (1.0 + d)).sum();
+            let par: f64 = parts.iter().map(|(b, d)| b / (1.0 + d)).sum();
+            if par > 0.0 {
+                assert!(rel(d_vol[i], perp / par) < 1e-12, "{cfg} depol_volume[{i}]");
+            }
+        }
         // t2: from bin centre to bin centre, exp(−2∫α_eff dr) by the trapezoid rule of the
         // stored point values agrees to 1e-6 wherever no layer edge lies between the two
         // centres (the stored values are point values; a cut bin's average is not)
         let effective = |i: usize| mol[i] + o3[i] + ms_aer[i] * aer[i] + ms_cld[i] * cld[i];
         let edges = layer_edges_m(&f);
-        let altitude = v("altitude");
         let mut checked = 0;
         for c in 0..n_columns * n_channels {
             for b in 1..n_bins {
