@@ -181,13 +181,37 @@ fn bin_report(sums: &Sums, n: usize, channel: &str, bin: usize, altitude_m: f64)
         shape: mean_shape,
     };
     let enough = model.cumulants[0] >= MIN_TOTAL_COUNTS && s.var > 0.0;
-    let shape = calibration::outside_probability(s.k3 / s.var.powf(1.5), s.k4 / (s.var * s.var));
-    let variance = Stat {
-        empirical: s.v / nf,
-        model: s.mu / nf,
-        z: (enough && shape.is_some()).then(|| (s.v - s.mu) / s.var.sqrt()),
+    let variance = variance_stat(s.v, s.mu, [s.var, s.k3, s.k4], enough, nf);
+    mean_and_variance(channel, bin, altitude_m, mean, variance)
+}
+
+/// The variance check of a bin over `nf` profiles: the sum of squared deviations
+/// `v` against its model `model_v`, whose own variance and third and fourth cumulants
+/// are `[var, k3, k4]` (the calibrated Edgeworth tail; no z unless `enough`).
+pub(crate) fn variance_stat(
+    v: f64,
+    model_v: f64,
+    [var, k3, k4]: [f64; 3],
+    enough: bool,
+    nf: f64,
+) -> Stat {
+    let shape = calibration::outside_probability(k3 / var.powf(1.5), k4 / (var * var));
+    Stat {
+        empirical: v / nf,
+        model: model_v / nf,
+        z: (enough && shape.is_some()).then(|| (v - model_v) / var.sqrt()),
         shape,
-    };
+    }
+}
+
+/// A bin's report with the mean and variance checks only (no S/N).
+pub(crate) fn mean_and_variance(
+    channel: &str,
+    bin: usize,
+    altitude_m: f64,
+    mean: Stat,
+    variance: Stat,
+) -> BinReport {
     BinReport {
         channel: channel.to_string(),
         bin,

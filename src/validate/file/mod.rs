@@ -35,7 +35,7 @@
 use std::path::Path;
 
 use super::exact::ExactSum;
-use super::{BinModel, BinReport, MIN_TOTAL_COUNTS, Report, Stat, calibration, mean_z};
+use super::{BinModel, BinReport, MIN_TOTAL_COUNTS, Report, Stat, mean_z, scene};
 use crate::detector::{DeadTime, DeadTimeModel};
 use crate::error::{Error, Result};
 use crate::output::raw_file::read::{self, RawHeader};
@@ -264,25 +264,9 @@ fn bin_report(
         shape,
     };
     let enough = n > 0 && mu >= MIN_TOTAL_COUNTS && var_y > 0.0;
-    let shape = calibration::outside_probability(
-        s.k3.value() / var_y.powf(1.5),
-        s.k4.value() / (var_y * var_y),
-    );
-    let variance = Stat {
-        empirical: v / nf,
-        model: var / nf,
-        z: (enough && shape.is_some()).then(|| (v - var) / var_y.sqrt()),
-        shape,
-    };
-    BinReport {
-        channel: channel.to_string(),
-        bin,
-        altitude_m,
-        mean,
-        variance,
-        snr_known_background: Stat::untested(),
-        snr_estimated_background: Stat::untested(),
-    }
+    let cumulants = [var_y, s.k3.value(), s.k4.value()];
+    let variance = scene::variance_stat(v, var, cumulants, enough, nf);
+    scene::mean_and_variance(channel, bin, altitude_m, mean, variance)
 }
 
 /// The checks' table, the channels not judged, and the verdict.
