@@ -73,6 +73,9 @@ fn rewrite_all<T: hdf5::H5Type>(path: &Path, names: &[&str], values: &[Vec<T>]) 
             .write_raw(v)
             .unwrap();
     }
+    // closed here, every handle with it, so the child process reads it whole (a file
+    // left to `Drop` may still be open while another test thread holds HDF5's lock)
+    f.close().unwrap();
 }
 
 fn rewrite<T: hdf5::H5Type + Clone>(path: &Path, name: &str, values: &[T]) {

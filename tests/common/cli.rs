@@ -17,9 +17,14 @@ pub fn scratch(name: &str) -> PathBuf {
 /// `lidarsim ARGS` in `dir` with SOURCE_DATE_EPOCH and `env` set, no array-job variables.
 pub fn lidarsim(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> Output {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_lidarsim"));
+    // A file this test process opened with the hdf5 crate (to rewrite it) may stay
+    // locked by a child another test thread forked meanwhile: HDF5 opens files without
+    // close-on-exec, and the child inherits the descriptor and its lock. The child run
+    // here then cannot open the file; without HDF5's advisory locking it can.
     cmd.current_dir(dir)
         .args(args)
-        .env("SOURCE_DATE_EPOCH", EPOCH);
+        .env("SOURCE_DATE_EPOCH", EPOCH)
+        .env("HDF5_USE_FILE_LOCKING", "FALSE");
     for v in [
         "SLURM_ARRAY_TASK_ID",
         "SLURM_ARRAY_TASK_COUNT",
