@@ -566,12 +566,9 @@ impl RunValues {
         let profiles = i64::try_from(self.profiles).map_err(|e| unwritable(e.to_string()))?;
         set("acquisition", "profiles", toml::Value::Integer(profiles))?;
         set("simulation", "seed", crate::config::seed_value(self.seed))?;
-        let method = match self.method {
-            Method::Auto => "auto",
-            Method::Shot => "shot",
-            Method::Aggregate => "aggregate",
-        };
-        set("simulation", "method", toml::Value::String(method.into()))?;
+        // as the config spells it (`auto`, `shot`, `aggregate`: Method's serde names)
+        let method = toml::Value::try_from(self.method).map_err(|e| unwritable(e.to_string()))?;
+        set("simulation", "method", method)?;
         set(
             "simulation",
             "components",
@@ -764,8 +761,8 @@ pub fn run(
                     .as_ref()
                     .map(|[s, b, k]| [&s[..], &b[..], &k[..]]),
                 values: &values,
-                columns: &d.columns.0,
-                column_weights: &d.columns.1,
+                columns: d.columns.as_ref().map_or(STATIC_COLUMN.0, |c| &c.0),
+                column_weights: d.columns.as_ref().map_or(STATIC_COLUMN.1, |c| &c.1),
             })?;
         }
         progress.inc(drawn.len() as u64);
@@ -828,8 +825,9 @@ pub struct DrawnProfile {
     /// background, recorded counts per shot, S/N, attenuated backscatter).
     pub values: Vec<Vec<f64>>,
     /// The columns the profile's shots saw and their shares (`profile_column`,
-    /// `profile_column_weight`), padded to the file's slots.
-    pub columns: (Vec<i32>, Vec<f64>),
+    /// `profile_column_weight`), padded to the file's slots; `None` in a static scene
+    /// (its one column, [`STATIC_COLUMN`]).
+    pub columns: Option<(Vec<i32>, Vec<f64>)>,
 }
 
 /// Index in [`DrawnProfile::values`] of a changing scene's expected recorded counts per shot.
@@ -914,7 +912,7 @@ pub fn draw_scene_counts(
         components: None,
         energy_sum: energies.run_sums(&runs).iter().sum(),
         values: Vec::new(),
-        columns: profile_columns(&runs, sc.column_slots),
+        columns: Some(profile_columns(&runs, sc.column_slots)),
     };
     (
         drawn,
@@ -1008,9 +1006,12 @@ pub fn draw_profile(
         components: parts,
         energy_sum: energy.law.profile_sum(energy_seed, p, shots),
         values: Vec::new(),
-        columns: (vec![0], vec![1.0]),
+        columns: None,
     }
 }
+
+/// The columns of every profile of a static scene: its one column, all the shots.
+pub const STATIC_COLUMN: (&[i32], &[f64]) = (&[0], &[1.0]);
 
 /// The distinct columns of a profile's `runs` (column, shots) in the order first seen,
 /// with the share of the shots that saw each, padded with (−1, 0) to `slots`.
@@ -1070,6 +1071,7 @@ fn raw_file_spec(
         method: method.name(),
         method_attributes,
         command_line: &opts.command_line,
+        config: values.stored_config(&first.loaded.resolved_toml)?,
     };
     // the brightest bin at the brightest pulse of the run sizes the counters (every
     // column of a changing scene, in full sunlight)
@@ -1116,23 +1118,8 @@ fn raw_file_spec(
             Some(_) => content::GEOLOCATION.iter().map(|s| s.to_string()).collect(),
             None => vec![],
         },
-        root_attributes: with_config(
-            content::root_attributes(first, &run_info)?,
-            values.stored_config(&first.loaded.resolved_toml)?,
-        ),
+        root_attributes: content::root_attributes(first, &run_info)?,
     })
-}
-
-/// `attributes` with `config` holding `config` (the run's [`RunValues::stored_config`]).
-fn with_config(
-    mut attributes: Vec<(String, AttrValue)>,
-    config: String,
-) -> Vec<(String, AttrValue)> {
-    match attributes.iter_mut().find(|(name, _)| name == "config") {
-        Some((_, value)) => *value = AttrValue::Str(config),
-        None => attributes.push(("config".into(), AttrValue::Str(config))),
-    }
-    attributes
 }
 
 /// Bytes per stored count beyond the Poisson entropy: deflate after shuffle stores

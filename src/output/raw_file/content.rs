@@ -23,6 +23,9 @@ pub struct RunInfo<'a> {
     pub method_attributes: Vec<(String, AttrValue)>,
     /// The command line, recorded in `history`.
     pub command_line: &'a str,
+    /// The resolved config with the run's values written in (`config`,
+    /// [`crate::simulate::RunValues::stored_config`]).
+    pub config: String,
 }
 
 /// Options of `simulate` that do not change the file's content, left out of `history`
@@ -316,7 +319,7 @@ pub fn root_attributes(sc: &Scenario, run: &RunInfo) -> Result<Vec<(String, Attr
             "lidarsim_format_version".into(),
             AttrValue::I32(FORMAT_VERSION),
         ),
-        s("config", sc.loaded.resolved_toml.clone()),
+        s("config", run.config.clone()),
         ("seed".into(), AttrValue::U64(run.seed)),
         s("method", run.method.into()),
         s("config_file", sc.loaded.path.display().to_string()),
