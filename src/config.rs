@@ -238,6 +238,10 @@ pub struct AcquisitionConfig {
     /// absent = the bins of the window above the top of the atmosphere.
     #[serde(default)]
     pub background_bins: Option<usize>,
+    /// Bins a ground recorder records before the pulse leaves (background and dark only),
+    /// first in the bin grid, at negative range; 0 = none.
+    #[serde(default)]
+    pub pretrigger_bins: usize,
     /// UTC time of the first shot, RFC 3339 (`2004-03-21T00:00:00Z`): the origin of the
     /// raw file's CF `time`.
     #[serde(default = "default_start_time")]

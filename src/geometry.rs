@@ -68,15 +68,21 @@ pub struct Geometry {
     pub spherical: bool,
     /// Range width of one bin, m.
     pub bin_range_m: f64,
-    /// Range at the start of bin 0, m.
-    pub first_bin_range_m: f64,
-    /// Number of bins.
+    /// Range at the start of the window's first bin after the trigger, m (bin
+    /// `pretrigger_bins`; bin 0 when there are none).
+    pub window_start_range_m: f64,
+    /// Number of bins, the pre-trigger bins included.
     pub n_bins: usize,
+    /// Bins recorded before the pulse leaves (`acquisition.pretrigger_bins`): the first
+    /// bins of the grid, at negative range, holding background and dark counts only.
+    pub pretrigger_bins: usize,
 }
 
 impl Geometry {
     /// Builds the bin grid of a validated config: bin 0 starts at the window's top
     /// (space-borne) or bottom (ground); bins cover the window, the last one may overhang it.
+    /// A ground window with `acquisition.pretrigger_bins = N` starts N bins before the
+    /// pulse leaves (range −N·Δr), as a transient recorder with a pre-trigger does.
     pub fn from_config(cfg: &ScenarioConfig, file: &str) -> Result<Self> {
         let p = &cfg.platform;
         let a = &cfg.acquisition;
@@ -93,8 +99,9 @@ impl Geometry {
             sin_angle,
             spherical: p.earth_curvature,
             bin_range_m: bin_range_m(cfg.instrument.bin_width_s),
-            first_bin_range_m: 0.0,
+            window_start_range_m: 0.0,
             n_bins: 1,
+            pretrigger_bins: 0,
         };
         let (top_m, bottom_m) = (a.top_altitude_km * 1e3, a.bottom_altitude_km * 1e3);
         g.check_reach(bottom_m, p.off_nadir_deg, file)?;
@@ -102,17 +109,40 @@ impl Geometry {
             PlatformKind::Spaceborne => (g.range_at_altitude(top_m), g.range_at_altitude(bottom_m)),
             PlatformKind::Ground => (g.range_at_altitude(bottom_m), g.range_at_altitude(top_m)),
         };
-        let n = ((far_m - near_m) / g.bin_range_m - 1e-9).ceil();
-        if n > MAX_BINS as f64 {
+        let n = ((far_m - near_m) / g.bin_range_m - 1e-9).ceil().max(1.0);
+        let pretrigger = check_pretrigger(p.kind, near_m, a.pretrigger_bins, file)?;
+        if n + pretrigger as f64 > MAX_BINS as f64 {
+            let (key, what) = if pretrigger == 0 {
+                (
+                    "instrument.bin_width_s",
+                    format!("the window needs {n} bins"),
+                )
+            } else {
+                (
+                    "acquisition.pretrigger_bins",
+                    format!("the window's {n} bins and {pretrigger} pre-trigger bins make"),
+                )
+            };
             return Err(Error::config(
                 file,
-                "instrument.bin_width_s",
-                format!("the window needs {n} bins, more than the {MAX_BINS} allowed"),
+                key,
+                format!("{what} more than the {MAX_BINS} allowed"),
             ));
         }
-        g.first_bin_range_m = near_m;
-        g.n_bins = (n as usize).max(1);
+        g.window_start_range_m = near_m;
+        g.n_bins = n as usize + pretrigger;
+        g.pretrigger_bins = pretrigger;
         Ok(g)
+    }
+
+    /// Whether bin `i` is a pre-trigger bin (recorded before the pulse leaves).
+    pub fn is_pretrigger(&self, i: usize) -> bool {
+        i < self.pretrigger_bins
+    }
+
+    /// Range at the start of bin 0, m (negative with pre-trigger bins).
+    pub fn first_bin_range_m(&self) -> f64 {
+        self.bin_range_bounds(0).0
     }
 
     /// Refuses a space-borne beam that misses the Earth or never reaches the window's
@@ -206,13 +236,20 @@ impl Geometry {
 
     /// Range interval `[start, end)` of bin `i`, m.
     pub fn bin_range_bounds(&self, i: usize) -> (f64, f64) {
-        let start = self.first_bin_range_m + i as f64 * self.bin_range_m;
+        // from the window's start, so that pre-trigger bins leave the window's ranges
+        // bit for bit as they are without them
+        let start = self.window_start_range_m + self.bins_after_trigger(i) * self.bin_range_m;
         (start, start + self.bin_range_m)
     }
 
     /// Bin-centre range of bin `i`, m.
     pub fn bin_centre_range_m(&self, i: usize) -> f64 {
-        self.first_bin_range_m + (i as f64 + 0.5) * self.bin_range_m
+        self.window_start_range_m + (self.bins_after_trigger(i) + 0.5) * self.bin_range_m
+    }
+
+    /// `i − pretrigger_bins`, exactly (negative for a pre-trigger bin).
+    fn bins_after_trigger(&self, i: usize) -> f64 {
+        i as f64 - self.pretrigger_bins as f64
     }
 
     /// Bin-centre altitude of bin `i`, m.
@@ -224,6 +261,39 @@ impl Geometry {
     pub fn max_range_m(&self) -> f64 {
         self.bin_range_bounds(self.n_bins - 1).1
     }
+}
+
+/// Checks `acquisition.pretrigger_bins` (`n`) against the platform: pre-trigger bins are
+/// a ground recorder's (the bins before the pulse leaves, contiguous with the window, so
+/// the window must start at the station, `near_m` = 0); a space-borne window starts
+/// hundreds of km from the instrument and takes its background from the bins above the
+/// atmosphere. Returns `n`.
+fn check_pretrigger(kind: PlatformKind, near_m: f64, n: usize, file: &str) -> Result<usize> {
+    let key = "acquisition.pretrigger_bins";
+    if n == 0 {
+        return Ok(0);
+    }
+    if kind == PlatformKind::Spaceborne {
+        return Err(Error::config(
+            file,
+            key,
+            "pre-trigger bins are a ground recorder's; a space-borne window takes its background \
+             from the bins above the atmosphere (raise acquisition.top_altitude_km above 86 km)",
+        ));
+    }
+    if near_m.abs() > 1e-6 {
+        return Err(Error::config(
+            file,
+            key,
+            format!(
+                "pre-trigger bins come just before the pulse leaves, so the window must start at \
+                 the station: the bottom is {:.0} m of range above it (set \
+                 acquisition.bottom_altitude_km to platform.altitude_km)",
+                near_m
+            ),
+        ));
+    }
+    Ok(n)
 }
 
 /// The overlap function η(r) of model.md §3: the fraction of the laser spot seen by the receiver.

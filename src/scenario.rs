@@ -219,7 +219,7 @@ impl Scenario {
             .grid_m
             .min(geometry.bin_range_m * geometry.local_cos_at(lowest) / 4.0);
         let overlap = Overlap::from_config(cfg);
-        if overlap.sees_zero_range() && geometry.first_bin_range_m <= 0.0 {
+        if overlap.sees_zero_range() && geometry.window_start_range_m <= 0.0 {
             return Err(Error::config(
                 &file,
                 "acquisition.bottom_altitude_km",
@@ -248,8 +248,9 @@ impl Scenario {
                     &file,
                     "acquisition.background_bins",
                     format!(
-                        "asks for {} signal-free bins, the window holds {available} above the \
-                         atmosphere (raise acquisition.top_altitude_km, or omit the key to use them all)",
+                        "asks for {} signal-free bins, the window holds {available} (pre-trigger \
+                         bins and bins above the atmosphere; raise acquisition.top_altitude_km or \
+                         acquisition.pretrigger_bins, or omit the key to use them all)",
                         crate::error::compact(asked as f64)
                     ),
                 ));
@@ -273,7 +274,7 @@ impl Scenario {
             .as_ref()
             .map_or(0.0, |s| s.altitude_km * 1e3);
         let top_m = self.atmosphere.top_m().min(g.platform_altitude_m);
-        let window = (g.first_bin_range_m, g.max_range_m());
+        let window = (g.first_bin_range_m(), g.max_range_m());
         // the returns that matter: from the window's top (or the atmosphere's, if lower)
         // down to the ground; the thin air above a window that starts inside the
         // atmosphere returns far less than the window's own scene and is not counted
@@ -300,20 +301,21 @@ impl Scenario {
         ))
     }
 
-    /// The window's bins lying wholly above the atmosphere (signal-free: they measure the
-    /// background alone), nearest the atmosphere first.
+    /// The signal-free bins, which measure the background alone: the pre-trigger bins
+    /// first (in order), then the window's bins lying wholly above the atmosphere,
+    /// nearest the atmosphere first.
     pub fn signal_free_bins(&self) -> Vec<usize> {
         let g = &self.geometry;
         let top = self.atmosphere.top_m();
-        let mut bins: Vec<usize> = (0..g.n_bins)
+        let mut above: Vec<usize> = (g.pretrigger_bins..g.n_bins)
             .filter(|&i| {
                 let (ra, rb) = g.bin_range_bounds(i);
                 g.altitude_at_range(ra).min(g.altitude_at_range(rb)) >= top
             })
             .collect();
         let altitude = |i: usize| g.altitude_at_range(g.bin_centre_range_m(i));
-        bins.sort_by(|&a, &b| altitude(a).total_cmp(&altitude(b)));
-        bins
+        above.sort_by(|&a, &b| altitude(a).total_cmp(&altitude(b)));
+        (0..g.pretrigger_bins).chain(above).collect()
     }
 
     /// The bins a retrieval estimates the background from: the signal-free bins, at most
@@ -361,7 +363,10 @@ impl Scenario {
             dark: self.instrument.dark_per_bin,
             ..Default::default()
         };
-        for i in 0..n {
+        for i in 0..g.pretrigger_bins {
+            self.push_pretrigger_bin(&mut e, g.bin_centre_range_m(i));
+        }
+        for i in g.pretrigger_bins..n {
             let (ra, rb) = g.bin_range_bounds(i);
             let r = g.bin_centre_range_m(i);
             let z = g.altitude_at_range(r);
@@ -370,10 +375,7 @@ impl Scenario {
             let o = if r <= self.path.end_range_m() {
                 self.atmosphere.optics_at(z)
             } else {
-                Optics {
-                    depol_mol: self.atmosphere.molecules.depolarization,
-                    ..Optics::default()
-                }
+                self.atmosphere.no_optics()
             };
             let integral = self.path.bin_integral(ra, rb)?;
             let signal = self.instrument.signal_constant * integral;
@@ -406,5 +408,21 @@ impl Scenario {
         e.background_bin_indices = self.background_bin_indices();
         e.background_bins = e.background_bin_indices.len();
         Ok(e)
+    }
+
+    /// A pre-trigger bin at (negative) range `r_m`: recorded before the pulse leaves, it
+    /// sees nothing: no signal, no optics, η = 0, T² = 1, and the molecular state of the
+    /// air at the station (docs/file-format.md "Pre-trigger bins").
+    fn push_pretrigger_bin(&self, e: &mut ExpectedProfile, r_m: f64) {
+        let station_m = self.geometry.platform_altitude_m;
+        e.altitude_m.push(self.geometry.altitude_at_range(r_m));
+        e.range_m.push(r_m);
+        e.point.push(self.atmosphere.no_optics());
+        e.state.push(self.atmosphere.molecules.state_at(station_m));
+        e.overlap.push(0.0);
+        e.t2.push(1.0);
+        e.signal.push(0.0);
+        e.range_weight.push(0.0);
+        e.attenuated_backscatter.push(0.0);
     }
 }

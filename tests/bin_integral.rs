@@ -208,8 +208,11 @@ fn ground_lidar_with_geometric_overlap_matches_brute_force() {
     let e = sc.expected().unwrap();
     let brute = brute_force_signal(&sc, 0.01);
     assert_close(&e.signal, &brute, 1e-3, 1e-9, "ground overlap");
-    // the overlap hides the first bins, then the signal rises
-    assert_eq!(e.signal[0], 0.0);
+    // the pre-trigger bins see nothing, the overlap hides the first bins, then the
+    // signal rises
+    assert_eq!(sc.geometry.pretrigger_bins, 256);
+    assert!(e.signal[..=256].iter().all(|&s| s == 0.0));
+    assert!(e.signal[300] > 0.0);
     assert!(e.signal.iter().all(|s| s.is_finite()));
 }
 
@@ -229,7 +232,11 @@ fn ground_lidar_seeing_range_zero_is_a_config_error() {
         "{msg}"
     );
     // raising the window removes the divergence
-    let ov2 = vec![ov[0].clone(), "acquisition.bottom_altitude_km=0.1".into()];
+    let ov2 = vec![
+        ov[0].clone(),
+        "acquisition.bottom_altitude_km=0.1".into(),
+        "acquisition.pretrigger_bins=0".into(),
+    ];
     let sc = lidarsim::scenario::Scenario::load(
         &common::config_path("ground/ground_532_overlap.toml"),
         &ov2,

@@ -119,12 +119,19 @@ fn a_ground_run_exports_with_the_scc_layout_and_its_counts() {
     assert_eq!(r.read_var_i32("Molecular_Calc").unwrap(), vec![4]);
     let res = r.read_var_f64("Raw_Data_Range_Resolution").unwrap()[0];
     assert!((res - 7.494811).abs() < 1e-6, "{res}");
-    assert_eq!(r.read_var_f64("Trigger_Delay").unwrap(), vec![0.0]);
+    // the config's 256 pre-trigger bins of 50 ns: recording starts 12.8 us before the
+    // pulse leaves, and the background window is those bins
+    let delay = r.read_var_f64("Trigger_Delay").unwrap()[0];
+    assert!((delay + 12_800.0).abs() < 1e-6, "{delay}");
     let (lo, hi) = (
         r.read_var_f64("Background_Low").unwrap()[0],
         r.read_var_f64("Background_High").unwrap()[0],
     );
-    same_window((lo, hi), window_in_m(&raw, 0, 0));
+    same_window((lo, hi), window_in_m(&raw, 0, 256));
+    assert!(
+        (lo + 256.0 * res).abs() < 1e-6 && hi.abs() < 1e-6,
+        "{lo} {hi}"
+    );
     let p = r.read_var_f64("Pressure_at_Lidar_Station").unwrap()[0];
     assert!((p - 1013.25).abs() < 0.01, "{p}");
     python_check(&out);
@@ -341,6 +348,7 @@ fn same_window(got: (f64, f64), want: (f64, f64)) {
 fn small_ground_run(dir: &Path, name: &str, extra: &[&str], profiles: usize) -> PathBuf {
     let raw = dir.join(name);
     let mut ov = vec![
+        "acquisition.pretrigger_bins=0",
         "instrument.channel=\"parallel\"",
         "acquisition.start_time=\"2024-07-14T21:30:00Z\"",
         "acquisition.accumulation_time_s=1",

@@ -389,6 +389,16 @@ impl Atmosphere {
         })
     }
 
+    /// The optics where the beam sees nothing (below the surface, before the pulse
+    /// leaves): every extinction and backscatter 0, the molecular line's depolarization
+    /// kept (it describes the channel's line, not the air).
+    pub fn no_optics(&self) -> Optics {
+        Optics {
+            depol_mol: self.molecules.depolarization,
+            ..Default::default()
+        }
+    }
+
     /// Optical properties at altitude `z_m`: `β = β_mol + β_aer + β_cld`,
     /// `α = α_mol + α_aer + α_cld` (model.md §4).
     pub fn optics_at(&self, z_m: f64) -> Optics {

@@ -348,8 +348,10 @@ pub fn bins(cfg: &ScenarioConfig) -> Vec<(f64, f64)> {
     };
     let dr = C_M_PER_S * cfg.instrument.bin_width_s / 2.0;
     let n = ((far - near) / dr - 1e-9).ceil().max(1.0) as usize;
-    (0..n)
-        .map(|i| (near + i as f64 * dr, near + (i + 1) as f64 * dr))
+    // a ground recorder's pre-trigger bins come first, at negative range
+    let start = near - a.pretrigger_bins as f64 * dr;
+    (0..n + a.pretrigger_bins)
+        .map(|i| (start + i as f64 * dr, start + (i + 1) as f64 * dr))
         .collect()
 }
 

@@ -332,6 +332,10 @@ pub fn root_attributes(sc: &Scenario, run: &RunInfo) -> Result<Vec<(String, Attr
             "full_overlap_range_m",
             sc.path.overlap().full_overlap_range_m(),
         ),
+        (
+            "pretrigger_bins".into(),
+            AttrValue::I32(i32::try_from(sc.geometry.pretrigger_bins).unwrap_or(i32::MAX)),
+        ),
     ];
     attrs.extend(run.method_attributes.iter().cloned());
     Ok(attrs)
