@@ -498,23 +498,29 @@ pub fn check_storage(path: &Path, name: &str, d: &Dataset) -> Result<()> {
 
 /// The `channel` coordinate's names.
 fn read_channels(path: &Path, f: &hdf5::File) -> Result<Vec<String>> {
+    read_text(path, f, CHANNEL_DIM)
+}
+
+/// A variable of variable-length strings (UTF-8, or ASCII as older tools write them),
+/// e.g. `channel` or `dead_time_model`; anything else is refused naming the file and
+/// the variable.
+pub fn read_text(path: &Path, f: &hdf5::File, name: &str) -> Result<Vec<String>> {
     let d = f
-        .dataset(CHANNEL_DIM)
-        .map_err(|_| Error::output(path, format!("has no `{CHANNEL_DIM}`")))?;
-    let unreadable = |_| {
+        .dataset(name)
+        .map_err(|_| Error::output(path, format!("has no `{name}`")))?;
+    let unreadable = || {
         Error::output(
             path,
-            format!("`{CHANNEL_DIM}` is not readable as variable-length strings"),
+            format!("`{name}` is not readable as variable-length strings"),
         )
     };
-    match Class::of(&d).0 {
-        Class::Text => {}
-        _ => return Err(unreadable(())),
+    if !matches!(Class::of(&d).0, Class::Text) {
+        return Err(unreadable());
     }
     if let Ok(v) = d.read_raw::<VarLenUnicode>() {
         return Ok(v.iter().map(|s| s.as_str().to_string()).collect());
     }
-    let v = d.read_raw::<VarLenAscii>().map_err(|_| unreadable(()))?;
+    let v = d.read_raw::<VarLenAscii>().map_err(|_| unreadable())?;
     Ok(v.iter().map(|s| s.as_str().to_string()).collect())
 }
 

@@ -41,7 +41,7 @@ use crate::error::{Error, Result};
 use crate::output::raw_file::read::{self, RawHeader};
 
 mod reader;
-use reader::{Reader, read_all, text_var};
+use reader::{Reader, read_all};
 
 /// Counts read at once (with their expectations: 8 bytes each, five arrays at most).
 pub const BLOCK_VALUES: usize = 1 << 20;
@@ -202,7 +202,7 @@ fn channels(path: &Path, f: &hdf5::File, h: &RawHeader) -> Result<Channels> {
         ));
     }
     let dead = if tau.iter().any(|&t| t > 0.0) {
-        let models = text_var(path, f, "dead_time_model")?;
+        let models = crate::output::raw_file::read::read_text(path, f, "dead_time_model")?;
         if models.len() != tau.len() {
             return Err(bad("`dead_time_model` is not (channel)".into()));
         }

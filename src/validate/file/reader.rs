@@ -25,20 +25,6 @@ pub(super) fn read_all(path: &Path, f: &hdf5::File, name: &str) -> Result<Vec<f6
     d.read_raw::<f64>().map_err(|e| unreadable(path, name, e))
 }
 
-/// A (channel) variable of strings.
-pub(super) fn text_var(path: &Path, f: &hdf5::File, name: &str) -> Result<Vec<String>> {
-    let d = f
-        .dataset(name)
-        .map_err(|_| Error::output(path, format!("has no `{name}`")))?;
-    if let Ok(v) = d.read_raw::<VarLenUnicode>() {
-        return Ok(v.iter().map(|s| s.as_str().to_string()).collect());
-    }
-    let v = d
-        .read_raw::<VarLenAscii>()
-        .map_err(|e| unreadable(path, name, e))?;
-    Ok(v.iter().map(|s| s.as_str().to_string()).collect())
-}
-
 fn unreadable(path: &Path, name: &str, e: hdf5::Error) -> Error {
     Error::output(
         path,
