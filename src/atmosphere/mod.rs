@@ -5,6 +5,7 @@
 pub mod aerosol_profile;
 pub mod ozone;
 pub mod profile_file;
+pub mod raman;
 pub mod rayleigh;
 pub mod us76;
 
