@@ -7,6 +7,8 @@ pub const SPEED_OF_LIGHT_M_PER_S: f64 = 299_792_458.0;
 pub const PLANCK_J_S: f64 = 6.626_070_15e-34;
 /// Boltzmann constant, J K⁻¹ (exact, SI).
 pub const BOLTZMANN_J_PER_K: f64 = 1.380_649e-23;
+/// Avogadro constant, mol⁻¹ (exact, SI).
+pub const AVOGADRO_PER_MOL: f64 = 6.022_140_76e23;
 /// Vacuum electric permittivity ε₀, F m⁻¹ (CODATA 2018).
 pub const VACUUM_PERMITTIVITY_F_PER_M: f64 = 8.854_187_812_8e-12;
 /// Mean Earth radius, m (IUGG mean radius R1).

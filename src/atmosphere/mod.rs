@@ -3,6 +3,7 @@
 //! as the piecewise-constant slabs on which the bin integral is exact.
 
 pub mod aerosol_profile;
+pub mod cabannes_line;
 pub mod ozone;
 pub mod profile_file;
 pub mod raman;

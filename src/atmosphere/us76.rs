@@ -39,8 +39,9 @@ pub const BOTTOM_ALTITUDE_M: f64 = -5_000.0;
 
 /// Universal gas constant of the Standard, J kmol⁻¹ K⁻¹.
 const R_STAR: f64 = 8.31432e3;
-/// Sea-level mean molecular weight, kg kmol⁻¹.
-const M0: f64 = 28.9644;
+/// Sea-level mean molecular weight of dry air, kg kmol⁻¹ (also the mass of an air
+/// molecule in the Doppler width of the Cabannes line, `cabannes_line.rs`).
+pub const M0: f64 = 28.9644;
 /// Standard gravity g0', m² s⁻² m'⁻¹ (geopotential metre).
 const G0: f64 = 9.80665;
 /// Effective Earth radius for the geopotential conversion, m.
