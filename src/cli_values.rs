@@ -5,9 +5,7 @@
 use crate::error::compact;
 use crate::sampling::approx::MAX_TOLERANCE;
 
-/// Largest `--profiles` (and `acquisition.profiles`): far beyond any disk, refused up
-/// front whatever the memory and disk say.
-pub const MAX_PROFILES: u64 = 1_000_000_000_000;
+pub use crate::limits::MAX_PROFILES;
 /// Largest `--threads`.
 pub const MAX_THREADS: usize = 1024;
 /// Largest `--realizations` of `validate`.

@@ -243,7 +243,7 @@ fn inconsistent_aerosol_source_is_an_error() {
     let text = std::fs::read_to_string(&path)
         .unwrap()
         .replace("surface_extinction_per_km = 0.08", "");
-    let err = lidarsim::config::load_str(
+    let err = lidarsim::loaded::load_str(
         &text,
         &path,
         &["atmosphere.aerosol.extinction_from=surface_extinction".into()],
@@ -279,7 +279,7 @@ fn malformed_overrides_name_the_key() {
 
 #[test]
 fn malformed_toml_names_the_line() {
-    let err = lidarsim::config::load_str(
+    let err = lidarsim::loaded::load_str(
         "name = \"x\"\n[instrument\nfoo = 1\n",
         std::path::Path::new("bad.toml"),
         &[],

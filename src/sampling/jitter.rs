@@ -24,9 +24,6 @@ use crate::detector::DeadTime;
 use crate::detector::dead_time::{ARRIVAL_STREAM, Scratch};
 use crate::laser::PulseEnergy;
 
-/// Largest relative rms pulse-energy jitter supported.
-pub const MAX_JITTER: f64 = 0.2;
-
 /// Samplers for shots of varying energy: the signal at its envelope, the rest unchanged.
 #[derive(Debug, Clone)]
 pub struct ModulatedShots {

@@ -808,7 +808,7 @@ pub fn orbit_of(lidar: &Lidar) -> Result<Option<crate::scene::orbit::Orbit>> {
     cfg.orbit
         .as_ref()
         .map(|o| {
-            o.orbit(cfg.platform.altitude_km * 1e3)
+            crate::scene::orbit::Orbit::from_config(o, cfg.platform.altitude_km * 1e3)
                 .map_err(|reason| Error::config(lidar.first().loaded.file_label(), "orbit", reason))
         })
         .transpose()
@@ -1220,7 +1220,7 @@ mod tests {
             .join("configs")
             .join("paper")
             .join("scenario1.toml");
-        let loaded = crate::config::load(&path, &[]).unwrap();
+        let loaded = crate::loaded::load(&path, &[]).unwrap();
         let values = RunValues {
             profiles: 400,
             seed: u64::MAX,
@@ -1233,7 +1233,7 @@ mod tests {
             stored.contains("seed = \"18446744073709551615\""),
             "{stored}"
         );
-        let again = crate::config::load_str(&stored, &path, &[]).unwrap();
+        let again = crate::loaded::load_str(&stored, &path, &[]).unwrap();
         assert_eq!(
             RunValues::resolve(&RunOptions::default(), &again.config),
             values
