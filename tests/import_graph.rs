@@ -1,6 +1,7 @@
 //! The module import graph of `src/` (docs/architecture.md, "Module layout"):
-//! `config` sits at the bottom (no circle of imports passes through it), and the
-//! largest remaining circle does not grow unnoticed.
+//! `config` sits at the bottom (no circle of imports passes through it), the sampler
+//! below the detector and the onboard sums, and the largest remaining circle does not
+//! grow unnoticed.
 //!
 //! A module is a file (`src/a/b.rs` and `src/a/b/mod.rs` are `a::b`, `src/lib.rs` the
 //! crate root; `src/main.rs` is the binary and uses the library by its name). An edge
@@ -64,6 +65,35 @@ fn config_is_in_no_circle_and_circles_do_not_grow() {
             .unwrap()
             .join(", ")
     );
+}
+
+/// Layers that only go one way: no module of the first reaches one of the second
+/// (the sampler knows counts and means; the detector and the onboard sums wrap it).
+const BELOW: [(&str, &str); 2] = [("sampling", "detector"), ("sampling", "onboard")];
+
+#[test]
+fn the_sampler_reaches_neither_detector_nor_onboard() {
+    let graph = import_graph(&Path::new(env!("CARGO_MANIFEST_DIR")).join("src"));
+    let under = |m: &str, top: &str| m == top || m.starts_with(&format!("{top}::"));
+    for (low, high) in BELOW {
+        for start in graph.keys().filter(|m| under(m, low)) {
+            let mut seen = BTreeSet::from([start.as_str()]);
+            let mut todo = vec![(start.as_str(), vec![start.clone()])];
+            while let Some((m, path)) = todo.pop() {
+                for next in graph.get(m).into_iter().flatten() {
+                    let path: Vec<String> = path.iter().cloned().chain([next.clone()]).collect();
+                    assert!(
+                        !under(next, high),
+                        "{low} reaches {high}: {}",
+                        path.join(" -> ")
+                    );
+                    if seen.insert(next) {
+                        todo.push((next, path));
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// The graph of every module file under `src`, by module path.

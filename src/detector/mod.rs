@@ -3,8 +3,10 @@
 //! has no detector stage and keeps every exact fast path.
 
 pub mod dead_time;
+pub mod modulated;
 
 pub use dead_time::{DeadTime, DeadTimeModel};
+pub use modulated::DetectedShots;
 
 use crate::config::{Checker, ScenarioConfig};
 use crate::error::Result;
