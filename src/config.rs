@@ -6,8 +6,10 @@
 //! [`ScenarioConfig`] (unknown keys are errors). [`ScenarioConfig::validate`] checks
 //! what the config alone can tell (ranges, consistency between sections); a check
 //! that needs a module's physics or limits lives in that module, beside them, and the
-//! loader (`src/loaded.rs`) runs them all. Every error names the file, the dotted key
-//! and the reason ([`Checker`] words them alike wherever they are checked).
+//! loader (`src/loaded.rs`) hands them in ([`OwnerChecks`]), so that every key is
+//! still checked in the same order and a config with several errors is told the same
+//! first one. Every error names the file, the dotted key and the reason ([`Checker`]
+//! words them alike wherever they are checked).
 //!
 //! This module sits at the bottom of the import graph: it names the error type and
 //! leaf modules only (`tests/import_graph.rs` fails if a circle comes through it).
@@ -927,6 +929,26 @@ impl Checker<'_> {
     }
 }
 
+/// A check of the keys whose limits another module's physics sets.
+pub type OwnerCheck = fn(&ScenarioConfig, &Checker) -> Result<()>;
+
+/// The checks the modules that own a section's limits make, handed to
+/// [`ScenarioConfig::validate`] by the loader: the config names none of those modules,
+/// and runs each check where its keys always were checked.
+#[derive(Debug, Clone, Copy)]
+pub struct OwnerChecks {
+    /// `instrument.pulse_energy_jitter` (the laser's law).
+    pub laser: OwnerCheck,
+    /// `[instrument.detector]` (the detector).
+    pub detector: OwnerCheck,
+    /// `atmosphere.ozone` (the ozone cross-section table).
+    pub ozone: OwnerCheck,
+    /// `[orbit]` (an orbit that exists).
+    pub orbit: OwnerCheck,
+    /// `[simulation]` (the sampler's tolerance).
+    pub simulation: OwnerCheck,
+}
+
 impl ScenarioConfig {
     /// Every file the config names, with its key, as written (relative to the config
     /// file): the molecular profile file and the scene's curtain. A key that names a
@@ -1118,14 +1140,15 @@ impl ScenarioConfig {
         }
     }
 
-    /// Checks every field the config alone can judge: finite, in range, consistent. A
-    /// check that needs a module's physics or limits is that module's (the loader,
-    /// `src/loaded.rs`, runs them after this one). `file` names the source in errors.
-    pub fn validate(&self, file: &str) -> Result<()> {
+    /// Checks every field: finite, in range, consistent. A check that needs a module's
+    /// physics or limits is that module's, one of `owners` (the loader's,
+    /// `src/loaded.rs`), run in its place among the others. `file` names the source in
+    /// errors.
+    pub fn validate(&self, file: &str, owners: &OwnerChecks) -> Result<()> {
         let c = Checker { file };
-        self.validate_instrument(&c)?;
+        self.validate_instrument(&c, owners)?;
         self.validate_geometry(&c)?;
-        self.validate_atmosphere(&c)?;
+        self.validate_atmosphere(&c, owners)?;
         self.validate_background(&c)?;
         if let Some(surface) = &self.surface {
             self.validate_surface(&c, surface)?;
@@ -1143,6 +1166,7 @@ impl ScenarioConfig {
                 -360.0,
                 360.0,
             )?;
+            (owners.orbit)(self, &c)?;
         }
         if self
             .atmosphere
@@ -1154,7 +1178,7 @@ impl ScenarioConfig {
         {
             return Err(c.fail("atmosphere.layers", "at most 3 broken layers"));
         }
-        Ok(())
+        (owners.simulation)(self, &c)
     }
 
     /// Warnings for values that are legal but almost surely a unit slip, one line each
@@ -1235,10 +1259,11 @@ impl ScenarioConfig {
         })
     }
 
-    fn validate_instrument(&self, c: &Checker) -> Result<()> {
+    fn validate_instrument(&self, c: &Checker, owners: &OwnerChecks) -> Result<()> {
         let i = &self.instrument;
         c.range("instrument.wavelength_nm", i.wavelength_nm, 200.0, 4000.0)?;
         c.positive("instrument.pulse_energy_j", i.pulse_energy_j, 1e3)?;
+        (owners.laser)(self, c)?;
         c.positive("instrument.rep_rate_hz", i.rep_rate_hz, 1e7)?;
         c.positive("instrument.telescope_area_m2", i.telescope_area_m2, 1e3)?;
         c.efficiency("instrument.optical_efficiency", i.optical_efficiency)?;
@@ -1281,6 +1306,7 @@ impl ScenarioConfig {
                 )?;
             }
         }
+        (owners.detector)(self, c)?;
         match &i.overlap {
             None | Some(OverlapConfig::None) => {}
             Some(OverlapConfig::FullRange { full_overlap_m }) => {
@@ -1386,7 +1412,7 @@ impl ScenarioConfig {
         Ok(())
     }
 
-    fn validate_atmosphere(&self, c: &Checker) -> Result<()> {
+    fn validate_atmosphere(&self, c: &Checker, owners: &OwnerChecks) -> Result<()> {
         let m = &self.atmosphere.molecular;
         if let MolecularModel::Named(name) = &m.model
             && name != "us76"
@@ -1403,6 +1429,7 @@ impl ScenarioConfig {
             c.range("atmosphere.molecular.depolarization", rho, 0.0, 0.2)?;
         }
         c.range("atmosphere.molecular.grid_m", m.grid_m, 0.1, 1000.0)?;
+        (owners.ozone)(self, c)?;
         if let Some(a) = &self.atmosphere.aerosol {
             c.positive("atmosphere.aerosol.visibility_km", a.visibility_km, 1e4)?;
             c.range(

@@ -9,7 +9,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::config::{self, Checker, ScenarioConfig};
+use crate::config::{self, OwnerChecks, ScenarioConfig};
 use crate::error::{Error, Result};
 use crate::receiver::{self, ChannelConfig};
 
@@ -98,17 +98,20 @@ pub fn load_str(text: &str, path: &Path, overrides: &[String]) -> Result<LoadedC
     })
 }
 
+/// The checks of the modules whose physics sets a key's limits.
+const OWNERS: OwnerChecks = OwnerChecks {
+    laser: crate::laser::validate,
+    detector: crate::detector::validate,
+    ozone: crate::atmosphere::ozone::validate,
+    orbit: crate::scene::orbit::validate,
+    simulation: |config, c| crate::sampling::approx::validate(&config.simulation, c),
+};
+
 /// Checks a whole config, `file` naming it in errors: the config's own checks
-/// ([`ScenarioConfig::validate`]), then each module's check of the keys whose limits
-/// its physics sets.
+/// ([`ScenarioConfig::validate`]) with, each in its place among them, the checks of
+/// the modules whose physics sets a key's limits.
 pub fn validate(config: &ScenarioConfig, file: &str) -> Result<()> {
-    config.validate(file)?;
-    let c = Checker { file };
-    crate::laser::validate(config, &c)?;
-    crate::detector::validate(config, &c)?;
-    crate::atmosphere::ozone::validate(config, &c)?;
-    crate::scene::orbit::validate(config, &c)?;
-    crate::sampling::approx::validate(&config.simulation, &c)
+    config.validate(file, &OWNERS)
 }
 
 #[cfg(test)]
