@@ -5,11 +5,9 @@
 use crate::error::compact;
 use crate::sampling::approx::MAX_TOLERANCE;
 
-pub use crate::limits::MAX_PROFILES;
+pub use crate::limits::{MAX_PROFILES, MAX_REALIZATIONS};
 /// Largest `--threads`.
 pub const MAX_THREADS: usize = 1024;
-/// Largest `--realizations` of `validate`.
-pub const MAX_REALIZATIONS: u64 = 100_000_000;
 
 /// A whole number in `[lo, hi]`, written as an integer or in scientific notation
 /// (`1e6`).
