@@ -5,13 +5,9 @@
 use crate::error::compact;
 use crate::sampling::approx::MAX_TOLERANCE;
 
-/// Largest `--profiles` (and `acquisition.profiles`): far beyond any disk, refused up
-/// front whatever the memory and disk say.
-pub const MAX_PROFILES: u64 = 1_000_000_000_000;
+pub use crate::limits::{MAX_PROFILES, MAX_REALIZATIONS};
 /// Largest `--threads`.
 pub const MAX_THREADS: usize = 1024;
-/// Largest `--realizations` of `validate`.
-pub const MAX_REALIZATIONS: u64 = 100_000_000;
 
 /// A whole number in `[lo, hi]`, written as an integer or in scientific notation
 /// (`1e6`).

@@ -40,7 +40,7 @@ fn to_stdout(fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result
 }
 
 /// The files a scenario reads (its config and every file it names,
-/// [`crate::config::LoadedConfig::files_read`]): no output may replace them.
+/// [`crate::loaded::LoadedConfig::files_read`]): no output may replace them.
 pub fn input_files(sc: &Scenario) -> Vec<PathBuf> {
     sc.loaded.files_read()
 }

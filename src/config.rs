@@ -1,16 +1,25 @@
-//! Scenario configuration: TOML files with the keys of `docs/config.md`,
-//! `--set KEY=VALUE` dotted overrides, and validation of every field.
+//! Scenario configuration: TOML text with the keys of `docs/config.md`,
+//! `--set KEY=VALUE` dotted overrides, typed sections and their own checks.
 //!
-//! Loading happens in three steps: the file is parsed into a TOML table, the
-//! overrides are applied to that table, and the table is deserialized into
-//! [`ScenarioConfig`] (unknown keys are errors) and validated ([`ScenarioConfig::validate`]).
-//! Every error names the file, the dotted key and the reason.
+//! Parsing happens in three steps ([`parse`]): the text is parsed into a TOML table,
+//! the overrides are applied to that table, and the table is deserialized into
+//! [`ScenarioConfig`] (unknown keys are errors). [`ScenarioConfig::validate`] checks
+//! what the config alone can tell (ranges, consistency between sections); a check
+//! that needs a module's physics or limits lives in that module, beside them, and the
+//! loader (`src/loaded.rs`) hands them in ([`OwnerChecks`]), so that every key is
+//! still checked in the same order and a config with several errors is told the same
+//! first one. Every error names the file, the dotted key and the reason ([`Checker`]
+//! words them alike wherever they are checked).
+//!
+//! This module sits at the bottom of the import graph: it names the error type and
+//! leaf modules only (`tests/import_graph.rs` fails if a circle comes through it).
 
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result, compact};
+use crate::limits::MAX_PROFILES;
 
 /// A whole scenario: instrument, platform, acquisition, atmosphere, background, simulation.
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -87,9 +96,9 @@ pub struct InstrumentConfig {
     /// Slow drift of the emitted pulse energy (the energy monitor reports it); absent = none.
     #[serde(default)]
     pub energy_drift: Option<EnergyDriftConfig>,
-    /// Receiver channels, `[[instrument.channels]]`: each a table of `name`,
+    /// Receiver channels, `[[instrument.channels]]`: each a table of `name`, `kind`,
     /// `polarization`, `crosstalk` and any instrument key it overrides (expanded into one
-    /// config per channel by [`crate::receiver::expand`]); empty = one channel.
+    /// config per channel by the receiver, `src/receiver/mod.rs`); empty = one channel.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub channels: Vec<toml::Table>,
     /// Overlap function η(r); absent = full overlap everywhere.
@@ -131,7 +140,18 @@ pub struct DetectorConfig {
     pub dead_time_s: f64,
     /// `"nonparalyzable"` or `"paralyzable"`.
     #[serde(default)]
-    pub dead_time_model: crate::detector::DeadTimeModel,
+    pub dead_time_model: DeadTimeModel,
+}
+
+/// How the dead period behaves (the detector's law, `src/detector/dead_time.rs`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DeadTimeModel {
+    /// Photons in the dead period are lost and do not extend it (default).
+    #[default]
+    Nonparalyzable,
+    /// Every photon restarts the dead period.
+    Paralyzable,
 }
 
 /// Receiver channel with respect to the laser's linear polarization (model.md §4).
@@ -415,7 +435,7 @@ impl LayerConfig {
     }
 }
 
-/// A circular orbit (`src/scene/orbit.rs`) at `platform.altitude_km`.
+/// A circular orbit (`src/scene/orbit.rs`, which checks it) at `platform.altitude_km`.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct OrbitConfig {
@@ -430,22 +450,6 @@ pub struct OrbitConfig {
     /// Moving north at the first shot (else south).
     #[serde(default = "yes")]
     pub ascending: bool,
-}
-
-impl OrbitConfig {
-    /// The orbit at `altitude_m` (the platform's altitude).
-    pub fn orbit(
-        &self,
-        altitude_m: f64,
-    ) -> std::result::Result<crate::scene::orbit::Orbit, String> {
-        crate::scene::orbit::Orbit::new(
-            altitude_m,
-            self.inclination_deg,
-            self.start_latitude_deg,
-            self.start_longitude_deg,
-            self.ascending,
-        )
-    }
 }
 
 /// The scene along the track (`src/scene/`).
@@ -546,7 +550,7 @@ pub struct BackgroundConfig {
     pub efficiency: BackgroundEfficiency,
     /// Solar model: a stated two-way transmission of the sunlight (sun → scene →
     /// instrument), whatever the angle; absent = the slant path through the modelled
-    /// atmosphere (`crate::scene::sun::SunlightPath`).
+    /// atmosphere (`SunlightPath` in `src/scene/sun.rs`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub transmission: Option<f64>,
     /// Solar model: albedo of an optically thick cloud top (column optical depth ≥ 1); absent = 0.7.
@@ -660,61 +664,6 @@ fn default_reference_wavelength_nm() -> f64 {
     532.0
 }
 
-/// A loaded, overridden and validated configuration with its provenance.
-#[derive(Debug, Clone)]
-pub struct LoadedConfig {
-    /// The validated configuration.
-    pub config: ScenarioConfig,
-    /// The config file as named on the command line.
-    pub path: PathBuf,
-    /// The resolved TOML after overrides (stored in output files).
-    pub resolved_toml: String,
-    /// The receiver's channels, each with the whole config as that channel sees it
-    /// (`[instrument]` with the channel's overrides); one when the config lists none.
-    pub channels: Vec<crate::receiver::ChannelConfig>,
-}
-
-impl LoadedConfig {
-    /// The config file's name for error messages.
-    pub fn file_label(&self) -> String {
-        self.path.display().to_string()
-    }
-
-    /// The config as channel `k` sees it (one channel), with the same provenance.
-    pub fn for_channel(&self, k: usize) -> LoadedConfig {
-        let channel = self.channels[k].clone();
-        LoadedConfig {
-            config: channel.config.clone(),
-            path: self.path.clone(),
-            resolved_toml: self.resolved_toml.clone(),
-            channels: vec![channel],
-        }
-    }
-
-    /// A path named in the config, resolved relative to the config file's directory.
-    pub fn resolve_path(&self, p: &Path) -> PathBuf {
-        if p.is_absolute() {
-            p.to_path_buf()
-        } else {
-            self.path.parent().unwrap_or(Path::new(".")).join(p)
-        }
-    }
-
-    /// Every file a run of this config reads: the config file itself and each file it
-    /// names ([`ScenarioConfig::named_files`]), resolved. No output may replace one of
-    /// them (`commands::input_files`).
-    pub fn files_read(&self) -> Vec<PathBuf> {
-        std::iter::once(self.path.clone())
-            .chain(
-                self.config
-                    .named_files()
-                    .into_iter()
-                    .map(|(_, p)| self.resolve_path(p)),
-            )
-            .collect()
-    }
-}
-
 /// Pulse energy above which a config is warned of a unit slip, J
 /// ([`ScenarioConfig::plausibility_warnings`]).
 pub const PLAUSIBLE_PULSE_ENERGY_J: f64 = 10.0;
@@ -729,22 +678,23 @@ pub fn unambiguous_range_m(rep_rate_hz: f64) -> f64 {
     crate::constants::SPEED_OF_LIGHT_M_PER_S / (2.0 * rep_rate_hz)
 }
 
-/// Reads `path`, applies `overrides` (`KEY=VALUE`, dotted keys), deserializes and validates.
-pub fn load(path: &Path, overrides: &[String]) -> Result<LoadedConfig> {
-    let bytes = crate::input_file::read("config", path)?;
-    let text = String::from_utf8(bytes).map_err(|_| {
-        Error::config(
-            path.display().to_string(),
-            "",
-            "is not UTF-8 text: a config is a TOML text file",
-        )
-    })?;
-    load_str(&text, path, overrides)
+/// A config parsed from TOML text, overrides applied: the typed sections, not yet
+/// validated.
+#[derive(Debug, Clone)]
+pub struct Parsed {
+    /// The typed sections.
+    pub config: ScenarioConfig,
+    /// The TOML table after overrides (the receiver expands its channels from it).
+    pub table: toml::Table,
+    /// The resolved TOML after overrides (stored in output files).
+    pub resolved_toml: String,
 }
 
-/// As [`load`], from text already read; `path` names the source in errors, and an
-/// error in a key that an override set names the override.
-pub fn load_str(text: &str, path: &Path, overrides: &[String]) -> Result<LoadedConfig> {
+/// Parses `text`, applies `overrides` (`KEY=VALUE`, dotted keys) and deserializes; `path`
+/// names the source in errors, and an error in a key that an override set names the
+/// override. Validation is the loader's (`src/loaded.rs`): [`ScenarioConfig::validate`]
+/// and the checks of the modules that own a section.
+pub fn parse(text: &str, path: &Path, overrides: &[String]) -> Result<Parsed> {
     let file = path.display().to_string();
     let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
         let at = e
@@ -764,16 +714,10 @@ pub fn load_str(text: &str, path: &Path, overrides: &[String]) -> Result<LoadedC
     let resolved_toml = toml::to_string(&table).unwrap_or_default();
     let de = toml::Value::Table(table.clone());
     let config = deserialize(de, &file).map_err(|e| attribute_to_override(e, overrides))?;
-    config
-        .validate(&file)
-        .map_err(|e| attribute_to_override(e, overrides))?;
-    let channels = crate::receiver::expand(&table, &config, &file)
-        .map_err(|e| attribute_to_override(e, overrides))?;
-    Ok(LoadedConfig {
+    Ok(Parsed {
         config,
-        path: path.to_path_buf(),
+        table,
         resolved_toml,
-        channels,
     })
 }
 
@@ -791,7 +735,7 @@ fn one_line(msg: &str) -> String {
 }
 
 /// A deserialization message in the user's words: no Rust type names.
-fn plain_serde_message(key: &str, msg: &str) -> String {
+pub fn plain_serde_message(key: &str, msg: &str) -> String {
     let msg = one_line(msg);
     if key.ends_with("molecular.model") {
         return "expected \"us76\", \"none\" or { file = \"profile.txt\" }".into();
@@ -936,18 +880,23 @@ pub fn deserialize(table: toml::Value, file: &str) -> Result<ScenarioConfig> {
     })
 }
 
-/// Collects the checks of one file; the first failure becomes the error.
-struct Checker<'a> {
-    file: &'a str,
+/// Collects the checks of one file; the first failure becomes the error. Every module
+/// that checks a section of the config words its errors through it, so that a range
+/// reads the same whoever checks it.
+#[derive(Debug, Clone, Copy)]
+pub struct Checker<'a> {
+    /// The file (or `--set` override) errors name.
+    pub file: &'a str,
 }
 
 impl Checker<'_> {
-    fn fail(&self, key: &str, reason: impl Into<String>) -> Error {
+    /// The error for `key`, naming the file.
+    pub fn fail(&self, key: &str, reason: impl Into<String>) -> Error {
         Error::config(self.file, key, reason)
     }
 
     /// `value` must be finite and within `[lo, hi]` (bounds inclusive).
-    fn range(&self, key: &str, value: f64, lo: f64, hi: f64) -> Result<()> {
+    pub fn range(&self, key: &str, value: f64, lo: f64, hi: f64) -> Result<()> {
         if !value.is_finite() {
             return Err(self.fail(key, format!("must be a finite number, got {value}")));
         }
@@ -966,7 +915,7 @@ impl Checker<'_> {
     }
 
     /// `value` must be finite and strictly positive, at most `hi`.
-    fn positive(&self, key: &str, value: f64, hi: f64) -> Result<()> {
+    pub fn positive(&self, key: &str, value: f64, hi: f64) -> Result<()> {
         self.range(key, value, 0.0, hi)?;
         if value == 0.0 {
             return Err(self.fail(key, "must be greater than 0"));
@@ -975,16 +924,36 @@ impl Checker<'_> {
     }
 
     /// A fraction in (0, 1].
-    fn efficiency(&self, key: &str, value: f64) -> Result<()> {
+    pub fn efficiency(&self, key: &str, value: f64) -> Result<()> {
         self.positive(key, value, 1.0)
     }
+}
+
+/// A check of the keys whose limits another module's physics sets.
+pub type OwnerCheck = fn(&ScenarioConfig, &Checker) -> Result<()>;
+
+/// The checks the modules that own a section's limits make, handed to
+/// [`ScenarioConfig::validate`] by the loader: the config names none of those modules,
+/// and runs each check where its keys always were checked.
+#[derive(Debug, Clone, Copy)]
+pub struct OwnerChecks {
+    /// `instrument.pulse_energy_jitter` (the laser's law).
+    pub laser: OwnerCheck,
+    /// `[instrument.detector]` (the detector).
+    pub detector: OwnerCheck,
+    /// `atmosphere.ozone` (the ozone cross-section table).
+    pub ozone: OwnerCheck,
+    /// `[orbit]` (an orbit that exists).
+    pub orbit: OwnerCheck,
+    /// `[simulation]` (the sampler's tolerance).
+    pub simulation: OwnerCheck,
 }
 
 impl ScenarioConfig {
     /// Every file the config names, with its key, as written (relative to the config
     /// file): the molecular profile file and the scene's curtain. A key that names a
     /// file belongs here, so that the file is an input no output may replace
-    /// ([`LoadedConfig::files_read`]); its reader opens it through [`crate::input_file`].
+    /// (`LoadedConfig::files_read`); its reader opens it through `src/input_file.rs`.
     pub fn named_files(&self) -> Vec<(&'static str, &Path)> {
         let mut files = Vec::new();
         if let MolecularModel::File { file } = &self.atmosphere.molecular.model {
@@ -1171,12 +1140,15 @@ impl ScenarioConfig {
         }
     }
 
-    /// Checks every field: finite, in range, consistent. `file` names the source in errors.
-    pub fn validate(&self, file: &str) -> Result<()> {
+    /// Checks every field: finite, in range, consistent. A check that needs a module's
+    /// physics or limits is that module's, one of `owners` (the loader's,
+    /// `src/loaded.rs`), run in its place among the others. `file` names the source in
+    /// errors.
+    pub fn validate(&self, file: &str, owners: &OwnerChecks) -> Result<()> {
         let c = Checker { file };
-        self.validate_instrument(&c)?;
+        self.validate_instrument(&c, owners)?;
         self.validate_geometry(&c)?;
-        self.validate_atmosphere(&c)?;
+        self.validate_atmosphere(&c, owners)?;
         self.validate_background(&c)?;
         if let Some(surface) = &self.surface {
             self.validate_surface(&c, surface)?;
@@ -1194,8 +1166,7 @@ impl ScenarioConfig {
                 -360.0,
                 360.0,
             )?;
-            o.orbit(self.platform.altitude_km * 1e3)
-                .map_err(|reason| c.fail("orbit", reason))?;
+            (owners.orbit)(self, &c)?;
         }
         if self
             .atmosphere
@@ -1207,14 +1178,7 @@ impl ScenarioConfig {
         {
             return Err(c.fail("atmosphere.layers", "at most 3 broken layers"));
         }
-        if let Some(t) = self.simulation.tolerance {
-            c.positive(
-                "simulation.tolerance",
-                t,
-                crate::sampling::approx::MAX_TOLERANCE,
-            )?;
-        }
-        Ok(())
+        (owners.simulation)(self, &c)
     }
 
     /// Warnings for values that are legal but almost surely a unit slip, one line each
@@ -1295,16 +1259,11 @@ impl ScenarioConfig {
         })
     }
 
-    fn validate_instrument(&self, c: &Checker) -> Result<()> {
+    fn validate_instrument(&self, c: &Checker, owners: &OwnerChecks) -> Result<()> {
         let i = &self.instrument;
         c.range("instrument.wavelength_nm", i.wavelength_nm, 200.0, 4000.0)?;
         c.positive("instrument.pulse_energy_j", i.pulse_energy_j, 1e3)?;
-        c.range(
-            "instrument.pulse_energy_jitter",
-            i.pulse_energy_jitter,
-            0.0,
-            crate::sampling::jitter::MAX_JITTER,
-        )?;
+        (owners.laser)(self, c)?;
         c.positive("instrument.rep_rate_hz", i.rep_rate_hz, 1e7)?;
         c.positive("instrument.telescope_area_m2", i.telescope_area_m2, 1e3)?;
         c.efficiency("instrument.optical_efficiency", i.optical_efficiency)?;
@@ -1347,9 +1306,7 @@ impl ScenarioConfig {
                 )?;
             }
         }
-        if let Some(d) = &i.detector {
-            c.range("instrument.detector.dead_time_s", d.dead_time_s, 0.0, 1e-6)?;
-        }
+        (owners.detector)(self, c)?;
         match &i.overlap {
             None | Some(OverlapConfig::None) => {}
             Some(OverlapConfig::FullRange { full_overlap_m }) => {
@@ -1411,11 +1368,10 @@ impl ScenarioConfig {
                 ),
             ));
         }
-        let max_profiles = crate::cli_values::MAX_PROFILES;
-        if a.profiles == 0 || a.profiles as u64 > max_profiles {
+        if a.profiles == 0 || a.profiles as u64 > MAX_PROFILES {
             return Err(c.fail(
                 "acquisition.profiles",
-                format!("must be from 1 to {}", compact(max_profiles as f64)),
+                format!("must be from 1 to {}", compact(MAX_PROFILES as f64)),
             ));
         }
         if let Err(e) = humantime::parse_rfc3339(&a.start_time) {
@@ -1456,7 +1412,7 @@ impl ScenarioConfig {
         Ok(())
     }
 
-    fn validate_atmosphere(&self, c: &Checker) -> Result<()> {
+    fn validate_atmosphere(&self, c: &Checker, owners: &OwnerChecks) -> Result<()> {
         let m = &self.atmosphere.molecular;
         if let MolecularModel::Named(name) = &m.model
             && name != "us76"
@@ -1473,16 +1429,7 @@ impl ScenarioConfig {
             c.range("atmosphere.molecular.depolarization", rho, 0.0, 0.2)?;
         }
         c.range("atmosphere.molecular.grid_m", m.grid_m, 0.1, 1000.0)?;
-        let wl = self.instrument.wavelength_nm;
-        if self.atmosphere.ozone && crate::atmosphere::ozone::cross_section_m2(wl).is_nan() {
-            return Err(c.fail(
-                "atmosphere.ozone",
-                format!(
-                    "no ozone cross-section is tabulated at {wl} nm (from 350 nm up); set \
-                     atmosphere.ozone = false"
-                ),
-            ));
-        }
+        (owners.ozone)(self, c)?;
         if let Some(a) = &self.atmosphere.aerosol {
             c.positive("atmosphere.aerosol.visibility_km", a.visibility_km, 1e4)?;
             c.range(
@@ -1536,47 +1483,5 @@ impl ScenarioConfig {
             self.validate_broken(c, &key(""), l)?;
         }
         Ok(())
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Every config key that holds a path is a file the run reads, so it must be in
-    /// [`ScenarioConfig::named_files`] (else no output is kept off it): the config's
-    /// path-typed fields, counted in this source, are the keys it lists plus
-    /// `LoadedConfig::path`.
-    #[test]
-    fn every_path_key_is_a_named_file() {
-        let source = include_str!("config.rs");
-        let path_fields = source
-            .lines()
-            .map(str::trim)
-            .filter(|l| {
-                let l = l.strip_prefix("pub ").unwrap_or(l);
-                l.split_once(": ").is_some_and(|(name, ty)| {
-                    name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
-                        && matches!(ty, "PathBuf," | "Option<PathBuf>,")
-                })
-            })
-            .count();
-        let path =
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/instruments/caliop_curtain.toml");
-        let loaded = load(
-            &path,
-            &["atmosphere.molecular.model={ file = \"p.txt\" }".into()],
-        )
-        .unwrap();
-        let named: Vec<&str> = loaded.config.named_files().iter().map(|f| f.0).collect();
-        assert_eq!(named, ["atmosphere.molecular.model.file", "scene.curtain"]);
-        assert_eq!(
-            path_fields,
-            named.len() + 1,
-            "a path key missing from named_files"
-        );
-        let read = loaded.files_read();
-        assert_eq!(read[0], path);
-        assert_eq!(read[1], path.parent().unwrap().join("p.txt"));
     }
 }

@@ -9,9 +9,9 @@
 //! the path and what it is: `--scheme D/fifo: is a FIFO, not a regular file`.
 //!
 //! Which files a command reads, so that no output replaces one, is the other half of
-//! the rule: [`crate::config::LoadedConfig::files_read`] for a config and the files it
-//! names, and the inputs each command passes to
-//! [`Outputs`](crate::output::safe_file::Outputs).
+//! the rule: `LoadedConfig::files_read` (`src/loaded.rs`) for a config and the files it
+//! names, and the inputs each command passes to `Outputs` (`src/output/safe_file.rs`):
+//! both read through this module, which names neither.
 
 use std::fs;
 use std::os::unix::fs::FileTypeExt;

@@ -36,7 +36,7 @@ pub struct Instrument {
 /// `background.radiance`; with the solar model and a fixed `solar_zenith_deg` also the
 /// sunlight reflected below (at 1 AU, `crate::scene::sun::reflected_radiance`, through
 /// `atmosphere` along the sun's slant path). Along an orbit the solar part changes from
-/// profile to profile and is added by the scene (`crate::simulate::scene`), not here.
+/// profile to profile and is added by the scene (`src/simulate/scene.rs`), not here.
 pub fn sky_radiance(cfg: &ScenarioConfig, atmosphere: &Atmosphere) -> f64 {
     let b = &cfg.background;
     let floor = b.radiance.unwrap_or(0.0);

@@ -17,8 +17,24 @@
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 
-use crate::config::{EnergyDriftConfig, InstrumentConfig};
+use crate::config::{Checker, EnergyDriftConfig, InstrumentConfig, ScenarioConfig};
+use crate::error::Result;
 use crate::sampling::{SHOT_BLOCK, stream_rng};
+
+/// Largest relative rms pulse-energy jitter σ supported: up to it the clamp at
+/// `1 + 6σ` changes the law with probability below 2·10⁻⁹.
+pub const MAX_JITTER: f64 = 0.2;
+
+/// Checks what the laser's law limits: `instrument.pulse_energy_jitter` within
+/// `[0, MAX_JITTER]`.
+pub fn validate(config: &ScenarioConfig, c: &Checker) -> Result<()> {
+    c.range(
+        "instrument.pulse_energy_jitter",
+        config.instrument.pulse_energy_jitter,
+        0.0,
+        MAX_JITTER,
+    )
+}
 
 /// Seed offset of the pulse-energy streams.
 const ENERGY_STREAM: u64 = 0xE4E2_6000_51A7_0001;

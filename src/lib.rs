@@ -15,6 +15,8 @@ pub mod geometry;
 pub mod input_file;
 pub mod instrument;
 pub mod laser;
+pub mod limits;
+pub mod loaded;
 pub mod onboard;
 pub mod output;
 pub mod receiver;

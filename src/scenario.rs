@@ -4,10 +4,11 @@
 use std::path::Path;
 
 use crate::atmosphere::{Atmosphere, MolecularState, Optics};
-use crate::config::{self, LoadedConfig};
+use crate::config;
 use crate::error::{Error, Result};
 use crate::geometry::{Geometry, Overlap};
 use crate::instrument::Instrument;
+use crate::loaded::{self, LoadedConfig};
 use crate::signal::BeamPath;
 use crate::snr;
 
@@ -46,7 +47,7 @@ pub struct Lidar {
 impl Lidar {
     /// Loads `path` with `overrides` and builds every channel.
     pub fn load(path: &Path, overrides: &[String]) -> Result<Self> {
-        Self::from_loaded(config::load(path, overrides)?)
+        Self::from_loaded(loaded::load(path, overrides)?)
             .map_err(|e| config::attribute_to_override(e, overrides))
     }
 
@@ -185,7 +186,7 @@ impl ExpectedProfile {
 impl Scenario {
     /// Loads `path` with `overrides` and builds the scenario.
     pub fn load(path: &Path, overrides: &[String]) -> Result<Self> {
-        Self::from_loaded(config::load(path, overrides)?)
+        Self::from_loaded(loaded::load(path, overrides)?)
             .map_err(|e| config::attribute_to_override(e, overrides))
     }
 

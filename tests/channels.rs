@@ -425,7 +425,7 @@ fn layers_scale_to_each_channel_wavelength() {
 
 fn config_error(text: &str) -> String {
     let path = Path::new("test.toml");
-    match lidarsim::config::load_str(text, path, &[]) {
+    match lidarsim::loaded::load_str(text, path, &[]) {
         Ok(_) => panic!("accepted:\n{text}"),
         Err(e) => e.to_string(),
     }
@@ -480,5 +480,29 @@ fn channel_errors_name_their_keys() {
     assert!(
         e.contains("instrument.channels[0].crosstalk") && e.contains("total"),
         "{e}"
+    );
+}
+
+/// `kind` says what scattering a channel sees: `"elastic"` (the default) is accepted
+/// and changes nothing; any other value is refused in one line naming the channel's
+/// key and the kinds accepted.
+#[test]
+fn channel_kind_is_elastic_or_refused() {
+    let base = std::fs::read_to_string(common::config_path("instruments/caliop_3ch.toml")).unwrap();
+    let from = "name = \"532_parallel\"\n";
+    assert!(base.contains(from));
+    let path = Path::new("test.toml");
+    let plain = lidarsim::loaded::load_str(&base, path, &[]).unwrap();
+    let elastic = base.replacen(from, &format!("{from}kind = \"elastic\"\n"), 1);
+    let kinds = lidarsim::loaded::load_str(&elastic, path, &[]).unwrap();
+    for (a, b) in plain.channels.iter().zip(&kinds.channels) {
+        assert_eq!(a.kind, lidarsim::receiver::ChannelKind::Elastic);
+        assert_eq!(b.kind, lidarsim::receiver::ChannelKind::Elastic);
+        assert_eq!(toml::to_string(&a.config), toml::to_string(&b.config));
+    }
+    let e = config_error(&base.replacen(from, &format!("{from}kind = \"raman\"\n"), 1));
+    assert_eq!(
+        e,
+        "test.toml: key `instrument.channels[0].kind`: unknown variant 'raman', expected 'elastic'"
     );
 }

@@ -243,7 +243,7 @@ fn inconsistent_aerosol_source_is_an_error() {
     let text = std::fs::read_to_string(&path)
         .unwrap()
         .replace("surface_extinction_per_km = 0.08", "");
-    let err = lidarsim::config::load_str(
+    let err = lidarsim::loaded::load_str(
         &text,
         &path,
         &["atmosphere.aerosol.extinction_from=surface_extinction".into()],
@@ -279,7 +279,7 @@ fn malformed_overrides_name_the_key() {
 
 #[test]
 fn malformed_toml_names_the_line() {
-    let err = lidarsim::config::load_str(
+    let err = lidarsim::loaded::load_str(
         "name = \"x\"\n[instrument\nfoo = 1\n",
         std::path::Path::new("bad.toml"),
         &[],
@@ -342,4 +342,56 @@ fn paper_background_form_drops_the_receiver_efficiencies() {
         .instrument
         .background_per_bin;
     assert!((paper * 0.8 * 1.0 - rx).abs() < 1e-15, "ε_bkg = TR·Q = 0.8");
+}
+
+/// A config with several errors is told the first in the order the keys are checked,
+/// whichever module checks them (the limits the laser, the detector, the ozone table,
+/// the orbit and the sampler set are checked in their place among the config's own).
+#[test]
+fn several_errors_are_told_in_the_order_of_the_keys() {
+    let cases: [(&[&str], &str); 6] = [
+        (
+            &[
+                "instrument.rep_rate_hz=-1",
+                "instrument.pulse_energy_jitter=0.5",
+            ],
+            "instrument.pulse_energy_jitter",
+        ),
+        (
+            &[
+                "instrument.wavelength_nm=100",
+                "instrument.pulse_energy_jitter=0.5",
+            ],
+            "instrument.wavelength_nm",
+        ),
+        (
+            &[
+                "instrument.overlap={ model = \"full_range\", full_overlap_m = -1 }",
+                "instrument.detector={ dead_time_s = 1 }",
+            ],
+            "instrument.detector.dead_time_s",
+        ),
+        (
+            &[
+                "atmosphere.aerosol.visibility_km=-1",
+                "atmosphere.ozone=true",
+                "instrument.wavelength_nm=300",
+            ],
+            "atmosphere.ozone",
+        ),
+        (
+            &["background.radiance=-1", "simulation.tolerance=1"],
+            "background.radiance",
+        ),
+        (
+            &[
+                "platform.off_nadir_deg=99",
+                "instrument.detector={ dead_time_s = 1 }",
+            ],
+            "instrument.detector.dead_time_s",
+        ),
+    ];
+    for (overrides, key) in cases {
+        expect_config_error(overrides, key, "");
+    }
 }

@@ -28,16 +28,16 @@ fn signal_constant_and_dark_counts_with_no_unit_factor() {
 }
 
 /// `configs/instruments/caliop_3ch.toml` with `from` replaced by `to` (once), loaded.
-fn three_channels(from: &str, to: &str) -> lidarsim::error::Result<lidarsim::config::LoadedConfig> {
+fn three_channels(from: &str, to: &str) -> lidarsim::error::Result<lidarsim::loaded::LoadedConfig> {
     let path = common::config_path("instruments/caliop_3ch.toml");
     let text = std::fs::read_to_string(&path).unwrap();
     assert!(from.is_empty() || text.contains(from), "{from}");
-    lidarsim::config::load_str(&text.replacen(from, to, 1), &path, &[])
+    lidarsim::loaded::load_str(&text.replacen(from, to, 1), &path, &[])
 }
 
 /// A channel's `detector` table is merged key by key into the instrument's: the 1064 nm
 /// channel sets only its dead time and keeps the instrument's (paralyzable) model; the
-/// other channels keep both (`src/receiver.rs` `merge_table`; cargo-mutants survivors
+/// other channels keep both (`src/receiver/mod.rs` `merge_table`; cargo-mutants survivors
 /// "replace merge_table with ()" and "delete match arm").
 #[test]
 fn a_channel_detector_table_merges_into_the_instrument_one() {
@@ -147,7 +147,7 @@ fn channel_errors_name_the_key_where_it_was_set() {
             "wavelength_nm = 1064.0\npolarization = \"total\"",
             1,
         );
-    let e = lidarsim::config::load_str(&text, &path, &[])
+    let e = lidarsim::loaded::load_str(&text, &path, &[])
         .expect_err("accepted")
         .to_string();
     assert!(
@@ -665,7 +665,7 @@ fn dead_time_carries_across_bin_edges() {
 fn a_track_sees_its_segments_and_broken_cells() {
     use lidarsim::config::SegmentConfig;
     use lidarsim::scene::track::{AlongTrack, Column, Track};
-    let base = lidarsim::config::load(&common::config_path("instruments/caliop_orbit.toml"), &[])
+    let base = lidarsim::loaded::load(&common::config_path("instruments/caliop_orbit.toml"), &[])
         .unwrap()
         .config;
     let with_segments = |segments: Vec<SegmentConfig>| {

@@ -21,7 +21,8 @@ if [ ${#files[@]} -eq 0 ]; then
     files=(
         src/atmosphere/ozone.rs src/atmosphere/rayleigh.rs src/atmosphere/us76.rs
         src/atmosphere/mod.rs src/atmosphere/aerosol_profile.rs
-        src/atmosphere/profile_file.rs src/signal.rs src/instrument.rs src/receiver.rs
+        src/atmosphere/profile_file.rs src/signal.rs src/instrument.rs src/receiver/mod.rs
+        src/receiver/channel.rs
         src/detector/mod.rs src/detector/dead_time.rs src/geometry.rs
         src/scene/sun.rs src/scene/track.rs src/scene/orbit.rs src/scene/curtain.rs
     )

@@ -11,11 +11,11 @@ pub mod rayleigh;
 pub mod us76;
 
 use crate::config::{
-    Channel, ExtinctionSource, LayerKind, LoadedConfig, MolecularLine, MolecularModel,
-    ScenarioConfig,
+    Channel, ExtinctionSource, LayerKind, MolecularLine, MolecularModel, ScenarioConfig,
 };
 use crate::constants::BOLTZMANN_J_PER_K;
 use crate::error::Result;
+use crate::loaded::LoadedConfig;
 use profile_file::MolecularProfile;
 
 /// Where the molecular number density comes from.

@@ -25,7 +25,25 @@
 //! two-way optical depth that is 2e-4 at the 360–370 nm value),
 //! and below 350 nm σ is NaN (not modelled).
 
+use crate::config::{Checker, ScenarioConfig};
 use crate::constants::DOBSON_UNIT_PER_M2;
+use crate::error::Result;
+
+/// Checks `atmosphere.ozone`: on, it needs a cross-section at the instrument's
+/// wavelength ([`cross_section_m2`], from 350 nm up).
+pub fn validate(config: &ScenarioConfig, c: &Checker) -> Result<()> {
+    let wl = config.instrument.wavelength_nm;
+    if config.atmosphere.ozone && cross_section_m2(wl).is_nan() {
+        return Err(c.fail(
+            "atmosphere.ozone",
+            format!(
+                "no ozone cross-section is tabulated at {wl} nm (from 350 nm up); set \
+                 atmosphere.ozone = false"
+            ),
+        ));
+    }
+    Ok(())
+}
 
 /// AFGL 1986 Table 1f (U.S. Standard): (altitude km, O3 ppmv, air number density cm⁻³).
 const AFGL_US_STANDARD: [(f64, f64, f64); 38] = [

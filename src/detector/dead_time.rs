@@ -31,7 +31,6 @@
 //! `mΔt·(1 − 2nτ·e^{−nτ})`, which tend to the Poisson value at low rates.
 
 use rand::Rng;
-use serde::{Deserialize, Serialize};
 
 use rayon::prelude::*;
 
@@ -44,16 +43,8 @@ pub const MAX_GRID_STEPS: f64 = 5e7;
 /// Grid steps per dead time (and at least per bin).
 const STEPS_PER_TAU: f64 = 64.0;
 
-/// How the dead period behaves.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum DeadTimeModel {
-    /// Photons in the dead period are lost and do not extend it (default).
-    #[default]
-    Nonparalyzable,
-    /// Every photon restarts the dead period.
-    Paralyzable,
-}
+/// How the dead period behaves (a config key's type, so it lives in the config).
+pub use crate::config::DeadTimeModel;
 
 /// A photon counter's dead time on a window of bins of equal width.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -3,8 +3,29 @@
 //! has no detector stage and keeps every exact fast path.
 
 pub mod dead_time;
+pub mod modulated;
 
 pub use dead_time::{DeadTime, DeadTimeModel};
+pub use modulated::DetectedShots;
+
+use crate::config::{Checker, ScenarioConfig};
+use crate::error::Result;
+
+/// Longest dead time a photon counter may have, s.
+pub const MAX_DEAD_TIME_S: f64 = 1e-6;
+
+/// Checks `[instrument.detector]`: a dead time from 0 to [`MAX_DEAD_TIME_S`].
+pub fn validate(config: &ScenarioConfig, c: &Checker) -> Result<()> {
+    if let Some(d) = &config.instrument.detector {
+        c.range(
+            "instrument.detector.dead_time_s",
+            d.dead_time_s,
+            0.0,
+            MAX_DEAD_TIME_S,
+        )?;
+    }
+    Ok(())
+}
 
 /// Count rate above which a photon counter without a dead-time model is out of its
 /// linear range (a non-paralyzable τ = 3.5 ns loses 15 % at 50 MHz; the

@@ -60,6 +60,8 @@ use statrs::function::erf::erfc;
 use statrs::function::gamma::ln_gamma;
 
 use super::{AGGREGATE_STREAM, poisson_u64, stream_rng};
+use crate::config::{Checker, SimulationConfig};
+use crate::error::Result;
 
 /// `c = 1/(6√(2π))`: `KS(μ)·√μ → c` as μ → ∞.
 pub const KS_ASYMPTOTE: f64 = 0.066_490_380_066_905_46;
@@ -80,6 +82,14 @@ pub const KS_SUP: f64 = 0.10802;
 /// normally and means of 0.2 counts come out 21 % high), so larger tolerances buy
 /// speed with bias, not with the shape error the tolerance states.
 pub const MAX_TOLERANCE: f64 = 0.01;
+
+/// Checks `simulation.tolerance`: a KS distance in (0, [`MAX_TOLERANCE`]].
+pub fn validate(simulation: &SimulationConfig, c: &Checker) -> Result<()> {
+    if let Some(t) = simulation.tolerance {
+        c.positive("simulation.tolerance", t, MAX_TOLERANCE)?;
+    }
+    Ok(())
+}
 
 /// [`normal_approx_ks`] sums over every integer up to this mean; above, it uses the
 /// incomplete-gamma integral on a refined grid of k.

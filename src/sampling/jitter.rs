@@ -1,5 +1,7 @@
 //! Shots whose signal varies with the emitted energy (jitter, drift: [`crate::laser`]),
-//! drawn exactly by thinning, optionally through the detector's dead time.
+//! drawn exactly by thinning. The counts of an ideal linear detector; a dead-time
+//! detector records the same shots' photons through its own wrapper
+//! (`DetectedShots` in `src/detector/modulated.rs`).
 //!
 //! **Model.** Shot `s` emits `f_s·E0`; its signal counts are Poisson(`f_s·λ_sig,i`),
 //! background and dark unchanged; the factors `f_s` come from the laser's own stream
@@ -10,8 +12,8 @@
 //! every count kept with probability `f_s/f_max` (a binomial thinning of a Poisson(μ)
 //! count is Poisson(p·μ); Lewis & Shedler 1979, Naval Res. Logist. Q. 26, 403). The cost
 //! per shot is that of the envelope draw plus one Bernoulli per signal count, with no
-//! per-shot rebuild. With dead time the shot's photons (thinned signal and the rest) are
-//! collected and recorded by [`DeadTime::record_shot`]. Blocks of [`SHOT_BLOCK`] shots
+//! per-shot rebuild. With dead time the detector takes each shot's photons (thinned
+//! signal and the rest, [`ModulatedShots::draw_shot`]) and records them. Blocks of [`SHOT_BLOCK`] shots
 //! use [`stream_rng`]`(seed, profile, block)`, as in [`super::shot_profile`], so results
 //! depend on the seed only.
 
@@ -20,12 +22,7 @@ use rand_distr::{Binomial, Distribution};
 use rayon::prelude::*;
 
 use super::{CountSink, SHOT_BLOCK, ShotCounts, ShotSampler, stream_rng};
-use crate::detector::DeadTime;
-use crate::detector::dead_time::{ARRIVAL_STREAM, Scratch};
 use crate::laser::PulseEnergy;
-
-/// Largest relative rms pulse-energy jitter supported.
-pub const MAX_JITTER: f64 = 0.2;
 
 /// Samplers for shots of varying energy: the signal at its envelope, the rest unchanged.
 #[derive(Debug, Clone)]
@@ -37,15 +34,6 @@ pub struct ModulatedShots {
     energy_seed: Option<u64>,
     /// `f_max`: no factor of the run exceeds it.
     envelope: f64,
-    dead: Option<DeadTime>,
-}
-
-/// Reusable buffers of one block.
-struct Buffers {
-    envelope: ShotCounts,
-    shot: ShotCounts,
-    factors: Vec<f64>,
-    scratch: Scratch,
 }
 
 impl ModulatedShots {
@@ -66,82 +54,78 @@ impl ModulatedShots {
             energy,
             energy_seed,
             envelope,
-            dead: None,
         }
-    }
-
-    /// The same sampler recording every shot through `dead`.
-    pub fn through_detector(mut self, dead: Option<DeadTime>) -> Self {
-        self.dead = dead;
-        self
-    }
-
-    /// Whether every shot is recorded through a dead-time detector.
-    pub fn has_detector(&self) -> bool {
-        self.dead.is_some()
     }
 
     /// Draws one shot per factor of `factors` (these shots' emitted energies relative to
     /// the nominal, none above the envelope) into `acc`, from `stream_rng(seed, profile,
-    /// 0)` and its arrival stream: a run of consecutive shots of a scene that changes
-    /// along the track. `extra` adds photons to each shot before the dead-time detector
-    /// records it (sunlight in a changing scene); without a detector it is not called
-    /// (the caller adds such photons for the whole run: the same law).
-    pub fn add_run(
-        &self,
-        seed: u64,
-        profile: u64,
-        factors: &[f64],
-        acc: &mut [u64],
-        extra: &mut dyn FnMut(&mut ShotCounts),
-    ) {
-        let bins = acc.len();
-        let mut buf = Buffers {
-            envelope: ShotCounts::new(bins),
-            shot: ShotCounts::new(bins),
-            factors: factors.to_vec(),
-            scratch: Scratch::default(),
-        };
-        let mut arrivals = stream_rng(seed ^ ARRIVAL_STREAM, profile, 0);
-        let mut rng = stream_rng(seed, profile, 0);
-        self.add_block(&mut rng, &mut arrivals, acc, &mut buf, extra);
+    /// 0)`: a run of consecutive shots of a scene that changes along the track.
+    pub fn add_run(&self, seed: u64, profile: u64, factors: &[f64], acc: &mut [u64]) {
+        let mut envelope = ShotCounts::new(acc.len());
+        self.add_block(
+            &mut stream_rng(seed, profile, 0),
+            factors,
+            acc,
+            &mut envelope,
+        );
     }
 
-    /// Draws block `block` (shots `factors.len()`) into `acc`; `extra` as in
-    /// [`add_run`](Self::add_run).
+    /// Draws one shot per factor of `factors` into `acc`, every count kept.
     fn add_block<R: Rng + ?Sized>(
         &self,
         rng: &mut R,
-        arrivals: &mut R,
+        factors: &[f64],
         acc: &mut [u64],
-        buf: &mut Buffers,
-        extra: &mut dyn FnMut(&mut ShotCounts),
+        envelope: &mut ShotCounts,
     ) {
-        for &f in &buf.factors {
+        for &f in factors {
             let keep = f / self.envelope;
-            buf.envelope.clear();
-            self.signal_envelope.sample_shot(rng, &mut buf.envelope);
-            match &self.dead {
-                None => {
-                    for (bin, n) in buf.envelope.nonzero() {
-                        acc[bin] += thin(rng, n, keep);
-                    }
-                    self.rest.sample_shot(rng, acc);
-                }
-                Some(dead) => {
-                    buf.shot.clear();
-                    for (bin, n) in buf.envelope.nonzero() {
-                        let kept = thin(rng, n, keep);
-                        if kept > 0 {
-                            buf.shot.add(bin, kept as u32);
-                        }
-                    }
-                    self.rest.sample_shot(rng, &mut buf.shot);
-                    extra(&mut buf.shot);
-                    dead.record_shot(arrivals, &buf.shot, &mut buf.scratch, acc);
-                }
+            envelope.clear();
+            self.signal_envelope.sample_shot(rng, envelope);
+            for (bin, n) in envelope.nonzero() {
+                acc[bin] += thin(rng, n, keep);
+            }
+            self.rest.sample_shot(rng, acc);
+        }
+    }
+
+    /// Draws the photons of one shot of energy factor `f` into `shot` (cleared first):
+    /// the thinned signal and the rest, `envelope` a buffer. The same draws, in the same
+    /// order, as a shot of [`add_run`](Self::add_run) or [`profile`](Self::profile): a
+    /// detector that needs the whole shot (dead time) records it.
+    pub fn draw_shot<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        f: f64,
+        envelope: &mut ShotCounts,
+        shot: &mut ShotCounts,
+    ) {
+        let keep = f / self.envelope;
+        envelope.clear();
+        self.signal_envelope.sample_shot(rng, envelope);
+        shot.clear();
+        for (bin, n) in envelope.nonzero() {
+            let kept = thin(rng, n, keep);
+            if kept > 0 {
+                shot.add(bin, kept as u32);
             }
         }
+        self.rest.sample_shot(rng, shot);
+    }
+
+    /// The energy factors of block `block` of profile `profile` of `shots` shots into
+    /// `out`, from the run's seed (`seed` when the sampler has none of its own).
+    pub fn block_factors(
+        &self,
+        seed: u64,
+        profile: u64,
+        shots: u64,
+        block: u64,
+        out: &mut Vec<f64>,
+    ) {
+        let energy_seed = self.energy_seed.unwrap_or(seed);
+        self.energy
+            .block_factors(energy_seed, profile, shots, block, out);
     }
 
     /// Accumulates one profile of `shots` shots into `acc`.
@@ -152,23 +136,11 @@ impl ModulatedShots {
             .into_par_iter()
             .map(|b| {
                 let mut part = vec![0u64; bins];
-                let mut buf = Buffers {
-                    envelope: ShotCounts::new(bins),
-                    shot: ShotCounts::new(bins),
-                    factors: Vec::new(),
-                    scratch: Scratch::default(),
-                };
-                let energy_seed = self.energy_seed.unwrap_or(seed);
-                self.energy
-                    .block_factors(energy_seed, profile, shots, b, &mut buf.factors);
-                let mut arrivals = stream_rng(seed ^ ARRIVAL_STREAM, profile, b);
-                self.add_block(
-                    &mut stream_rng(seed, profile, b),
-                    &mut arrivals,
-                    &mut part,
-                    &mut buf,
-                    &mut |_| {},
-                );
+                let mut factors = Vec::new();
+                self.block_factors(seed, profile, shots, b, &mut factors);
+                let mut envelope = ShotCounts::new(bins);
+                let mut rng = stream_rng(seed, profile, b);
+                self.add_block(&mut rng, &factors, &mut part, &mut envelope);
                 part
             })
             .reduce(

@@ -28,9 +28,10 @@
 //!
 //! # Extension points
 //!
-//! Built since (see [`jitter`], `crate::detector`, `crate::onboard`): per-shot
-//! varying means by thinning, the dead-time detector as a sink, component
-//! colouring by separate streams, onboard sums through [`ShotSampler::for_each_shot`].
+//! Built since (see [`jitter`], and `src/detector/`, `src/onboard/` which use this
+//! module, never the other way): per-shot varying means by thinning, the dead-time
+//! detector wrapping a sampler, component colouring by separate streams, onboard sums
+//! through [`ShotSampler::for_each_shot`].
 //! The notes as first written:
 //!
 //! * **Per-shot varying means.** Pulse-energy jitter scales the signal part by

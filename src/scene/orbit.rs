@@ -46,6 +46,7 @@
 //! equatorial orbit; for a sun-synchronous one, i = 98.2°, ~70 m/s: its track over the
 //! rotating Earth is 1.2 % longer than `v_g·t` at the equator, 1.0 % at 60°).
 
+use crate::config::{Checker, OrbitConfig, ScenarioConfig};
 use crate::constants::{EARTH_GM_M3_PER_S2, EARTH_RADIUS_M, EARTH_ROTATION_RAD_PER_S};
 use crate::geometry::ground_track_speed_m_per_s;
 use std::f64::consts::PI;
@@ -98,7 +99,27 @@ pub struct GroundPoint {
     pub along_track_m: f64,
 }
 
+/// Checks `[orbit]`: an orbit [`Orbit::new`] accepts at the platform's altitude.
+pub fn validate(config: &ScenarioConfig, c: &Checker) -> crate::error::Result<()> {
+    if let Some(o) = &config.orbit {
+        Orbit::from_config(o, config.platform.altitude_km * 1e3)
+            .map_err(|reason| c.fail("orbit", reason))?;
+    }
+    Ok(())
+}
+
 impl Orbit {
+    /// The orbit of `[orbit]` at `altitude_m` (the platform's altitude).
+    pub fn from_config(o: &OrbitConfig, altitude_m: f64) -> Result<Self, String> {
+        Orbit::new(
+            altitude_m,
+            o.inclination_deg,
+            o.start_latitude_deg,
+            o.start_longitude_deg,
+            o.ascending,
+        )
+    }
+
     /// The orbit at `altitude_m` with inclination `inclination_deg` (0–180; above 90 is
     /// retrograde) whose sub-satellite point at t = 0 is (`start_latitude_deg`,
     /// `start_longitude_deg`), moving north (`ascending`) or south.

@@ -333,7 +333,7 @@ mod tests {
             env!("CARGO_MANIFEST_DIR"),
             "/configs/paper/scenario1.toml"
         ));
-        crate::config::load(path, &ov).unwrap().config
+        crate::loaded::load(path, &ov).unwrap().config
     }
 
     /// Over 200,000 km of a layer with f = 0.3 and 5 km cells (cloudy and clear lengths

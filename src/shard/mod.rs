@@ -239,7 +239,7 @@ pub fn shard_spec(mut spec: RawFileSpec, shard: Shard, rows: Range<usize>) -> Ra
 /// The lidar of a config stored in a file (`config`: the resolved TOML; `config_file`:
 /// the config's path as the run named it, against which the files it names resolve).
 pub fn stored_lidar(config: &str, config_file: &str) -> Result<Lidar> {
-    let loaded = crate::config::load_str(config, Path::new(config_file), &[])?;
+    let loaded = crate::loaded::load_str(config, Path::new(config_file), &[])?;
     Lidar::from_loaded(loaded)
 }
 

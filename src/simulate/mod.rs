@@ -16,7 +16,7 @@ use rayon::prelude::*;
 pub mod scene;
 
 use crate::config::Method;
-use crate::detector::{DeadTime, dead_time};
+use crate::detector::{DeadTime, DetectedShots, dead_time};
 use crate::error::{Error, Result};
 use crate::laser::PulseEnergy;
 use crate::output::raw_file::content::{self, RunInfo};
@@ -311,7 +311,7 @@ pub enum StreamSampler {
     Shot(Box<ShotSampler>),
     /// Every shot drawn, the signal scaled by the shot's pulse energy (and recorded
     /// through dead time where the detector has it).
-    Modulated(Box<ModulatedShots>),
+    Modulated(Box<DetectedShots>),
     /// Aggregate with the normal approximation at and above a mean threshold.
     AggregateNormal(Vec<f64>, f64),
     /// Every shot drawn and recorded through the detector's dead time.
@@ -354,9 +354,15 @@ impl StreamSampler {
             ResolvedMethod::AggregateNormal { threshold } => {
                 StreamSampler::AggregateNormal(total(), threshold)
             }
-            ResolvedMethod::Shot if !constant => StreamSampler::Modulated(Box::new(
-                ModulatedShots::new(signal, rest, energy.law, energy.seed, energy.envelope),
-            )),
+            ResolvedMethod::Shot if !constant => {
+                StreamSampler::Modulated(Box::new(DetectedShots::new(ModulatedShots::new(
+                    signal,
+                    rest,
+                    energy.law,
+                    energy.seed,
+                    energy.envelope,
+                ))))
+            }
             _ => StreamSampler::Shot(Box::new(ShotSampler::new(&total()))),
         }
     }
@@ -808,7 +814,7 @@ pub fn orbit_of(lidar: &Lidar) -> Result<Option<crate::scene::orbit::Orbit>> {
     cfg.orbit
         .as_ref()
         .map(|o| {
-            o.orbit(cfg.platform.altitude_km * 1e3)
+            crate::scene::orbit::Orbit::from_config(o, cfg.platform.altitude_km * 1e3)
                 .map_err(|reason| Error::config(lidar.first().loaded.file_label(), "orbit", reason))
         })
         .transpose()
@@ -1220,7 +1226,7 @@ mod tests {
             .join("configs")
             .join("paper")
             .join("scenario1.toml");
-        let loaded = crate::config::load(&path, &[]).unwrap();
+        let loaded = crate::loaded::load(&path, &[]).unwrap();
         let values = RunValues {
             profiles: 400,
             seed: u64::MAX,
@@ -1233,7 +1239,7 @@ mod tests {
             stored.contains("seed = \"18446744073709551615\""),
             "{stored}"
         );
-        let again = crate::config::load_str(&stored, &path, &[]).unwrap();
+        let again = crate::loaded::load_str(&stored, &path, &[]).unwrap();
         assert_eq!(
             RunValues::resolve(&RunOptions::default(), &again.config),
             values

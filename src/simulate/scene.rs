@@ -16,10 +16,11 @@
 use std::collections::HashMap;
 
 use super::{ResolvedMethod, RunEnergy, StreamSampler};
-use crate::config::{BackgroundModel, LoadedConfig, ScenarioConfig};
+use crate::config::{BackgroundModel, ScenarioConfig};
 use crate::detector::DeadTime;
 use crate::detector::dead_time::{ARRIVAL_STREAM, Scratch};
 use crate::error::{Error, Result};
+use crate::loaded::LoadedConfig;
 use crate::receiver::ChannelConfig;
 use crate::sampling::{self, CountSink, SHOT_BLOCK, ShotCounts, ShotSampler};
 use crate::scenario::{ExpectedProfile, Lidar, Scenario};
@@ -572,6 +573,7 @@ fn column_scenario(
     let loaded = LoadedConfig {
         channels: vec![ChannelConfig {
             name: c.channel_name.clone(),
+            kind: c.loaded.channels[0].kind,
             config: config.clone(),
         }],
         config,

@@ -104,7 +104,7 @@ pub fn partial(lidar: &Lidar, opts: &ValidateOptions, shard: Shard) -> Result<Pa
 /// impossible ([`impossible_sums`]).
 pub fn read(path: &Path) -> Result<Partial> {
     let p: Partial = read_partial(path, PARTIAL_FORMAT, "validate --shard K/N --partial")?;
-    let max = crate::cli_values::MAX_REALIZATIONS;
+    let max = crate::limits::MAX_REALIZATIONS;
     if p.realizations as u64 > max || p.first > p.end || p.end > p.realizations {
         return Err(Error::output(
             path,

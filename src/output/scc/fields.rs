@@ -231,7 +231,7 @@ fn channels(path: &Path, raw: &RawRun, opts: &SccOptions) -> Result<Vec<SccChann
 fn receiver_channels(path: &Path, raw: &RawRun) -> Result<Vec<ChannelConfig>> {
     let text = toml::to_string(&raw.config)
         .map_err(|e| bad(path, &format!("the `config` attribute: {e}")))?;
-    let loaded = crate::config::load_str(&text, path, &[])
+    let loaded = crate::loaded::load_str(&text, path, &[])
         .map_err(|e| bad(path, &format!("the `config` attribute: {e}")))?;
     Ok(loaded.channels)
 }

@@ -1,18 +1,21 @@
 //! The receiver's channels (docs/model.md §4c, docs/config.md `[[instrument.channels]]`).
 //!
-//! A channel is the whole instrument as one detector sees it: `[instrument]` with the
-//! channel's own keys laid over it (`wavelength_nm`, `pulse_energy_j`, efficiencies,
-//! filter, dark rate, `detector`, ...), its `polarization` and `crosstalk`. Expanding the
-//! config once per channel keeps every formula in one place: each channel is a
-//! single-channel scenario of its own, with the same geometry, atmosphere and seed.
+//! A channel ([`channel`]) is the whole instrument as one detector sees it: `[instrument]`
+//! with the channel's own keys laid over it (`wavelength_nm`, `pulse_energy_j`,
+//! efficiencies, filter, dark rate, `detector`, ...), its `kind`, `polarization` and
+//! `crosstalk`. Expanding the config once per channel keeps every formula in one place:
+//! each channel is a single-channel scenario of its own, with the same geometry,
+//! atmosphere and seed.
 //!
 //! What one laser, one digitizer and one telescope share cannot differ per channel:
 //! [`SHARED_KEYS`]. Layers keep their values at the `[instrument]` wavelength and reach
 //! a channel at another wavelength through their Ångström exponent.
 
-use serde::Serialize;
+pub mod channel;
 
-use crate::config::{self, Channel, ScenarioConfig};
+pub use channel::{ChannelConfig, ChannelKind, Filter, channel_name};
+
+use crate::config::{self, ScenarioConfig};
 use crate::error::{Error, Result};
 
 /// Keys shared by every channel: the laser's timing and energy statistics, the
@@ -27,30 +30,19 @@ pub const SHARED_KEYS: [&str; 6] = [
 ];
 /// Most channels one receiver may have.
 pub const MAX_CHANNELS: usize = 32;
-/// Longest channel name, characters.
-const MAX_NAME_CHARS: usize = 64;
 
-/// One channel: its name and the config as it sees it.
-#[derive(Debug, Clone, Serialize)]
-pub struct ChannelConfig {
-    /// The channel's name (the file's `channel` coordinate), e.g. `532_parallel`.
-    pub name: String,
-    /// The whole config with `[instrument]` as this channel sees it.
-    pub config: ScenarioConfig,
-}
-
-/// A channel's default name: wavelength and polarization, e.g. `532_total`.
-pub fn channel_name(wavelength_nm: f64, polarization: Channel) -> String {
-    format!("{wavelength_nm}_{}", polarization.name())
-}
+/// Checks a whole config (`file` names it in errors): what the loader calls valid.
+pub type Validate = fn(&ScenarioConfig, &str) -> Result<()>;
 
 /// The channels of a validated config (`base`, deserialized from `table`): one per
-/// `[[instrument.channels]]` entry, or the instrument itself when there is none.
+/// `[[instrument.channels]]` entry, or the instrument itself when there is none. Each
+/// channel's config is checked by `validate`, the loader's checks of a whole config.
 /// Errors name the entry's key, e.g. `instrument.channels[1].wavelength_nm`.
 pub fn expand(
     table: &toml::Table,
     base: &ScenarioConfig,
     file: &str,
+    validate: Validate,
 ) -> Result<Vec<ChannelConfig>> {
     let entries = &base.instrument.channels;
     let listed_empty = table
@@ -71,6 +63,7 @@ pub fn expand(
         let i = &base.instrument;
         return Ok(vec![ChannelConfig {
             name: channel_name(i.wavelength_nm, i.channel),
+            kind: ChannelKind::default(),
             config: base.clone(),
         }]);
     }
@@ -86,7 +79,7 @@ pub fn expand(
     }
     let mut channels: Vec<ChannelConfig> = Vec::with_capacity(entries.len());
     for (k, entry) in entries.iter().enumerate() {
-        let channel = expand_one(table, base, entry, k, file)?;
+        let channel = expand_one(table, base, (k, entry), file, validate)?;
         if let Some(j) = channels.iter().position(|c| c.name == channel.name) {
             return Err(Error::config(
                 file,
@@ -106,13 +99,14 @@ pub fn expand(
 fn expand_one(
     table: &toml::Table,
     base: &ScenarioConfig,
-    entry: &toml::Table,
-    k: usize,
+    (k, entry): (usize, &toml::Table),
     file: &str,
+    validate: Validate,
 ) -> Result<ChannelConfig> {
     let key = |s: &str| format!("instrument.channels[{k}].{s}");
     let mut root = table.clone();
     let mut name = None;
+    let mut kind = ChannelKind::default();
     {
         let Some(toml::Value::Table(inst)) = root.get_mut("instrument") else {
             return Err(Error::config(file, "instrument", "must be a table"));
@@ -120,7 +114,8 @@ fn expand_one(
         inst.remove("channels");
         for (field, value) in entry {
             match field.as_str() {
-                "name" => name = Some(channel_label(value, &key("name"), file)?),
+                "name" => name = Some(channel::channel_label(value, &key("name"), file)?),
+                "kind" => kind = ChannelKind::from_value(value, &key("kind"), file)?,
                 "polarization" | "channel" => {
                     inst.remove("polarization");
                     inst.insert("channel".into(), value.clone());
@@ -167,25 +162,13 @@ fn expand_one(
     let label = name.clone().unwrap_or_else(|| format!("{k}"));
     let in_channel = |e: Error| rename_key(e, k, entry, &label);
     let config = config::deserialize(toml::Value::Table(root), file).map_err(in_channel)?;
-    config.validate(file).map_err(in_channel)?;
+    validate(&config, file).map_err(in_channel)?;
     let i = &config.instrument;
     Ok(ChannelConfig {
         name: name.unwrap_or_else(|| channel_name(i.wavelength_nm, i.channel)),
+        kind,
         config,
     })
-}
-
-/// A channel name: a string of 1–64 printable characters.
-fn channel_label(value: &toml::Value, key: &str, file: &str) -> Result<String> {
-    let fail = |why: &str| Error::config(file, key, why.to_string());
-    let name = value.as_str().ok_or_else(|| fail("must be a string"))?;
-    if name.is_empty() || name.chars().count() > MAX_NAME_CHARS {
-        return Err(fail("must have 1 to 64 characters"));
-    }
-    if name.chars().any(char::is_control) {
-        return Err(fail("must not contain control characters"));
-    }
-    Ok(name.to_string())
 }
 
 /// `inst[key]` = `value`, merged key by key into an existing table.
@@ -232,33 +215,5 @@ fn rename_key(e: Error, k: usize, entry: &toml::Table, label: &str) -> Error {
             }
         }
         other => other,
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn names_read_like_the_field() {
-        assert_eq!(channel_name(532.0, Channel::Total), "532_total");
-        assert_eq!(
-            channel_name(1064.0, Channel::Perpendicular),
-            "1064_perpendicular"
-        );
-        assert_eq!(channel_name(354.7, Channel::Parallel), "354.7_parallel");
-    }
-
-    #[test]
-    fn crosstalk_mixes_the_polarizations() {
-        let d = 0.4;
-        let (par, per) = (1.0 / 1.4, 0.4 / 1.4);
-        assert_eq!(Channel::Total.share(d, 0.1), 1.0);
-        assert!((Channel::Parallel.share(d, 0.0) - par).abs() < 1e-15);
-        assert!((Channel::Parallel.share(d, 0.1) - (0.9 * par + 0.1 * per)).abs() < 1e-15);
-        assert!((Channel::Perpendicular.share(d, 0.1) - (0.9 * per + 0.1 * par)).abs() < 1e-15);
-        // the two polarization channels together see all of it, whatever the cross-talk
-        let sum = Channel::Parallel.share(d, 0.03) + Channel::Perpendicular.share(d, 0.03);
-        assert!((sum - 1.0).abs() < 1e-15);
     }
 }
