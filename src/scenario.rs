@@ -213,7 +213,7 @@ impl Scenario {
             bins * MODEL_BYTES_PER_BIN,
         )?;
         let mut atmosphere = Atmosphere::from_config(&loaded)?;
-        let instrument = Instrument::from_config(cfg, &atmosphere);
+        let instrument = Instrument::from_config(cfg, atmosphere.detected_line());
         // at least four slabs per bin, so that the piecewise representation resolves every bin
         let lowest = cfg.acquisition.bottom_altitude_km * 1e3;
         atmosphere.grid_m = atmosphere

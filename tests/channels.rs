@@ -484,8 +484,8 @@ fn channel_errors_name_their_keys() {
 }
 
 /// `kind` says what scattering a channel sees: `"elastic"` (the default) is accepted
-/// and changes nothing; any other value is refused in one line naming the channel's
-/// key and the kinds accepted.
+/// and changes nothing; `"raman"` is a Raman channel (tests/raman_retrieval.rs); any
+/// other value is refused in one line naming the channel's key and the kinds accepted.
 #[test]
 fn channel_kind_is_elastic_or_refused() {
     let base = std::fs::read_to_string(common::config_path("instruments/caliop_3ch.toml")).unwrap();
@@ -500,9 +500,9 @@ fn channel_kind_is_elastic_or_refused() {
         assert_eq!(b.kind, lidarsim::receiver::ChannelKind::Elastic);
         assert_eq!(toml::to_string(&a.config), toml::to_string(&b.config));
     }
-    let e = config_error(&base.replacen(from, &format!("{from}kind = \"raman\"\n"), 1));
+    let e = config_error(&base.replacen(from, &format!("{from}kind = \"hsrl\"\n"), 1));
     assert_eq!(
         e,
-        "test.toml: key `instrument.channels[0].kind`: unknown variant 'raman', expected 'elastic'"
+        "test.toml: key `instrument.channels[0].kind`: unknown variant 'hsrl', expected 'elastic' or 'raman'"
     );
 }

@@ -16,7 +16,54 @@ use crate::config::{
 use crate::constants::BOLTZMANN_J_PER_K;
 use crate::error::Result;
 use crate::loaded::LoadedConfig;
+use crate::receiver::ChannelKind;
 use profile_file::MolecularProfile;
+
+/// Temperature at which a Raman channel's band cross-section is taken, K: the band
+/// summed over its lines depends on T only through the vibrational ground state's
+/// population, which differs from 1 by 9e-6 at 288 K and by < 2e-5 below 320 K
+/// (`raman::n2_ground_state_fraction`).
+pub const RAMAN_TEMPERATURE_K: f64 = 288.15;
+
+/// What a Raman channel sees (docs/model.md §4h): the atmosphere at its detected line,
+/// which attenuates the return on its way back, and the Raman backscatter per air
+/// molecule.
+#[derive(Debug, Clone)]
+pub struct RamanReturn {
+    /// The species (`N2`).
+    pub species: &'static str,
+    /// The detected line, nm.
+    pub line_nm: f64,
+    /// The atmosphere at the detected line (its elastic optics give the extinction back).
+    pub line: Box<Atmosphere>,
+    /// The species' share of the air's molecules times its band's backscatter
+    /// cross-section at the laser line, m² sr⁻¹: `β_R = N·this`.
+    pub backscatter_per_air_molecule_m2_sr: f64,
+}
+
+impl RamanReturn {
+    /// The optics a Raman channel sees at `z_m`, from the elastic optics `up` at the laser
+    /// line: extinction by species at the detected line (the truth of the channel), the
+    /// Raman backscatter as the molecular one (particles scatter no Raman light), and
+    /// the attenuation of the way up and back, `α_eff = (α_eff(λ₀) + α_eff(λ_R))/2`, so
+    /// that `T² = T_λ₀·T_λR` (model.md §8).
+    fn optics(&self, up: &Optics, z_m: f64) -> Optics {
+        let down = self.line.elastic_optics_at(z_m);
+        let beta_r =
+            self.line.molecules.number_density_m3(z_m) * self.backscatter_per_air_molecule_m2_sr;
+        Optics {
+            beta_mol: beta_r,
+            beta_aer: 0.0,
+            beta_cld: 0.0,
+            beta_perp_aer: 0.0,
+            beta_perp_cld: 0.0,
+            depol_mol: 0.0,
+            beta_channel: beta_r,
+            alpha_effective: 0.5 * (up.alpha_effective + down.alpha_effective),
+            ..down
+        }
+    }
+}
 
 /// Where the molecular number density comes from.
 #[derive(Debug, Clone)]
@@ -304,6 +351,8 @@ pub struct Atmosphere {
     pub crosstalk: f64,
     /// Ozone absorption at this wavelength, if on: the Chappuis cross-section, m².
     pub ozone_cross_section_m2: Option<f64>,
+    /// A Raman channel's return (None for an elastic channel).
+    pub raman: Option<RamanReturn>,
 }
 
 impl Atmosphere {
@@ -388,7 +437,34 @@ impl Atmosphere {
                 .ozone
                 .then(|| ozone::cross_section_m2(wl))
                 .filter(|s| *s > 0.0),
+            raman: raman_return(loaded)?,
         })
+    }
+
+    /// The atmosphere at the line the channel detects: itself, or a Raman channel's
+    /// atmosphere at the Raman line.
+    pub fn detected_line(&self) -> &Atmosphere {
+        self.raman.as_ref().map_or(self, |r| &r.line)
+    }
+
+    /// The name of what the channel's `beta_mol` is: `cabannes` or `whole` (the part of
+    /// the elastic molecular line its filter passes), `raman_N2`.
+    pub fn molecular_line_name(&self) -> String {
+        match &self.raman {
+            Some(r) => format!("raman_{}", r.species),
+            None if self.molecules.cabannes => "cabannes".into(),
+            None => "whole".into(),
+        }
+    }
+
+    /// `α_mol/β_mol` of what the channel sees, sr: the molecular lidar ratio of its part
+    /// of the elastic line, or for a Raman channel the Rayleigh extinction at the Raman
+    /// line over the Raman backscatter (both ∝ N: a constant).
+    pub fn molecular_lidar_ratio_sr(&self) -> f64 {
+        match &self.raman {
+            Some(r) => r.line.molecules.cross_section_m2 / r.backscatter_per_air_molecule_m2_sr,
+            None => self.molecules.lidar_ratio_sr,
+        }
     }
 
     /// The optics where the beam sees nothing (below the surface, before the pulse
@@ -401,9 +477,19 @@ impl Atmosphere {
         }
     }
 
-    /// Optical properties at altitude `z_m`: `β = β_mol + β_aer + β_cld`,
-    /// `α = α_mol + α_aer + α_cld` (model.md §4).
+    /// Optical properties the channel sees at altitude `z_m`: the elastic optics
+    /// ([`Atmosphere::elastic_optics_at`]), or a Raman channel's ([`RamanReturn`]).
     pub fn optics_at(&self, z_m: f64) -> Optics {
+        let up = self.elastic_optics_at(z_m);
+        match &self.raman {
+            None => up,
+            Some(r) => r.optics(&up, z_m),
+        }
+    }
+
+    /// Elastic optical properties at the laser line at altitude `z_m`:
+    /// `β = β_mol + β_aer + β_cld`, `α = α_mol + α_aer + α_cld` (model.md §4).
+    pub fn elastic_optics_at(&self, z_m: f64) -> Optics {
         let mut o = Optics {
             alpha_mol: self.molecules.extinction_per_m(z_m),
             depol_mol: self.molecules.depolarization,
@@ -496,6 +582,33 @@ impl Atmosphere {
             })
             .collect()
     }
+}
+
+/// A Raman channel's return: its atmosphere at the detected line (the layers' and the
+/// aerosol's values carried there by their Ångström exponents, Rayleigh and ozone at that
+/// line) and the N₂ band's backscatter (docs/model.md §4h); None for another kind.
+fn raman_return(loaded: &LoadedConfig) -> Result<Option<RamanReturn>> {
+    let Some(channel) = loaded
+        .channels
+        .first()
+        .filter(|c| c.kind == ChannelKind::Raman)
+    else {
+        return Ok(None);
+    };
+    let laser_nm = loaded.config.instrument.wavelength_nm;
+    let line_nm = channel.detection_wavelength_nm();
+    let mut down = loaded.clone();
+    down.config.instrument.wavelength_nm = line_nm;
+    down.channels[0].kind = ChannelKind::Elastic;
+    down.channels[0].config.instrument.wavelength_nm = line_nm;
+    let share = raman::N2_FRACTION_OF_AIR;
+    Ok(Some(RamanReturn {
+        species: channel.species.name(),
+        line_nm,
+        line: Box::new(Atmosphere::from_config(&down)?),
+        backscatter_per_air_molecule_m2_sr: share
+            * raman::n2_backscatter_cross_section_m2_sr(laser_nm, RAMAN_TEMPERATURE_K),
+    }))
 }
 
 /// Eq. 5 near-surface extinction at the laser wavelength, from the visibility or from

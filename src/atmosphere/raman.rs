@@ -41,6 +41,11 @@ use crate::constants::{
 /// (Wandinger 2005, p. 251).
 pub const N2_SHIFT_PER_M: f64 = 233_070.0;
 
+/// Vibrational wavenumber of H₂O (the ν₁ Q branch), m⁻¹: 3652 cm⁻¹ (Wandinger 2005,
+/// p. 251): 354.7 → 407.5 nm, 532.1 → 660.4 nm. Only the line: lidarsim does not model
+/// water vapour's profile or cross-section yet.
+pub const H2O_SHIFT_PER_M: f64 = 365_200.0;
+
 /// Volume (number) fraction of N₂ in dry air (U.S. Standard Atmosphere 1976, Table 3).
 pub const N2_FRACTION_OF_AIR: f64 = 0.780_84;
 

@@ -3,10 +3,11 @@
 //! cross-talk, its filter and its detector, each as the channel's view of the config
 //! (`[instrument]` with the channel's own keys laid over it).
 //!
-//! A kind is what the channel's light is: today only [`ChannelKind::Elastic`], the
-//! backscatter at the laser's wavelength. A kind that sees other light (a Raman line, a
-//! molecular line through an HSRL filter) is a variant here, checked and described in
-//! this folder.
+//! A kind is what the channel's light is: [`ChannelKind::Elastic`], the backscatter at
+//! the laser's wavelength, or [`ChannelKind::Raman`], the vibrational Raman band of a
+//! species ([`RamanSpecies`]) shifted from the laser line (docs/model.md §4h). A kind
+//! that sees other light (a molecular line through an HSRL filter) is a variant here,
+//! checked and described in this folder.
 
 use serde::{Deserialize, Serialize};
 
@@ -23,13 +24,52 @@ pub enum ChannelKind {
     /// Elastic backscatter at the laser's wavelength, molecules and particles (default).
     #[default]
     Elastic,
+    /// The vibrational Raman band of `species` (`instrument.channels[i].species`),
+    /// detected at the shifted line: molecules only, up at the laser line and back at the
+    /// Raman line.
+    Raman,
+}
+
+/// The species a Raman channel sees (`instrument.channels[i].species`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+pub enum RamanSpecies {
+    /// Nitrogen, 0.78084 of the air's molecules (default).
+    #[default]
+    N2,
+    /// Water vapour: named so that a config asking for it is told it is not modelled yet.
+    H2O,
+}
+
+impl RamanSpecies {
+    /// The species' name in the config and the file: `N2`, `H2O`.
+    pub fn name(self) -> &'static str {
+        match self {
+            RamanSpecies::N2 => "N2",
+            RamanSpecies::H2O => "H2O",
+        }
+    }
+
+    /// The species a channel's `species` key gives; errors name `key` and list them.
+    pub fn from_value(value: &toml::Value, key: &str, file: &str) -> Result<Self> {
+        RamanSpecies::deserialize(value.clone())
+            .map_err(|e| Error::config(file, key, config::plain_serde_message(key, e.message())))
+    }
+
+    /// Its vibrational shift, m⁻¹ (the Stokes line is `1/λ₀ − shift`).
+    pub fn shift_per_m(self) -> f64 {
+        match self {
+            RamanSpecies::N2 => crate::atmosphere::raman::N2_SHIFT_PER_M,
+            RamanSpecies::H2O => crate::atmosphere::raman::H2O_SHIFT_PER_M,
+        }
+    }
 }
 
 impl ChannelKind {
-    /// The kind's name in the config: `elastic`.
+    /// The kind's name in the config and the file: `elastic`, `raman`.
     pub fn name(self) -> &'static str {
         match self {
             ChannelKind::Elastic => "elastic",
+            ChannelKind::Raman => "raman",
         }
     }
 
@@ -47,6 +87,9 @@ pub struct ChannelConfig {
     pub name: String,
     /// The kind of scattering it sees.
     pub kind: ChannelKind,
+    /// The species of a Raman channel (N2 unless `species` says otherwise; unused by
+    /// other kinds, which refuse the key).
+    pub species: RamanSpecies,
     /// The whole config with `[instrument]` as this channel sees it.
     pub config: ScenarioConfig,
 }
@@ -80,6 +123,27 @@ impl ChannelConfig {
         }
     }
 
+    /// The wavelength of the line it detects, nm: the laser's for an elastic channel,
+    /// the species' Stokes line for a Raman channel.
+    pub fn detection_wavelength_nm(&self) -> f64 {
+        let laser = self.config.instrument.wavelength_nm;
+        match self.kind {
+            ChannelKind::Elastic => laser,
+            ChannelKind::Raman => {
+                crate::atmosphere::raman::shifted_wavelength_nm(laser, self.species.shift_per_m())
+            }
+        }
+    }
+
+    /// Its name when the config gives none: `532_total`, `386.7_raman_N2`.
+    pub fn default_name(&self) -> String {
+        let i = &self.config.instrument;
+        match self.kind {
+            ChannelKind::Elastic => channel_name(i.wavelength_nm, i.channel),
+            ChannelKind::Raman => raman_channel_name(self.detection_wavelength_nm(), self.species),
+        }
+    }
+
     /// Its detector; `None` = an ideal linear photon counter.
     pub fn detector(&self) -> Option<&DetectorConfig> {
         self.config.instrument.detector.as_ref()
@@ -89,6 +153,45 @@ impl ChannelConfig {
 /// A channel's default name: wavelength and polarization, e.g. `532_total`.
 pub fn channel_name(wavelength_nm: f64, polarization: Channel) -> String {
     format!("{wavelength_nm}_{}", polarization.name())
+}
+
+/// A Raman channel's default name: its detected line to 0.1 nm and the species, e.g.
+/// `386.7_raman_N2`.
+pub fn raman_channel_name(detection_nm: f64, species: RamanSpecies) -> String {
+    format!("{:.1}_raman_{}", detection_nm, species.name())
+}
+
+/// The checks of a channel's kind against its other keys (`key` gives an entry's key):
+/// `species` only on a Raman channel, N2 only (H2O needs a humidity profile lidarsim
+/// does not model yet), and a Raman channel sees the total band (its depolarization is
+/// not modelled).
+pub fn check_kind(
+    kind: ChannelKind,
+    species: Option<RamanSpecies>,
+    polarization: Channel,
+    key: &dyn Fn(&str) -> String,
+    file: &str,
+) -> Result<()> {
+    match (kind, species) {
+        (ChannelKind::Elastic, Some(_)) => Err(Error::config(
+            file,
+            key("species"),
+            "is for Raman channels (kind = \"raman\"); an elastic channel sees the laser line",
+        )),
+        (ChannelKind::Raman, Some(RamanSpecies::H2O)) => Err(Error::config(
+            file,
+            key("species"),
+            "H2O needs a water-vapour mixing-ratio profile, which lidarsim does not model \
+             yet; \"N2\" is the species it simulates",
+        )),
+        (ChannelKind::Raman, _) if polarization != Channel::Total => Err(Error::config(
+            file,
+            key("polarization"),
+            "a Raman channel sees the whole band, whose depolarization lidarsim does not \
+             model: use polarization = \"total\"",
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// A channel name: a string of 1–64 printable characters.
@@ -140,7 +243,11 @@ mod tests {
             ChannelKind::Elastic
         );
         assert_eq!(ChannelKind::default().name(), "elastic");
-        let e = ChannelKind::from_value(&v("raman"), key, "f.toml")
+        assert_eq!(
+            ChannelKind::from_value(&v("raman"), key, "f.toml").unwrap(),
+            ChannelKind::Raman
+        );
+        let e = ChannelKind::from_value(&v("hsrl"), key, "f.toml")
             .unwrap_err()
             .to_string();
         assert!(

@@ -13,7 +13,7 @@
 
 pub mod channel;
 
-pub use channel::{ChannelConfig, ChannelKind, Filter, channel_name};
+pub use channel::{ChannelConfig, ChannelKind, Filter, RamanSpecies, channel_name};
 
 use crate::config::{self, ScenarioConfig};
 use crate::error::{Error, Result};
@@ -64,6 +64,7 @@ pub fn expand(
         return Ok(vec![ChannelConfig {
             name: channel_name(i.wavelength_nm, i.channel),
             kind: ChannelKind::default(),
+            species: RamanSpecies::default(),
             config: base.clone(),
         }]);
     }
@@ -107,6 +108,7 @@ fn expand_one(
     let mut root = table.clone();
     let mut name = None;
     let mut kind = ChannelKind::default();
+    let mut species = None;
     {
         let Some(toml::Value::Table(inst)) = root.get_mut("instrument") else {
             return Err(Error::config(file, "instrument", "must be a table"));
@@ -116,6 +118,13 @@ fn expand_one(
             match field.as_str() {
                 "name" => name = Some(channel::channel_label(value, &key("name"), file)?),
                 "kind" => kind = ChannelKind::from_value(value, &key("kind"), file)?,
+                "species" => {
+                    species = Some(channel::RamanSpecies::from_value(
+                        value,
+                        &key("species"),
+                        file,
+                    )?)
+                }
                 "polarization" | "channel" => {
                     inst.remove("polarization");
                     inst.insert("channel".into(), value.clone());
@@ -163,12 +172,15 @@ fn expand_one(
     let in_channel = |e: Error| rename_key(e, k, entry, &label);
     let config = config::deserialize(toml::Value::Table(root), file).map_err(in_channel)?;
     validate(&config, file).map_err(in_channel)?;
-    let i = &config.instrument;
-    Ok(ChannelConfig {
-        name: name.unwrap_or_else(|| channel_name(i.wavelength_nm, i.channel)),
+    channel::check_kind(kind, species, config.instrument.channel, &key, file)?;
+    let mut channel = ChannelConfig {
+        name: String::new(),
         kind,
+        species: species.unwrap_or_default(),
         config,
-    })
+    };
+    channel.name = name.unwrap_or_else(|| channel.default_name());
+    Ok(channel)
 }
 
 /// `inst[key]` = `value`, merged key by key into an existing table.

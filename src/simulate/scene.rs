@@ -574,6 +574,7 @@ fn column_scenario(
         channels: vec![ChannelConfig {
             name: c.channel_name.clone(),
             kind: c.loaded.channels[0].kind,
+            species: c.loaded.channels[0].species,
             config: config.clone(),
         }],
         config,

@@ -184,10 +184,10 @@ pub fn column_variables(lidar: &Lidar, columns: &[&[ExpectedProfile]]) -> Vec<Va
 /// (one value when every channel agrees; else see `molecular_line` and
 /// `molecular_lidar_ratio`).
 fn beta_mol_attributes(lidar: &Lidar) -> Vec<(String, AttrValue)> {
-    let m = |k: usize| &lidar.channels[k].atmosphere.molecules;
+    let m = |k: usize| lidar.channels[k].atmosphere.molecular_lidar_ratio_sr();
     let same = |f: &dyn Fn(usize) -> String| (1..lidar.channels.len()).all(|k| f(k) == f(0));
-    let line = |k: usize| line_name(m(k).cabannes).to_string();
-    let ratio = |k: usize| m(k).lidar_ratio_sr.to_string();
+    let line = |k: usize| lidar.channels[k].atmosphere.molecular_line_name();
+    let ratio = |k: usize| m(k).to_string();
     let mut attrs = vec![(
         "line".to_string(),
         AttrValue::Str(if same(&line) {
@@ -197,14 +197,9 @@ fn beta_mol_attributes(lidar: &Lidar) -> Vec<(String, AttrValue)> {
         }),
     )];
     if same(&ratio) {
-        attrs.push(("lidar_ratio_sr".into(), AttrValue::F64(m(0).lidar_ratio_sr)));
+        attrs.push(("lidar_ratio_sr".into(), AttrValue::F64(m(0))));
     }
     attrs
-}
-
-/// `cabannes` or `whole`: the part of the molecular line a channel sees.
-fn line_name(cabannes: bool) -> &'static str {
-    if cabannes { "cabannes" } else { "whole" }
 }
 
 /// The string variables of the channel dimension (format 3): kind, species,
@@ -219,12 +214,17 @@ pub fn channel_text(lidar: &Lidar) -> Vec<TextVariable> {
         text(
             "channel_kind",
             "kind of scattering the channel sees: elastic, raman or hsrl_molecular",
-            &|_| "elastic".into(),
+            &|c| c.loaded.channels[0].kind.name().into(),
         ),
         text(
             "channel_species",
             "Raman-scattering species of a raman channel (empty otherwise)",
-            &|_| String::new(),
+            &|c| {
+                c.atmosphere
+                    .raman
+                    .as_ref()
+                    .map_or_else(String::new, |r| r.species.into())
+            },
         ),
         text(
             "polarization",
@@ -245,8 +245,8 @@ pub fn channel_text(lidar: &Lidar) -> Vec<TextVariable> {
         ),
         text(
             "molecular_line",
-            "part of the molecular line the channel sees: cabannes or whole",
-            &|c| line_name(c.atmosphere.molecules.cabannes).into(),
+            "what the channel's beta_mol is: the part of the elastic molecular line it sees (cabannes or whole), or a Raman band (raman_N2)",
+            &|c| c.atmosphere.molecular_line_name(),
         ),
     ]
 }
@@ -270,7 +270,7 @@ pub fn instrument_variables(lidar: &Lidar, e0: &ExpectedProfile) -> Vec<Variable
             "wavelength of the detected line",
             "nm",
             &[],
-            per(|c| c.instrument.wavelength_nm),
+            per(|c| c.loaded.channels[0].detection_wavelength_nm()),
         ),
         var(
             "crosstalk",
@@ -318,7 +318,7 @@ pub fn instrument_variables(lidar: &Lidar, e0: &ExpectedProfile) -> Vec<Variable
             "extinction-to-backscatter ratio of the part of the molecular line the channel sees: alpha_mol / beta_mol",
             "sr",
             &[],
-            per(|c| c.atmosphere.molecules.lidar_ratio_sr),
+            per(|c| c.atmosphere.molecular_lidar_ratio_sr()),
         ),
         var(
             "overlap",

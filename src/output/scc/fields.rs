@@ -35,8 +35,11 @@ pub struct SccChannel {
     pub id: i32,
     /// `Laser_Repetition_Rate`, Hz.
     pub rep_rate_hz: i32,
-    /// `Emitted_Wavelength` = `Detected_Wavelength` (elastic), nm.
+    /// `Emitted_Wavelength`: the laser line, nm.
     pub wavelength_nm: f64,
+    /// `Detected_Wavelength`: the laser line for an elastic channel, the Raman line for
+    /// a Raman channel, nm.
+    pub detected_wavelength_nm: f64,
     /// `Raw_Data_Range_Resolution`, m.
     pub range_resolution_m: f64,
     /// `Background_Low`, `Background_High`: range window, m.
@@ -259,6 +262,7 @@ fn channel(
         id,
         rep_rate_hz: raw.rep_rate_hz.round() as i32,
         wavelength_nm: instrument.wavelength_nm,
+        detected_wavelength_nm: cfg.detection_wavelength_nm(),
         range_resolution_m: res,
         background_m: (
             raw.range_m[window.start] - res / 2.0,

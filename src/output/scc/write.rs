@@ -182,9 +182,9 @@ fn write_channel_vars(w: &mut W, c: &SccContent) -> WResult {
         "Laser_Repetition_Rate",
         &per_channel(c, |ch| ch.rep_rate_hz),
     )?;
-    let wl = per_channel(c, |ch| ch.wavelength_nm);
-    w.write_var_f64("Emitted_Wavelength", &wl)?;
-    w.write_var_f64("Detected_Wavelength", &wl)?;
+    w.write_var_f64("Emitted_Wavelength", &per_channel(c, |ch| ch.wavelength_nm))?;
+    let detected = per_channel(c, |ch| ch.detected_wavelength_nm);
+    w.write_var_f64("Detected_Wavelength", &detected)?;
     let res = per_channel(c, |ch| ch.range_resolution_m);
     w.write_var_f64("Raw_Data_Range_Resolution", &res)?;
     w.write_var_i32("Background_Mode", &vec![BACKGROUND_MODE_FAR_RANGE; n])?;
