@@ -295,6 +295,7 @@ fn check_identity(p: &Path, g: &str) -> f64 {
     };
     let shots = region_attr(p, g, "shots_averaged");
     let merge = (region_attr(p, g, "vertical_resolution_m") / 30.0).round();
+    assert_eq!(region_attr(p, g, "native_bins_merged"), merge);
     let signal = f64s(p, g, "expected_signal");
     let (bkg, dark) = (
         f64s(p, g, "expected_background"),
@@ -338,7 +339,8 @@ fn check_identity(p: &Path, g: &str) -> f64 {
 
 /// Each region profile's latitude, longitude and along-track distance are those the raw
 /// file gives a profile of the same shots (`simulate` with 15-shot profiles against the
-/// 15-shot region), and `counts` names them in its `coordinates`.
+/// 15-shot region), and `counts` names them in its `coordinates`; under the sun along the
+/// orbit, every region's truth, background included, is the native truth averaged.
 #[test]
 fn region_profiles_are_geolocated_at_their_centres() {
     let dir = scratch("onboard-truth-geolocation");
@@ -352,8 +354,20 @@ fn region_profiles_are_geolocated_at_their_centres() {
             "caliop",
             "-o",
             "p.h5",
+            "--raw",
+            "native.h5",
         ],
     );
+    // the orbit's scene (segments, broken cloud) under the sun: the background changes
+    // from shot to shot, every region's truth is still the native truth averaged
+    let (p, native) = (dir.join("p.h5"), dir.join("native.h5"));
+    let bkg = f64s(&native, "", "expected_background");
+    let last = bkg[bkg.len() - 1];
+    assert!(bkg[0] > 0.0 && bkg[0] != last, "{} {last}", bkg[0]);
+    for g in groups(&p) {
+        let shots = region_attr(&p, &g, "shots_averaged") as usize;
+        compare_with_native(&p, &native, &g, shots);
+    }
     let c = config_path("instruments/caliop_orbit.toml");
     ok(lidarsim(
         &dir,
@@ -367,7 +381,7 @@ fn region_profiles_are_geolocated_at_their_centres() {
         ],
         &[],
     ));
-    let (p, raw) = (dir.join("p.h5"), dir.join("raw.h5"));
+    let raw = dir.join("raw.h5");
     assert_eq!(region_attr(&p, "region_0", "shots_averaged"), 15.0);
     for name in ["latitude", "longitude", "along_track_distance"] {
         let (a, b) = (f64s(&p, "region_0", name), f64s(&raw, "", name));

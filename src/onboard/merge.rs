@@ -291,8 +291,8 @@ impl ShardRegion {
                 let (c, w) = (c.to_vec(), w.to_vec());
                 if let Err(why) = check_profile_columns(&c, &w, self.columns) {
                     return Err(bad(format!(
-                        "profile {} (row {}): `profile_column` {c:?} with `profile_column_weight` {w:?}: {why}",
-                        start + i,
+                        "profile row {}: `profile_column` {c:?} with `profile_column_weight` \
+                         {w:?}: {why}",
                         start + i
                     )));
                 }
@@ -410,6 +410,10 @@ fn region_spec(
         channels: channels.iter().map(|c| c.as_str().to_string()).collect(),
         altitude_m: altitude.read_raw::<f64>().map_err(unreadable(&f.path))?,
         shots: f.regions[k].shots,
+        merge: g
+            .attr("native_bins_merged")
+            .and_then(|a| a.read_scalar::<u32>())
+            .map_err(unreadable(&f.path))?,
         bounds: (
             num("altitude_min_km")?,
             num("altitude_max_km")?,

@@ -264,6 +264,7 @@ impl NativeRun {
                         .collect(),
                     altitude_m,
                     shots: r.shots,
+                    merge: u32::try_from(r.merge).unwrap_or(u32::MAX),
                     bounds,
                 })
             })

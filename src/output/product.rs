@@ -3,7 +3,8 @@
 //! `channel` (the channels the region holds: all of them but where a channel has a layout
 //! of its own, as CALIOP's 1064 nm) and `bin` dimension scales, `altitude`, `time`, `n_shots` and
 //! `counts (profile, channel, bin)` (integer sums, u32), and the region's attributes
-//! `altitude_min_km`, `altitude_max_km`, `vertical_resolution_m`, `shots_averaged`.
+//! `altitude_min_km`, `altitude_max_km`, `vertical_resolution_m`, `shots_averaged`,
+//! `native_bins_merged`, and the truth averaged as the counts (`crate::onboard::truth`).
 //! Readable as netCDF-4 (groups with dimensions of their own).
 //!
 //! The bytes depend on the content only (as the raw file's, `raw_file::layout`): no
@@ -53,6 +54,8 @@ pub struct RegionSpec {
     pub altitude_m: Vec<f64>,
     /// Shots summed per profile.
     pub shots: u32,
+    /// Native bins summed per bin (`native_bins_merged`).
+    pub merge: u32,
     /// `altitude_min_km`, `altitude_max_km`, `vertical_resolution_m`.
     pub bounds: (f64, f64, f64),
     /// Its truth and per-profile variables.
@@ -493,5 +496,6 @@ fn region_layout(
     hdf5_ds::write_num_attr(g, "altitude_max_km", &r.bounds.1)?;
     hdf5_ds::write_num_attr(g, "vertical_resolution_m", &r.bounds.2)?;
     hdf5_ds::write_num_attr(g, "shots_averaged", &r.shots)?;
+    hdf5_ds::write_num_attr(g, "native_bins_merged", &r.merge)?;
     Ok((counts, time, (values, columns)))
 }
