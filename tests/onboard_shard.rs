@@ -333,7 +333,8 @@ fn edit_shard<T: hdf5::H5Type + Copy>(dir: &Path, from: &str, to: &str, name: &s
 }
 
 /// A product shard whose profile columns are impossible (a weight of 0.7 alone, a column
-/// the scene does not have) or that records another command line is refused, naming it.
+/// the scene does not have), that lacks a truth variable or that records another command
+/// line is refused, naming it.
 #[test]
 fn product_shards_with_impossible_truth_are_refused() {
     let dir = scratch("onboard-refuse-truth");
@@ -374,6 +375,16 @@ fn product_shards_with_impossible_truth_are_refused() {
         &dir,
         &merge("c1.h5"),
         &["c1.h5", "history", "one command line"],
+        "m.h5",
+    );
+    std::fs::copy(dir.join("s1.h5"), dir.join("t1.h5")).unwrap();
+    let f = hdf5::File::open_rw(dir.join("t1.h5")).unwrap();
+    f.unlink("region_0/t2").unwrap();
+    f.close().unwrap();
+    refused(
+        &dir,
+        &merge("t1.h5"),
+        &["t1.h5", "region_0/t2", "not a product of this version"],
         "m.h5",
     );
     ok(lidarsim(&dir, &merge("s1.h5"), &[]));

@@ -226,8 +226,43 @@ impl ShardRegion {
             slots,
             geolocation: g.dataset("latitude").is_ok(),
         };
+        out.check_fixed(g, path, &region)?;
         out.check_truth(g, path, &region)?;
         Ok(out)
+    }
+
+    /// Refuses a region whose fixed truth variables (`range_weight`, `lidar_constant`,
+    /// the truth per column, …) are missing, not floats, not (bin), (channel) or
+    /// (column, channel, bin) of the region's lengths, or hold less than they declare (so
+    /// that none is read at a size the file does not hold).
+    fn check_fixed(&self, g: &Group, path: &Path, region: &str) -> Result<()> {
+        use crate::output::product::RegionDims::{Bin, Channel, ColumnChannelBin};
+        use crate::output::raw_file::read::{check_storage, is_float, shape_text};
+        let bins = self.row_elems / self.channels.max(1);
+        for v in fixed_variables(&[], |_| Ok(Vec::new()))? {
+            let want = match v.dims {
+                Bin => vec![bins],
+                Channel => vec![self.channels],
+                ColumnChannelBin => vec![self.columns, self.channels, bins],
+                _ => vec![],
+            };
+            let name = format!("{region}/{}", v.name);
+            let d = g.dataset(&v.name).map_err(|_| {
+                Error::output(path, format!("no `{name}`: not a product of this version"))
+            })?;
+            if d.shape() != want || !is_float(&d) {
+                return Err(Error::output(
+                    path,
+                    format!(
+                        "`{name}` is {}, not {} floating-point numbers",
+                        shape_text(&d.shape()),
+                        shape_text(&want)
+                    ),
+                ));
+            }
+            check_storage(path, &name, &d)?;
+        }
+        Ok(())
     }
 
     /// Refuses a region whose truth is not the product's: a (profile, …) variable of

@@ -625,6 +625,7 @@ fn write_product(
             .zip(&specs)
             .map(|(r, s)| (r.clone(), s.truth.slots))
             .collect(),
+        native.lidar.channels.len(),
         specs.iter().map(|s| s.first_profile).collect(),
         simulate::orbit_of(&native.lidar)?,
         native.rep_rate_hz,

@@ -289,6 +289,8 @@ struct PendingProfile {
 /// The per-profile rows of every region of the product, built shot by shot.
 pub struct ProfileRows {
     regions: Vec<(RegionLayout, usize)>,
+    /// Per region: the channels it holds.
+    held: Vec<Vec<usize>>,
     pending: Vec<PendingProfile>,
     /// Per region: the run's index of its next profile.
     next: Vec<usize>,
@@ -299,16 +301,21 @@ pub struct ProfileRows {
 }
 
 impl ProfileRows {
-    /// The rows of `regions` (each with its slots), whose first profiles in the run are
-    /// `first`.
+    /// The rows of `regions` (each with its slots) of an instrument of `channels`
+    /// channels, whose first profiles in the run are `first`.
     pub fn new(
         regions: Vec<(RegionLayout, usize)>,
+        channels: usize,
         first: Vec<usize>,
         orbit: Option<Orbit>,
         rep_rate_hz: f64,
         nominal_energy_j: f64,
     ) -> Self {
         ProfileRows {
+            held: regions
+                .iter()
+                .map(|(r, _)| r.channel_indices(channels))
+                .collect(),
             pending: vec![PendingProfile::default(); regions.len()],
             regions,
             next: first,
@@ -320,8 +327,7 @@ impl ProfileRows {
 
     /// Adds one shot to every region's pending profile.
     pub fn add_shot(&mut self, shot: &ShotTruth) {
-        for ((r, _), p) in self.regions.iter().zip(&mut self.pending) {
-            let held = r.channel_indices(shot.background.len());
+        for (held, p) in self.held.iter().zip(&mut self.pending) {
             p.background.resize(held.len(), 0.0);
             p.dark.resize(held.len(), 0.0);
             for (h, &c) in held.iter().enumerate() {
