@@ -320,6 +320,19 @@ fn bad_onboard_shards_are_refused() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// 10,500 shots: the 1-shot regions have 10,500 profiles, so their per-profile truth is
+/// written in three blocks (chunks) of 4,096 rows; the merge writes them at the same
+/// rows in the same order, byte for byte.
+#[test]
+fn a_long_product_merges_across_its_truth_blocks() {
+    let dir = scratch("onboard-long");
+    let extra = ["--set", "acquisition.profiles=700", "--scheme", "caliop"];
+    whole_and_shards(&dir, "instruments/caliop_532.toml", &extra, 3);
+    let rows = group_values::<i32>(&dir, "whole.h5", "region_3", "profile_column");
+    assert_eq!(rows.len(), 10_500);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Copies product shard `from` to `to` and rewrites one value of `region_0/name` (its
 /// first profile row, first slot) to `value`.
 fn edit_shard<T: hdf5::H5Type + Copy>(dir: &Path, from: &str, to: &str, name: &str, value: T) {

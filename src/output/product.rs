@@ -353,6 +353,39 @@ fn dimension_scales(g: &Group, r: &RegionSpec, channels: &[String]) -> hdf5::Res
     Ok([profile, channel, bin])
 }
 
+/// A variable of a region's truth, chunked along its first dimension and deflated after
+/// shuffle (as `counts`, through HDF5's filters): a (profile, …) variable in chunks of
+/// [`PROFILE_BLOCK`] rows, which the writer fills whole but the last, a (column, …) one a
+/// column a chunk, with no chunk cache. Its bytes depend on the values and the order of
+/// the writes only.
+fn compressed_var<T: hdf5::H5Type>(
+    g: &Group,
+    name: &str,
+    shape: &[usize],
+) -> hdf5::Result<Dataset> {
+    if shape.len() < 2 && shape.first().is_none_or(|&n| n <= 64) {
+        return create_var::<T>(g, name, shape);
+    }
+    let mut chunk = shape.to_vec();
+    chunk[0] = match shape.len() {
+        3 => 1,
+        _ => PROFILE_BLOCK.min(shape[0]),
+    }
+    .max(1);
+    chunk.iter_mut().for_each(|c| *c = (*c).max(1));
+    // no chunk cache: a block of rows goes to the file when written, so that memory does
+    // not grow with the regions (a 1 MiB cache per variable otherwise)
+    g.new_dataset::<T>()
+        .chunk_cache(0, 0, 1.0)
+        .shape(shape)
+        .chunk(chunk)
+        .shuffle()
+        .deflate(chunk::DEFLATE_LEVEL)
+        .obj_track_times(false)
+        .attr_creation_order(hdf5::plist::dataset_create::AttrCreationOrder::Indexed)
+        .create(name)
+}
+
 /// A region's per-profile datasets (the f64 ones with their widths, and `profile_column`).
 type ProfileDatasets = (Vec<(Dataset, usize)>, Dataset);
 
@@ -390,7 +423,7 @@ fn truth_layout(
     };
     for v in &t.fixed {
         let (dims, scales) = shape(v.dims, r.profiles);
-        let ds = create_var::<f64>(g, &v.name, &dims)?;
+        let ds = compressed_var::<f64>(g, &v.name, &dims)?;
         ds.write_raw(&v.data)?;
         for (name, value) in &v.attributes {
             hdf5_ds::write_attr(&ds, name, value)?;
@@ -404,7 +437,7 @@ fn truth_layout(
     let coordinate = |name: &str| t.profile_coordinates.split(' ').any(|c| c == name);
     for v in &t.per_profile {
         let (dims, scales) = shape(v.dims, r.profiles);
-        let ds = create_var::<f64>(g, &v.name, &dims)?;
+        let ds = compressed_var::<f64>(g, &v.name, &dims)?;
         for (name, value) in &v.attributes {
             hdf5_ds::write_attr(&ds, name, value)?;
         }
@@ -414,7 +447,7 @@ fn truth_layout(
         hdf5_ds::attach_scales(&ds, &scales)?;
         values.push((ds, t.width(v.dims, channels)));
     }
-    let columns = create_var::<i32>(g, "profile_column", &[r.profiles, t.slots])?;
+    let columns = compressed_var::<i32>(g, "profile_column", &[r.profiles, t.slots])?;
     hdf5_ds::write_str_attr(
         &columns,
         "long_name",
