@@ -161,7 +161,14 @@ fn a_straddling_profile_has_the_shares_of_its_shots_and_the_mean_native_truth() 
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// Region `g` (of `shots` shots a profile) of `product` against the native `raw` file.
+/// The channel names of `group` of `file`.
+fn channel_names(file: &Path, group: &str) -> Vec<String> {
+    let names = read::<hdf5::types::VarLenUnicode>(file, group, "channel").0;
+    names.iter().map(|n| n.as_str().to_string()).collect()
+}
+
+/// Region `g` (of `shots` shots a profile) of `product` against the native `raw` file,
+/// every channel the region holds against the raw file's channel of that name.
 fn compare_with_native(product: &Path, raw: &Path, g: &str, shots: usize) {
     let close = |a: f64, b: f64, what: &str| {
         assert!(
@@ -174,16 +181,31 @@ fn compare_with_native(product: &Path, raw: &Path, g: &str, shots: usize) {
     let alt = f64s(product, g, "altitude");
     let res = region_attr(product, g, "vertical_resolution_m");
     let (first, merge) = native_bins(&raw_alt, &alt, res);
+    let raw_channels = channel_names(raw, "");
+    let nch = raw_channels.len();
+    let held: Vec<usize> = channel_names(product, g)
+        .iter()
+        .map(|h| raw_channels.iter().position(|r| r == h).unwrap())
+        .collect();
     let (_, col_shape) = read::<f64>(product, g, "alpha_mol");
     let [columns, channels, bins] = col_shape[..] else {
         panic!("{col_shape:?}")
     };
-    let mean = |v: &[f64], base: usize, j: usize| {
-        v[base + first + j * merge..base + first + (j + 1) * merge]
-            .iter()
-            .sum::<f64>()
-            / merge as f64
+    assert_eq!(channels, held.len());
+    // the mean of `v` over region bin j's native bins, from native row `row`
+    let mean = |v: &[f64], row: usize, j: usize| {
+        let base = row * n + first + j * merge;
+        v[base..base + merge].iter().sum::<f64>() / merge as f64
     };
+    // every (column, held channel, bin) of the region with its raw row
+    let mut cells = Vec::new();
+    for col in 0..columns {
+        for (h, &c) in held.iter().enumerate() {
+            for j in 0..bins {
+                cells.push(((col * channels + h) * bins + j, col * nch + c, j));
+            }
+        }
+    }
     for name in [
         "alpha_mol",
         "alpha_aer",
@@ -197,18 +219,20 @@ fn compare_with_native(product: &Path, raw: &Path, g: &str, shots: usize) {
         "lidar_ratio_cld",
         "ms_factor_cld",
         "depol_cld",
+        "depol_mol",
         "depol_volume",
     ] {
         let (native, region) = (f64s(raw, "", name), f64s(product, g, name));
-        assert_eq!(native.len(), columns * channels * n, "{name}");
-        for (i, r) in region.iter().enumerate() {
-            let (col, j) = (i / bins, i % bins); // one channel
-            close(*r, mean(&native, col * n, j), name);
+        assert_eq!(native.len(), columns * nch * n, "{name}");
+        assert_eq!(region.len(), columns * channels * bins, "{name}");
+        for &(i, row, j) in &cells {
+            close(region[i], mean(&native, row, j), name);
         }
     }
     let rw = f64s(raw, "", "range_weight");
     let region_rw = f64s(product, g, "range_weight");
-    let constant = f64s(product, g, "lidar_constant")[0];
+    let constant = f64s(product, g, "lidar_constant");
+    let raw_constant = f64s(raw, "", "lidar_constant");
     let (signal, atb) = (
         f64s(product, g, "expected_signal"),
         f64s(product, g, "attenuated_backscatter"),
@@ -217,43 +241,83 @@ fn compare_with_native(product: &Path, raw: &Path, g: &str, shots: usize) {
         close(*w, mean(&rw, 0, j) * merge as f64, "range_weight");
     }
     for (i, (s, a)) in signal.iter().zip(&atb).enumerate() {
-        close(*s, constant * a * region_rw[i % bins], "C·atb·range_weight");
+        let h = i / bins % channels;
+        close(constant[h], raw_constant[held[h]], "lidar_constant");
+        close(
+            *s,
+            constant[h] * a * region_rw[i % bins],
+            "C·atb·range_weight",
+        );
     }
-    // the per-shot truth of the raw file's one-shot profiles, averaged over the shots
-    let raw_signal = f64s(raw, "", "expected_signal"); // (profile, channel, bin)
+    // the per-shot truth of the raw file's one-shot profiles (per profile in a changing
+    // scene, else (channel, bin)), averaged over the shots
+    let raw_signal = f64s(raw, "", "expected_signal");
+    let raw_bkg = f64s(raw, "", "expected_background");
+    let raw_dark = f64s(raw, "", "expected_dark");
+    let per_profile = raw_signal.len() > nch * n;
+    let row = |shot: usize, c: usize| if per_profile { shot * nch + c } else { c };
     let raw_columns = read::<i32>(raw, "", "profile_column").0;
     let raw_slots = raw_columns.len() / f64s(raw, "", "time").len();
     let column_of = |shot: usize| raw_columns[shot * raw_slots] as usize;
     for shot in 0..30 {
-        for j in 0..bins {
-            let s = mean(&raw_signal, shot * n, j) * merge as f64;
-            let col = column_of(shot);
-            close(
-                signal[col * bins + j],
-                s,
-                "expected_signal of the shot's column",
-            );
+        let col = column_of(shot);
+        for (h, &c) in held.iter().enumerate() {
+            for j in 0..bins {
+                let s = mean(&raw_signal, row(shot, c), j) * merge as f64;
+                let i = (col * channels + h) * bins + j;
+                close(signal[i], s, "expected_signal of the shot's column");
+            }
         }
     }
-    let raw_bkg = f64s(raw, "", "expected_background");
     let raw_energy = f64s(raw, "", "pulse_energy");
     let (bkg, dark, energy) = (
         f64s(product, g, "expected_background"),
         f64s(product, g, "expected_dark"),
         f64s(product, g, "pulse_energy"),
     );
-    let raw_dark = f64s(raw, "", "expected_dark")[0];
     for (p, e) in energy.iter().enumerate() {
-        let mean_of = |v: &[f64], stride: usize| {
-            (p * shots..(p + 1) * shots)
-                .map(|s| v[s * stride])
-                .sum::<f64>()
-                / shots as f64
+        let mean_of = |f: &dyn Fn(usize) -> f64| {
+            (p * shots..(p + 1) * shots).map(f).sum::<f64>() / shots as f64
         };
-        close(*e, mean_of(&raw_energy, 1), "pulse_energy");
-        close(bkg[p], mean_of(&raw_bkg, n), "expected_background");
-        close(dark[p], raw_dark, "expected_dark");
+        close(*e, mean_of(&|s| raw_energy[s]), "pulse_energy");
+        for (h, &c) in held.iter().enumerate() {
+            let b = mean_of(&|s| raw_bkg[row(s, c) * n]);
+            close(bkg[p * channels + h], b, "expected_background");
+            close(dark[p * channels + h], raw_dark[c * n], "expected_dark");
+        }
     }
+}
+
+/// Every region of a three-channel product (CALIOP's per-channel layouts: 1064 nm in
+/// regions of its own) holds the native truth of its own channels, averaged.
+#[test]
+fn every_channel_of_a_region_has_its_own_native_truth() {
+    let dir = scratch("onboard-truth-channels");
+    onboard(
+        &dir,
+        "instruments/caliop_3ch.toml",
+        &[
+            "--set",
+            "acquisition.profiles=2",
+            "--scheme",
+            "caliop",
+            "-o",
+            "p.h5",
+            "--raw",
+            "raw.h5",
+        ],
+    );
+    let (p, raw) = (dir.join("p.h5"), dir.join("raw.h5"));
+    let held: Vec<usize> = groups(&p)
+        .iter()
+        .map(|g| channel_names(&p, g).len())
+        .collect();
+    assert_eq!(held, vec![2, 3, 3, 2, 1, 3]);
+    for g in groups(&p) {
+        let shots = region_attr(&p, &g, "shots_averaged") as usize;
+        compare_with_native(&p, &raw, &g, shots);
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// E[counts] = n_shots·(E/E0·Σ_k w_k·expected_signal[k] + merge·(background + dark)) for
