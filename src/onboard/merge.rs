@@ -790,3 +790,22 @@ impl ProductMerge {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::check_profile_columns as check;
+
+    #[test]
+    fn impossible_profile_columns_are_told_apart() {
+        assert!(check(&[1, 0, -1], &[0.25, 0.75, 0.0], 2).is_ok());
+        assert!(check(&[0], &[1.0], 1).is_ok());
+        let why = |c: &[i32], w: &[f64]| check(c, w, 2).unwrap_err();
+        assert!(why(&[-1, 0], &[0.0, 1.0]).contains("first slot is unused"));
+        assert!(why(&[0, -1, 1], &[0.5, 0.0, 0.5]).contains("after an unused one"));
+        assert!(why(&[0, 2], &[0.5, 0.5]).contains("column 2 is not one of the 2"));
+        assert!(why(&[1, 1], &[0.5, 0.5]).contains("twice"));
+        assert!(why(&[0, 1], &[0.0, 1.0]).contains("not in (0, 1]"));
+        assert!(why(&[0, -1], &[1.0, 0.5]).contains("unused slot's weight"));
+        assert!(why(&[0, 1], &[0.5, 0.6]).contains("sum to 1.1"));
+    }
+}

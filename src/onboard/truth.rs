@@ -183,6 +183,54 @@ pub fn slots(columns: usize, shots: u32) -> usize {
     columns.min(shots as usize).max(1)
 }
 
+/// The cells of a region's truth: every column of the scene, every channel the region
+/// holds, every region bin (column-major, then channel-major).
+struct RegionCells<'a> {
+    /// Per column, per channel: the model.
+    columns: &'a [&'a [ExpectedProfile]],
+    held: Vec<usize>,
+    r: &'a RegionLayout,
+}
+
+impl RegionCells<'_> {
+    /// The native bins of region bin `j`.
+    fn native_bins(&self, j: usize) -> std::ops::Range<usize> {
+        let r = self.r;
+        r.first_bin + j * r.merge..r.first_bin + (j + 1) * r.merge
+    }
+
+    /// `f(model, native bins)` in every cell.
+    fn values(&self, f: &dyn Fn(&ExpectedProfile, std::ops::Range<usize>) -> f64) -> Vec<f64> {
+        let mut out = Vec::with_capacity(self.columns.len() * self.held.len() * self.r.bins);
+        for col in self.columns {
+            for &c in &self.held {
+                out.extend((0..self.r.bins).map(|j| f(&col[c], self.native_bins(j))));
+            }
+        }
+        out
+    }
+
+    /// The mean of point truth `f` over each cell's native bins.
+    fn mean(&self, f: crate::output::raw_file::truth::Truth) -> Vec<f64> {
+        let m = self.r.merge as f64;
+        self.values(&|e, bins| bins.map(|i| f(e, i)).sum::<f64>() / m)
+    }
+}
+
+/// `signal / (constant · range_weight)` per cell (`constant` per held channel,
+/// `range_weight` per region bin), 0 where either is 0.
+fn attenuated_backscatter(signal: &[f64], constant: &[f64], range_weight: &[f64]) -> Vec<f64> {
+    let bins = range_weight.len().max(1);
+    signal
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let (c, w) = (constant[i / bins % constant.len()], range_weight[i % bins]);
+            if w > 0.0 && c > 0.0 { s / (c * w) } else { 0.0 }
+        })
+        .collect()
+}
+
 /// The truth of region `r`: every one of the scene's `columns` (per column, per channel:
 /// the model) at the region's resolution, and its per-profile variables.
 pub fn region_truth(
@@ -191,64 +239,32 @@ pub fn region_truth(
     r: &RegionLayout,
     geolocation: bool,
 ) -> Result<RegionTruth> {
-    let held = r.channel_indices(lidar.channels.len());
-    let bins = |j: usize| r.first_bin + j * r.merge..r.first_bin + (j + 1) * r.merge;
+    let cells = RegionCells {
+        columns,
+        held: r.channel_indices(lidar.channels.len()),
+        r,
+    };
     let e0 = &columns[0][0];
     let range_weight: Vec<f64> = (0..r.bins)
-        .map(|j| e0.range_weight[bins(j)].iter().sum())
+        .map(|j| e0.range_weight[cells.native_bins(j)].iter().sum())
         .collect();
-    let constant: Vec<f64> = held
-        .iter()
-        .map(|&c| lidar.channels[c].instrument.signal_constant)
-        .collect();
-    // every column, every held channel, every region bin
-    let per_column = |f: &dyn Fn(&ExpectedProfile, usize) -> f64| -> Vec<f64> {
-        let mut out = Vec::with_capacity(columns.len() * held.len() * r.bins);
-        for col in columns {
-            for &c in &held {
-                out.extend((0..r.bins).map(|j| f(&col[c], j)));
-            }
-        }
-        out
-    };
-    let mean = |f: fn(&ExpectedProfile, usize) -> f64| {
-        per_column(&|e, j| bins(j).map(|i| f(e, i)).sum::<f64>() / r.merge as f64)
-    };
-    let signal = |e: &ExpectedProfile, j: usize| e.signal[bins(j)].iter().sum::<f64>();
-    let mut held_constant = Vec::with_capacity(columns.len() * held.len() * r.bins);
-    for _ in columns {
-        for &c in &constant {
-            held_constant.extend(std::iter::repeat_n(c, r.bins));
-        }
-    }
-    let expected_signal = per_column(&signal);
-    let attenuated_backscatter: Vec<f64> = expected_signal
-        .iter()
-        .zip(&held_constant)
-        .enumerate()
-        .map(|(i, (s, c))| {
-            let w = range_weight[i % r.bins];
-            if w > 0.0 && *c > 0.0 {
-                s / (c * w)
-            } else {
-                0.0
-            }
-        })
-        .collect();
+    let channel = |f: &dyn Fn(usize) -> f64| cells.held.iter().map(|&c| f(c)).collect::<Vec<_>>();
+    let constant = channel(&|c| lidar.channels[c].instrument.signal_constant);
+    let expected_signal = cells.values(&|e, bins| e.signal[bins].iter().sum());
+    let attenuated_backscatter = attenuated_backscatter(&expected_signal, &constant, &range_weight);
     let beta_mol = crate::output::raw_file::truth::beta_mol_attributes(lidar);
     let fixed = fixed_variables(&beta_mol, |name| {
         Ok(match name {
             "range_weight" => range_weight.clone(),
             "lidar_constant" => constant.clone(),
-            "nominal_pulse_energy" => held
-                .iter()
-                .map(|&c| lidar.channels[c].loaded.config.instrument.pulse_energy_j)
-                .collect(),
+            "nominal_pulse_energy" => {
+                channel(&|c| lidar.channels[c].loaded.config.instrument.pulse_energy_j)
+            }
             "expected_signal" => expected_signal.clone(),
             "attenuated_backscatter" => attenuated_backscatter.clone(),
             _ => {
                 let f = COLUMN_TRUTH.iter().find(|t| t.0 == name).map(|t| t.3);
-                f.map(mean).unwrap_or_default()
+                f.map(|f| cells.mean(f)).unwrap_or_default()
             }
         })
     })?;
