@@ -350,6 +350,10 @@ fn main() -> ExitCode {
                         word_bits: *word_bits,
                         shard,
                         partial: partial.clone(),
+                        command_line: lidarsim::output::raw_file::content::history_command_omitting(
+                            std::env::args(),
+                            &lidarsim::output::raw_file::content::PRODUCT_HISTORY_OMITS,
+                        ),
                     };
                     lidarsim::onboard::run::run(config, set, &opts)
                 })

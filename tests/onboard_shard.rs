@@ -319,3 +319,87 @@ fn bad_onboard_shards_are_refused() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// 10,500 shots: the 1-shot regions have 10,500 profiles, so their per-profile truth is
+/// written in three blocks (chunks) of 4,096 rows; the merge writes them at the same
+/// rows in the same order, byte for byte.
+#[test]
+fn a_long_product_merges_across_its_truth_blocks() {
+    let dir = scratch("onboard-long");
+    let extra = ["--set", "acquisition.profiles=700", "--scheme", "caliop"];
+    whole_and_shards(&dir, "instruments/caliop_532.toml", &extra, 3);
+    let rows = group_values::<i32>(&dir, "whole.h5", "region_3", "profile_column");
+    assert_eq!(rows.len(), 10_500);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Copies product shard `from` to `to` and rewrites one value of `region_0/name` (its
+/// first profile row, first slot) to `value`.
+fn edit_shard<T: hdf5::H5Type + Copy>(dir: &Path, from: &str, to: &str, name: &str, value: T) {
+    std::fs::copy(dir.join(from), dir.join(to)).unwrap();
+    let f = hdf5::File::open_rw(dir.join(to)).unwrap();
+    let d = f.dataset(&format!("region_0/{name}")).unwrap();
+    let mut v: ndarray::Array2<T> = d.read().unwrap();
+    v[[0, 0]] = value;
+    d.write(&v).unwrap();
+    f.close().unwrap();
+}
+
+/// A product shard whose profile columns are impossible (a weight of 0.7 alone, a column
+/// the scene does not have), that lacks a truth variable or that records another command
+/// line is refused, naming it.
+#[test]
+fn product_shards_with_impossible_truth_are_refused() {
+    let dir = scratch("onboard-refuse-truth");
+    let args = onboard_args(
+        "instruments/caliop_532.toml",
+        &["--set", "acquisition.profiles=6", "--scheme", "uniform:15"],
+    );
+    for k in 0..3 {
+        let (shard, out) = (format!("{k}/3"), format!("s{k}.h5"));
+        ok(run(&dir, &args, &["--shard", &shard, "-o", &out]));
+    }
+    // the same run (same config, seed, schemes) asked for in other words
+    let again = [
+        "--set",
+        "acquisition.profiles=6",
+        "--shard",
+        "1/3",
+        "-o",
+        "c1.h5",
+    ];
+    ok(run(&dir, &args, &again));
+    edit_shard(&dir, "s1.h5", "w1.h5", "profile_column_weight", 0.7f64);
+    edit_shard(&dir, "s1.h5", "k1.h5", "profile_column", 5i32);
+    let merge = |middle: &'static str| ["merge", "m.h5", "s0.h5", middle, "s2.h5"];
+    refused(
+        &dir,
+        &merge("w1.h5"),
+        &["w1.h5", "region_0", "profile row 0", "sum to 0.7"],
+        "m.h5",
+    );
+    refused(
+        &dir,
+        &merge("k1.h5"),
+        &["k1.h5", "region_0", "column 5 is not one of the 1 columns"],
+        "m.h5",
+    );
+    refused(
+        &dir,
+        &merge("c1.h5"),
+        &["c1.h5", "history", "one command line"],
+        "m.h5",
+    );
+    std::fs::copy(dir.join("s1.h5"), dir.join("t1.h5")).unwrap();
+    let f = hdf5::File::open_rw(dir.join("t1.h5")).unwrap();
+    f.unlink("region_0/t2").unwrap();
+    f.close().unwrap();
+    refused(
+        &dir,
+        &merge("t1.h5"),
+        &["t1.h5", "region_0/t2", "not a product of this version"],
+        "m.h5",
+    );
+    ok(lidarsim(&dir, &merge("s1.h5"), &[]));
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -17,12 +17,15 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use hdf5::{Dataset, Group};
-use ndarray::{Ix1, Ix3, s};
+use ndarray::{Ix1, Ix2, Ix3, s};
 
-use super::run::{METHOD, product_attributes, source};
+use super::run::{METHOD, ProductIdentity, product_attributes, source};
 use super::shard::{FRAME_ATTRIBUTE, profiles_within, shard_shots};
+use super::truth::{fixed_variables, per_profile_variables, profile_coordinates};
 use crate::error::{Error, Result};
 use crate::output::product::{ProductHeader, ProductWriter, RegionSpec};
+use crate::output::product::{ProfileRow, RegionTruth};
+use crate::output::raw_file::AttrValue;
 use crate::output::safe_file::{OutputId, Outputs, describe_hdf5_error};
 use crate::shard::merge::MergeSummary;
 use crate::shard::{
@@ -40,6 +43,12 @@ struct ShardRegion {
     shots: u32,
     /// Channels × bins of a profile.
     row_elems: usize,
+    /// Its channels, the scene's columns and the `k` slots.
+    channels: usize,
+    columns: usize,
+    slots: usize,
+    /// Whether it has the geolocation of an orbit.
+    geolocation: bool,
 }
 
 /// A product shard and what its root attributes say of it (the file is closed: it is
@@ -57,6 +66,8 @@ struct ProductShard {
     config: String,
     source: String,
     scheme: String,
+    /// `history` without its date: the command line the run recorded.
+    command: String,
     regions: Vec<ShardRegion>,
 }
 
@@ -82,6 +93,13 @@ impl ProductShard {
             ));
         }
         let a = FileAttributes { file: &file, path };
+        let (history, created) = (a.text("history")?, a.text("date_created")?);
+        let command = history
+            .strip_prefix(&format!("{created} "))
+            .ok_or_else(|| {
+                Error::output(path, "its `history` does not start with its `date_created`")
+            })?
+            .to_string();
         let mut regions = Vec::new();
         while let Ok(g) = file.group(&format!("region_{}", regions.len())) {
             regions.push(ShardRegion::of(&g, path)?);
@@ -96,6 +114,7 @@ impl ProductShard {
             config: a.text("config")?,
             source: a.text("source")?,
             scheme: a.text("scheme")?,
+            command,
             regions,
             path: path.to_path_buf(),
         })
@@ -196,12 +215,194 @@ impl ShardRegion {
         for name in ["time", "altitude"] {
             check_finite(path, &format!("{region}/{name}"), &get(name)?)?;
         }
-        Ok(ShardRegion {
+        let columns = get("column")?.shape().first().copied().unwrap_or(0);
+        let slots = get("k")?.shape().first().copied().unwrap_or(0);
+        let out = ShardRegion {
             rows,
             row_elems: channels * bins,
             shots,
-        })
+            channels,
+            columns,
+            slots,
+            geolocation: g.dataset("latitude").is_ok(),
+        };
+        out.check_fixed(g, path, &region)?;
+        out.check_truth(g, path, &region)?;
+        Ok(out)
     }
+
+    /// Refuses a region whose fixed truth variables (`range_weight`, `lidar_constant`,
+    /// the truth per column, …) are missing, not floats, not (bin), (channel) or
+    /// (column, channel, bin) of the region's lengths, or hold less than they declare (so
+    /// that none is read at a size the file does not hold).
+    fn check_fixed(&self, g: &Group, path: &Path, region: &str) -> Result<()> {
+        use crate::output::product::RegionDims::{Bin, Channel, ColumnChannelBin};
+        use crate::output::raw_file::read::{check_storage, is_float, shape_text};
+        let bins = self.row_elems / self.channels.max(1);
+        for v in fixed_variables(&[], |_| Ok(Vec::new()))? {
+            let want = match v.dims {
+                Bin => vec![bins],
+                Channel => vec![self.channels],
+                ColumnChannelBin => vec![self.columns, self.channels, bins],
+                _ => vec![],
+            };
+            let name = format!("{region}/{}", v.name);
+            let d = g.dataset(&v.name).map_err(|_| {
+                Error::output(path, format!("no `{name}`: not a product of this version"))
+            })?;
+            if d.shape() != want || !is_float(&d) {
+                return Err(Error::output(
+                    path,
+                    format!(
+                        "`{name}` is {}, not {} floating-point numbers",
+                        shape_text(&d.shape()),
+                        shape_text(&want)
+                    ),
+                ));
+            }
+            check_storage(path, &name, &d)?;
+        }
+        Ok(())
+    }
+
+    /// Refuses a region whose truth is not the product's: a (profile, …) variable of
+    /// another shape or not finite, `column` or `k` empty, or a profile whose
+    /// `profile_column` and `profile_column_weight` are impossible (a column outside
+    /// `column`, one given twice, the first slot unused, a weight outside [0, 1], a
+    /// used slot of weight 0 or an unused one of weight ≠ 0, weights not summing to 1).
+    fn check_truth(&self, g: &Group, path: &Path, region: &str) -> Result<()> {
+        use crate::output::raw_file::read::{check_finite, check_storage, shape_text};
+        let bad = |why: String| Error::output(path, format!("{region}: {why}"));
+        if self.columns == 0 || self.slots == 0 || self.slots > self.columns {
+            return Err(bad(format!(
+                "`column` ({}) and `k` ({}) are not 1 ≤ k ≤ column",
+                self.columns, self.slots
+            )));
+        }
+        let get = |name: &str| {
+            g.dataset(name)
+                .map_err(|_| bad(format!("no `{name}`: not a product of this version")))
+        };
+        let vars = per_profile_variables(self.geolocation);
+        let names = vars
+            .iter()
+            .map(|v| v.name.as_str())
+            .chain(["profile_column"]);
+        for name in names {
+            let d = get(name)?;
+            let width = match vars.iter().find(|v| v.name == name) {
+                Some(v) => self.truth_width(v.dims),
+                None => self.slots,
+            };
+            let want = match d.ndim() {
+                1 => vec![self.rows],
+                _ => vec![self.rows, width],
+            };
+            if d.shape() != want || (width != 1 && d.ndim() == 1) {
+                return Err(bad(format!(
+                    "`{name}` is {}, not {} (profile, …)",
+                    shape_text(&d.shape()),
+                    shape_text(&[self.rows, width])
+                )));
+            }
+            check_storage(path, &format!("{region}/{name}"), &d)?;
+            match d.ndim() {
+                1 => check_finite(path, &format!("{region}/{name}"), &d)?,
+                _ if name != "profile_column" => self.check_finite_rows(&d, &bad, name)?,
+                _ => {}
+            }
+        }
+        let (columns, weights) = (get("profile_column")?, get("profile_column_weight")?);
+        for start in (0..self.rows).step_by(CHECK_ROWS) {
+            let end = (start + CHECK_ROWS).min(self.rows);
+            let read = |e: hdf5::Error| bad(format!("cannot read its profile columns: {e}"));
+            let c = columns
+                .read_slice::<i32, _, ndarray::Ix2>(s![start..end, ..])
+                .map_err(read)?;
+            let w = weights
+                .read_slice::<f64, _, ndarray::Ix2>(s![start..end, ..])
+                .map_err(read)?;
+            for (i, (c, w)) in c.outer_iter().zip(w.outer_iter()).enumerate() {
+                let (c, w) = (c.to_vec(), w.to_vec());
+                if let Err(why) = check_profile_columns(&c, &w, self.columns) {
+                    return Err(bad(format!(
+                        "profile row {}: `profile_column` {c:?} with `profile_column_weight` \
+                         {w:?}: {why}",
+                        start + i
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Refuses a (profile, n) variable with a value that is not finite.
+    fn check_finite_rows(
+        &self,
+        d: &Dataset,
+        bad: &dyn Fn(String) -> Error,
+        name: &str,
+    ) -> Result<()> {
+        for start in (0..self.rows).step_by(CHECK_ROWS) {
+            let end = (start + CHECK_ROWS).min(self.rows);
+            let v = d
+                .read_slice::<f64, _, ndarray::Ix2>(s![start..end, ..])
+                .map_err(|e| bad(format!("cannot read `{name}`: {e}")))?;
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                let row = start + i / v.ncols().max(1);
+                return Err(bad(format!("`{name}` of profile row {row} is not finite")));
+            }
+        }
+        Ok(())
+    }
+
+    /// Values of a row of a per-profile variable of `dims`.
+    fn truth_width(&self, dims: crate::output::product::RegionDims) -> usize {
+        use crate::output::product::RegionDims::{ProfileChannel, ProfileK};
+        match dims {
+            ProfileChannel => self.channels,
+            ProfileK => self.slots,
+            _ => 1,
+        }
+    }
+}
+
+/// Rows of `profile_column` checked at once.
+const CHECK_ROWS: usize = 65_536;
+
+/// Why a profile's columns and weights are impossible (docs/file-format.md, the onboard
+/// product's truth), if they are: every used slot a column of `0..columns` seen once,
+/// of weight in (0, 1], the unused slots (−1) after them with weight 0, the weights
+/// summing to 1 (to 1e-9).
+pub fn check_profile_columns(
+    columns: &[i32],
+    weights: &[f64],
+    n_columns: usize,
+) -> std::result::Result<(), String> {
+    let used = columns.iter().take_while(|&&c| c >= 0).count();
+    if used == 0 {
+        return Err("its first slot is unused".into());
+    }
+    if columns[used..].iter().any(|&c| c != -1) {
+        return Err("a used slot after an unused one, or a column below −1".into());
+    }
+    if let Some(c) = columns[..used].iter().find(|&&c| c as usize >= n_columns) {
+        return Err(format!("column {c} is not one of the {n_columns} columns"));
+    }
+    if (1..used).any(|i| columns[..i].contains(&columns[i])) {
+        return Err("a column given twice".into());
+    }
+    if weights[..used].iter().any(|w| !(*w > 0.0 && *w <= 1.0)) {
+        return Err("a used slot's weight is not in (0, 1]".into());
+    }
+    if weights[used..].iter().any(|&w| w != 0.0) {
+        return Err("an unused slot's weight is not 0".into());
+    }
+    let sum: f64 = weights.iter().sum();
+    if (sum - 1.0).abs() > 1e-9 {
+        return Err(format!("the weights sum to {sum}, not 1"));
+    }
+    Ok(())
 }
 
 /// Region `k` of the whole product, as the first shard (open as `file`) describes it,
@@ -225,12 +426,29 @@ fn region_spec(
         .dataset("channel")
         .and_then(|c| c.read_raw::<hdf5::types::VarLenUnicode>())
         .map_err(unreadable(&f.path))?;
+    let r = &f.regions[k];
+    let fixed = fixed_variables(&beta_mol_attributes(&g, &f.path)?, |name| {
+        g.dataset(name)
+            .and_then(|d| d.read_raw::<f64>())
+            .map_err(|_| Error::output(&f.path, format!("region_{k} has no readable `{name}`")))
+    })?;
     Ok(RegionSpec {
+        truth: RegionTruth {
+            columns: r.columns,
+            slots: r.slots,
+            fixed,
+            per_profile: per_profile_variables(r.geolocation),
+            profile_coordinates: profile_coordinates(r.geolocation),
+        },
         first_profile: 0,
         profiles,
         channels: channels.iter().map(|c| c.as_str().to_string()).collect(),
         altitude_m: altitude.read_raw::<f64>().map_err(unreadable(&f.path))?,
         shots: f.regions[k].shots,
+        merge: g
+            .attr("native_bins_merged")
+            .and_then(|a| a.read_scalar::<u32>())
+            .map_err(unreadable(&f.path))?,
         bounds: (
             num("altitude_min_km")?,
             num("altitude_max_km")?,
@@ -239,7 +457,27 @@ fn region_spec(
     })
 }
 
-/// The whole product's root, as the first shard (open as `file`) describes it.
+/// The attributes of a region's `beta_mol` beyond its long name and units, as the run
+/// wrote them (`line`, and `lidar_ratio_sr` when every channel agrees).
+fn beta_mol_attributes(g: &Group, path: &Path) -> Result<Vec<(String, AttrValue)>> {
+    let d = g.dataset("beta_mol").map_err(unreadable(path))?;
+    let line = d
+        .attr("line")
+        .and_then(|a| a.read_scalar::<hdf5::types::VarLenUnicode>())
+        .map_err(unreadable(path))?;
+    let mut attrs = vec![("line".to_string(), AttrValue::Str(line.as_str().into()))];
+    if let Ok(ratio) = d
+        .attr("lidar_ratio_sr")
+        .and_then(|a| a.read_scalar::<f64>())
+    {
+        attrs.push(("lidar_ratio_sr".into(), AttrValue::F64(ratio)));
+    }
+    Ok(attrs)
+}
+
+/// The whole product's root, as the first shard (open as `file`) describes it: the run's
+/// command line in `history`, with the merge's date (`SOURCE_DATE_EPOCH` when set), as
+/// the whole run records it.
 fn header(f: &ProductShard, file: &hdf5::File) -> Result<ProductHeader> {
     let g = file.group("region_0").map_err(unreadable(&f.path))?;
     let read = || -> hdf5::Result<(Vec<String>, String)> {
@@ -259,7 +497,16 @@ fn header(f: &ProductShard, file: &hdf5::File) -> Result<ProductHeader> {
     Ok(ProductHeader {
         channels,
         time_units,
-        attributes: product_attributes(&f.scheme, &f.source, &f.config, f.seed),
+        attributes: {
+            let created = crate::output::raw_file::content::creation_time()?;
+            let id = ProductIdentity {
+                scheme: f.scheme.clone(),
+                source: f.source.clone(),
+                config: f.config.clone(),
+                seed: f.seed,
+            };
+            product_attributes(&id, &format!("{created} {}", f.command), &created)
+        },
     })
 }
 
@@ -275,14 +522,17 @@ pub struct ProductMerge {
 /// Refuses a shard whose regions are not the first one's or do not hold its shots'
 /// profiles, or that another lidarsim wrote.
 fn check_regions(first: &ProductShard, f: &ProductShard) -> Result<()> {
-    let shape = |f: &ProductShard| -> Vec<(u32, usize)> {
-        f.regions.iter().map(|r| (r.shots, r.row_elems)).collect()
+    let shape = |f: &ProductShard| -> Vec<(u32, usize, usize, usize, bool)> {
+        let r = f.regions.iter();
+        r.map(|r| (r.shots, r.row_elems, r.columns, r.slots, r.geolocation))
+            .collect()
     };
     if shape(f) != shape(first) || f.regions.is_empty() {
         return Err(Error::output(
             &f.path,
             format!(
-                "its regions (shots, channels × bins) {:?} are not those of {} {:?}",
+                "its regions (shots, channels × bins, columns, slots, geolocation) {:?} are not \
+                 those of {} {:?}",
                 shape(f),
                 first.path.display(),
                 shape(first)
@@ -304,6 +554,18 @@ fn check_regions(first: &ProductShard, f: &ProductShard) -> Result<()> {
                 ),
             ));
         }
+    }
+    if f.command != first.command {
+        return Err(Error::output(
+            &f.path,
+            format!(
+                "its `history` records `{}`, but {} records `{}`: shards of one run record \
+                 one command line",
+                f.command,
+                first.path.display(),
+                first.command
+            ),
+        ));
     }
     if f.source != source() {
         return Err(Error::output(
@@ -360,41 +622,87 @@ pub fn prepare(out: &Path, shards: &[PathBuf]) -> Result<ProductMerge> {
     })
 }
 
-/// The rows of one region of the whole run, read from the shards in order, a block of
-/// rows at a time.
+/// The rows of one region of the whole run (counts and per-profile variables), read
+/// from the shards in order, a block of rows at a time.
 struct RegionRows<'a> {
     files: &'a [ProductShard],
     k: usize,
-    /// The shard read, its `counts` of the region, and its next row.
+    /// The per-profile f64 variables, each with its values per row.
+    vars: Vec<(String, usize)>,
+    /// The shard read and its next row.
     shard: usize,
-    counts: Option<Dataset>,
     row: usize,
-    /// Rows of the shard read, `block_start .. block_start + block_len`.
-    block: Vec<u64>,
+    /// Rows of the shard read, `block_start .. block_start + block_len`: counts, every
+    /// per-profile variable, `profile_column`.
+    counts: Vec<u64>,
+    values: Vec<Vec<f64>>,
+    columns: Vec<i32>,
     block_start: usize,
     block_len: usize,
     /// Rows read at once.
     block_rows: usize,
+    /// The row's values, concatenated.
+    scratch: Vec<f64>,
 }
 
 impl<'a> RegionRows<'a> {
-    fn new(files: &'a [ProductShard], k: usize, bytes: usize) -> Self {
-        let elems = files[0].regions[k].row_elems.max(1);
+    fn new(files: &'a [ProductShard], spec: &RegionSpec, k: usize, bytes: usize) -> Self {
+        let r = &files[0].regions[k];
+        let vars: Vec<(String, usize)> = spec
+            .truth
+            .per_profile
+            .iter()
+            .map(|v| (v.name.clone(), spec.truth.width(v.dims, r.channels)))
+            .collect();
+        let per_row = r.row_elems + vars.iter().map(|v| v.1).sum::<usize>() + r.slots;
         RegionRows {
             files,
             k,
+            vars,
             shard: 0,
-            counts: None,
             row: 0,
-            block: Vec::new(),
+            counts: Vec::new(),
+            values: Vec::new(),
+            columns: Vec::new(),
             block_start: 0,
             block_len: 0,
-            block_rows: (bytes / (8 * elems)).max(1),
+            block_rows: (bytes / (8 * per_row.max(1))).max(1),
+            scratch: Vec::new(),
         }
     }
 
-    /// The next row of the region (channel-major counts).
-    fn next(&mut self) -> Result<&[u64]> {
+    /// Reads rows `rows` of the shard's region into the block.
+    fn read_block(&mut self, rows: Range<usize>) -> Result<()> {
+        let f = &self.files[self.shard];
+        let (k, fail) = (self.k, unreadable(&f.path));
+        let sel = s![rows.clone(), ..];
+        let counts = f.dataset(k, "counts")?;
+        self.counts = counts
+            .read_slice::<u64, _, Ix3>(s![rows.clone(), .., ..])
+            .map_err(&fail)?
+            .into_raw_vec();
+        self.values.clear();
+        for (name, width) in &self.vars {
+            let d = f.dataset(k, name)?;
+            let v = match width {
+                1 if d.ndim() == 1 => d
+                    .read_slice::<f64, _, Ix1>(s![rows.clone()])
+                    .map(|a| a.to_vec()),
+                _ => d.read_slice::<f64, _, Ix2>(sel).map(|a| a.into_raw_vec()),
+            };
+            self.values.push(v.map_err(&fail)?);
+        }
+        self.columns = f
+            .dataset(k, "profile_column")?
+            .read_slice::<i32, _, Ix2>(sel)
+            .map_err(&fail)?
+            .into_raw_vec();
+        (self.block_start, self.block_len) = (rows.start, rows.len());
+        Ok(())
+    }
+
+    /// The next row of the region.
+    fn next(&mut self) -> Result<ProfileRow<'_>> {
         while self.row >= self.files[self.shard].regions[self.k].rows {
             if self.shard + 1 == self.files.len() {
                 return Err(Error::Unsupported(
@@ -402,27 +710,24 @@ impl<'a> RegionRows<'a> {
                 ));
             }
             (self.shard, self.row, self.block_start, self.block_len) = (self.shard + 1, 0, 0, 0);
-            self.counts = None;
         }
-        let f = &self.files[self.shard];
-        let r = &f.regions[self.k];
+        let r = &self.files[self.shard].regions[self.k];
+        let (elems, slots) = (r.row_elems, r.slots);
         if self.row >= self.block_start + self.block_len {
             let end = (self.row + self.block_rows).min(r.rows);
-            if self.counts.is_none() {
-                self.counts = Some(f.dataset(self.k, "counts")?);
-            }
-            self.block = self
-                .counts
-                .as_ref()
-                .ok_or_else(|| Error::Unsupported("no counts".into()))?
-                .read_slice::<u64, _, Ix3>(s![self.row..end, .., ..])
-                .map_err(unreadable(&f.path))?
-                .into_raw_vec();
-            (self.block_start, self.block_len) = (self.row, end - self.row);
+            self.read_block(self.row..end)?;
         }
-        let i = (self.row - self.block_start) * r.row_elems;
+        let i = self.row - self.block_start;
         self.row += 1;
-        Ok(&self.block[i..i + r.row_elems])
+        self.scratch.clear();
+        for ((_, w), v) in self.vars.iter().zip(&self.values) {
+            self.scratch.extend_from_slice(&v[i * w..(i + 1) * w]);
+        }
+        Ok(ProfileRow {
+            counts: &self.counts[i * elems..(i + 1) * elems],
+            values: &self.scratch,
+            columns: &self.columns[i * slots..(i + 1) * slots],
+        })
     }
 }
 
@@ -461,7 +766,7 @@ impl ProductMerge {
         )?;
         let per_region = BLOCK_BYTES / self.specs.len().max(1);
         let mut readers: Vec<RegionRows> = (0..self.specs.len())
-            .map(|k| RegionRows::new(files, k, per_region))
+            .map(|k| RegionRows::new(files, &self.specs[k], k, per_region))
             .collect();
         let mut next = vec![0usize; self.specs.len()];
         // the row that completes first in the whole run (at shot (j + 1)·shots), the
@@ -483,5 +788,24 @@ impl ProductMerge {
             file: "product",
             elapsed: self.start.elapsed(),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::check_profile_columns as check;
+
+    #[test]
+    fn impossible_profile_columns_are_told_apart() {
+        assert!(check(&[1, 0, -1], &[0.25, 0.75, 0.0], 2).is_ok());
+        assert!(check(&[0], &[1.0], 1).is_ok());
+        let why = |c: &[i32], w: &[f64]| check(c, w, 2).unwrap_err();
+        assert!(why(&[-1, 0], &[0.0, 1.0]).contains("first slot is unused"));
+        assert!(why(&[0, -1, 1], &[0.5, 0.0, 0.5]).contains("after an unused one"));
+        assert!(why(&[0, 2], &[0.5, 0.5]).contains("column 2 is not one of the 2"));
+        assert!(why(&[1, 1], &[0.5, 0.5]).contains("twice"));
+        assert!(why(&[0, 1], &[0.0, 1.0]).contains("not in (0, 1]"));
+        assert!(why(&[0, -1], &[1.0, 0.5]).contains("unused slot's weight"));
+        assert!(why(&[0, 1], &[0.5, 0.6]).contains("sum to 1.1"));
     }
 }

@@ -13,6 +13,7 @@ pub mod run;
 pub mod scheme;
 pub mod shard;
 pub mod sum;
+pub mod truth;
 
 pub use scheme::{Region, RegionLayout, Scheme};
 pub use sum::Averager;

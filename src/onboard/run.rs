@@ -11,10 +11,11 @@ use rayon::prelude::*;
 
 use super::report::{self, ReportInput, SchemeSums, averaging_bias};
 use super::shard::{FRAME_ATTRIBUTE, frame_shots, region_profiles, shard_shots_of};
+use super::truth::{ProfileRows, ShotTruth};
 use super::{Averager, RegionLayout, Scheme};
 use crate::config::Method;
 use crate::error::{Error, Result};
-use crate::output::product::{ProductHeader, ProductWriter, RegionSpec};
+use crate::output::product::{ProductHeader, ProductWriter, ProfileRow, RegionSpec};
 use crate::output::raw_file::AttrValue;
 use crate::output::safe_file::{OutputId, Outputs, Stream};
 use crate::scenario::{ExpectedProfile, Lidar};
@@ -40,6 +41,10 @@ pub struct OnboardOptions {
     pub shard: Option<Shard>,
     /// With `shard`: the partial of the report (`--partial`, JSON).
     pub partial: Option<PathBuf>,
+    /// The command line, recorded in the product's `history` (as
+    /// [`crate::output::raw_file::content::history_command_omitting`] gives it, with
+    /// [`crate::output::raw_file::content::PRODUCT_HISTORY_OMITS`]).
+    pub command_line: String,
 }
 
 /// The root attribute that marks a file as an onboard product.
@@ -178,14 +183,25 @@ impl NativeRun {
         }
     }
 
-    /// The product's root: its attributes (and a shard's, for `shots` of `shard`).
-    fn header(&self, shard: Option<(Shard, &Range<u64>)>, word_bits: u32) -> Result<ProductHeader> {
+    /// The product's root: its attributes (and a shard's, for `shots` of `shard`), with
+    /// `command` in `history`.
+    fn header(
+        &self,
+        shard: Option<(Shard, &Range<u64>)>,
+        word_bits: u32,
+        command: &str,
+    ) -> Result<ProductHeader> {
         let sc = self.lidar.first();
+        let created = crate::output::raw_file::content::creation_time()?;
         let mut attributes = product_attributes(
-            &self.schemes[0].name,
-            &source(),
-            &sc.loaded.resolved_toml,
-            self.seed,
+            &ProductIdentity {
+                scheme: self.schemes[0].name.clone(),
+                source: source(),
+                config: sc.loaded.resolved_toml.clone(),
+                seed: self.seed,
+            },
+            &format!("{created} {command}"),
+            &created,
         );
         if let Some((s, shots)) = shard {
             let values = [
@@ -208,12 +224,17 @@ impl NativeRun {
         })
     }
 
-    /// The first scheme's regions within `shots`: profiles, channels, coordinates and
-    /// bounds.
-    fn region_specs(&self, shots: &Range<u64>) -> Vec<RegionSpec> {
+    /// The first scheme's regions within `shots`: profiles, channels, coordinates,
+    /// bounds and the truth of the scene's `columns` (per column, per channel).
+    fn region_specs(
+        &self,
+        shots: &Range<u64>,
+        columns: &[&[ExpectedProfile]],
+    ) -> Result<Vec<RegionSpec>> {
         let g = &self.lidar.first().geometry;
         let e = &self.expected[0];
         let names = self.lidar.channel_names();
+        let geolocation = simulate::orbit_of(&self.lidar)?.is_some();
         self.layouts[0]
             .iter()
             .map(|r| {
@@ -232,7 +253,8 @@ impl NativeRun {
                         g.bin_range_m * g.cos_angle,
                     ),
                 };
-                RegionSpec {
+                Ok(RegionSpec {
+                    truth: super::truth::region_truth(&self.lidar, columns, r, geolocation)?,
                     first_profile: profiles.start,
                     profiles: profiles.len(),
                     channels: r
@@ -242,8 +264,9 @@ impl NativeRun {
                         .collect(),
                     altitude_m,
                     shots: r.shots,
+                    merge: u32::try_from(r.merge).unwrap_or(u32::MAX),
                     bounds,
-                }
+                })
             })
             .collect()
     }
@@ -272,26 +295,41 @@ pub fn source() -> String {
     format!("lidarsim {}", env!("CARGO_PKG_VERSION"))
 }
 
-/// The product's root attributes (docs/file-format.md), in order: `title`, `source`,
-/// `config`, [`PRODUCT_ATTRIBUTE`], `scheme`, `seed`.
+/// What identifies a product's run in its root attributes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProductIdentity {
+    /// The scheme written.
+    pub scheme: String,
+    /// `lidarsim <version>`.
+    pub source: String,
+    /// The resolved config of the native run.
+    pub config: String,
+    /// The seed of the counts.
+    pub seed: u64,
+}
+
+/// The product's root attributes (docs/file-format.md), in order: `Conventions`,
+/// `title`, `source`, `history`, `date_created`, `config`, [`PRODUCT_ATTRIBUTE`],
+/// `scheme`, `seed`.
 pub fn product_attributes(
-    scheme: &str,
-    source: &str,
-    config: &str,
-    seed: u64,
+    id: &ProductIdentity,
+    history: &str,
+    created: &str,
 ) -> Vec<(String, AttrValue)> {
-    let text = |k: &str, v: String| (k.to_string(), AttrValue::Str(v));
+    let text = |k: &str, v: &str| (k.to_string(), AttrValue::Str(v.to_string()));
     vec![
-        text("Conventions", crate::output::raw_file::CONVENTIONS.into()),
+        text("Conventions", crate::output::raw_file::CONVENTIONS),
         text(
             "title",
-            format!("lidarsim onboard product, scheme {scheme}"),
+            &format!("lidarsim onboard product, scheme {}", id.scheme),
         ),
-        text("source", source.to_string()),
-        text("config", config.to_string()),
-        text(PRODUCT_ATTRIBUTE, "onboard".into()),
-        text("scheme", scheme.to_string()),
-        ("seed".into(), AttrValue::U64(seed)),
+        text("source", &id.source),
+        text("history", history),
+        text("date_created", created),
+        text("config", &id.config),
+        text(PRODUCT_ATTRIBUTE, "onboard"),
+        text("scheme", &id.scheme),
+        ("seed".into(), AttrValue::U64(id.seed)),
     ]
 }
 
@@ -308,6 +346,8 @@ struct Draw {
     samplers: Vec<Vec<(simulate::StreamSampler, u64)>>,
     channels: usize,
     n_bins: usize,
+    /// Per channel: the static scene's background and dark counts per native bin.
+    rest: Vec<(f64, f64)>,
 }
 
 impl Draw {
@@ -337,20 +377,49 @@ impl Draw {
             samplers,
             channels: lidar.channels.len(),
             n_bins: lidar.first().geometry.n_bins,
+            rest: native
+                .expected
+                .iter()
+                .map(|e| (e.background, e.dark))
+                .collect(),
         })
     }
 
-    /// The native counts of shot `p`, every channel (channel-major).
-    fn shot(&self, p: u64) -> Vec<u64> {
+    /// The scene's columns, each with every channel's model (one in a static scene).
+    fn columns<'a>(&'a self, native: &'a NativeRun) -> Vec<&'a [ExpectedProfile]> {
+        match &self.scene {
+            Some(s) => s.expected.iter().map(Vec::as_slice).collect(),
+            None => vec![&native.expected],
+        }
+    }
+
+    /// The native counts of shot `p`, every channel (channel-major), and what it saw.
+    fn shot(&self, p: u64) -> (Vec<u64>, ShotTruth) {
         let (seed, channels, n_bins, energy) =
             (self.seed, self.channels, self.n_bins, &self.energy);
         match &self.scene {
             Some(s) => {
-                simulate::draw_scene_counts(s, seed, channels, p, n_bins, energy)
-                    .0
-                    .counts
+                let (drawn, draw) =
+                    simulate::draw_scene_counts(s, seed, channels, p, n_bins, energy);
+                let column = s.column_of_shot(p);
+                let truth = ShotTruth {
+                    column,
+                    background: draw.mean_backgrounds().to_vec(),
+                    dark: s.expected[column].iter().map(|e| e.dark).collect(),
+                    energy: drawn.energy_sum(),
+                };
+                (drawn.counts, truth)
             }
-            None => simulate::draw_profile(&self.samplers, p, 1, n_bins, false, energy).counts,
+            None => {
+                let drawn = simulate::draw_profile(&self.samplers, p, 1, n_bins, false, energy);
+                let truth = ShotTruth {
+                    column: 0,
+                    background: self.rest.iter().map(|r| r.0).collect(),
+                    dark: self.rest.iter().map(|r| r.1).collect(),
+                    energy: drawn.energy_sum(),
+                };
+                (drawn.counts, truth)
+            }
         }
     }
 
@@ -436,22 +505,33 @@ impl SchemeRun {
 }
 
 /// Draws `shots` in batches (in parallel, then in order) and adds each to every scheme;
-/// the first scheme's downlinked profiles go to `writer`.
+/// the first scheme's downlinked profiles go to `writer` with their `rows`.
 fn draw_shots(
     draw: &Draw,
     shots: Range<u64>,
     runs: &mut [SchemeRun],
+    rows: &mut ProfileRows,
     writer: &mut ProductWriter,
 ) -> Result<()> {
     let batch = ((4 << 20) / (draw.n_bins * draw.channels).max(1)).clamp(1, 4096) as u64;
     for start in shots.clone().step_by(batch as usize) {
         let end = (start + batch).min(shots.end);
-        let drawn: Vec<Vec<u64>> = (start..end).into_par_iter().map(|p| draw.shot(p)).collect();
-        for (shot, native) in (start..end).zip(&drawn) {
+        let drawn: Vec<(Vec<u64>, ShotTruth)> =
+            (start..end).into_par_iter().map(|p| draw.shot(p)).collect();
+        for (shot, (native, seen)) in (start..end).zip(&drawn) {
             let truth = draw.truth(shot);
+            rows.add_shot(seen);
             for (i, r) in runs.iter_mut().enumerate() {
                 r.add_shot(native, truth, |k, sums| match i {
-                    0 => writer.write(k, sums),
+                    0 => {
+                        let (values, columns) = rows.take(k);
+                        let row = ProfileRow {
+                            counts: sums,
+                            values: &values,
+                            columns: &columns,
+                        };
+                        writer.write(k, row)
+                    }
                     _ => Ok(()),
                 })?;
             }
@@ -486,6 +566,20 @@ fn check_memory(native: &NativeRun, schemes: usize) -> Result<()> {
     )
 }
 
+/// Refuses a product whose truth cannot fit: per region, 20 f64 per column, channel and
+/// region bin (the truth of every column, built once).
+fn check_truth_memory(native: &NativeRun, columns: usize) -> Result<()> {
+    let channels = native.lidar.channels.len();
+    let bins: usize = native.layouts[0]
+        .iter()
+        .map(|r| r.bins * r.channel_indices(channels).len())
+        .sum();
+    crate::resources::require_memory(
+        &format!("the product's truth of {columns} columns of {bins} bins"),
+        columns as f64 * bins as f64 * 20.0 * 8.0 * 2.0,
+    )
+}
+
 /// Refuses options that do not go together (one line each).
 fn check_options(opts: &OnboardOptions) -> Result<()> {
     let refuse = |why: &str| Err(Error::Unsupported(why.into()));
@@ -517,8 +611,26 @@ fn write_product(
 ) -> Result<Vec<SchemeSums>> {
     check_memory(native, native.layouts.len())?;
     let draw = Draw::new(native)?;
-    let header = native.header(opts.shard.map(|s| (s, shots)), opts.word_bits)?;
-    let specs = native.region_specs(shots);
+    let header = native.header(
+        opts.shard.map(|s| (s, shots)),
+        opts.word_bits,
+        &opts.command_line,
+    )?;
+    let columns = draw.columns(native);
+    check_truth_memory(native, columns.len())?;
+    let specs = native.region_specs(shots, &columns)?;
+    let mut rows = ProfileRows::new(
+        native.layouts[0]
+            .iter()
+            .zip(&specs)
+            .map(|(r, s)| (r.clone(), s.truth.slots))
+            .collect(),
+        native.lidar.channels.len(),
+        specs.iter().map(|s| s.first_profile).collect(),
+        simulate::orbit_of(&native.lidar)?,
+        native.rep_rate_hz,
+        native.lidar.first().loaded.config.instrument.pulse_energy_j,
+    );
     let fl = native.rep_rate_hz;
     let mut times = |k: usize, rows: Range<usize>| {
         let r = &specs[k];
@@ -533,7 +645,7 @@ fn write_product(
         .iter()
         .map(|l| SchemeRun::new(l, draw.channels, draw.n_bins))
         .collect();
-    draw_shots(&draw, shots.clone(), &mut runs, &mut writer)?;
+    draw_shots(&draw, shots.clone(), &mut runs, &mut rows, &mut writer)?;
     writer.finish()?;
     Ok(runs.into_iter().map(|r| r.sums).collect())
 }

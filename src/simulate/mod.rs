@@ -892,6 +892,14 @@ pub struct SceneDraw {
     mean_backgrounds: Vec<f64>,
 }
 
+impl SceneDraw {
+    /// Each channel's background counts per shot per bin, averaged over the profile's
+    /// shots (the sunlight changes along the track).
+    pub fn mean_backgrounds(&self) -> &[f64] {
+        &self.mean_backgrounds
+    }
+}
+
 /// Draws the counts of profile `p` of a changing scene, every channel (no truth yet:
 /// [`scene_profile_values`]); also returns what the truth needs of the draw.
 pub fn draw_scene_counts(
@@ -1013,6 +1021,13 @@ pub fn draw_profile(
         energy_sum: energy.law.profile_sum(energy_seed, p, shots),
         values: Vec::new(),
         columns: None,
+    }
+}
+
+impl DrawnProfile {
+    /// Sum of the shots' energy factors (relative to the nominal energy).
+    pub fn energy_sum(&self) -> f64 {
+        self.energy_sum
     }
 }
 

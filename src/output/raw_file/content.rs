@@ -34,9 +34,22 @@ pub struct RunInfo<'a> {
 /// run gives the same bytes whatever its output name (docs/file-format.md).
 pub const HISTORY_OMITS: [&str; 4] = ["-o", "--output", "--shard", "--threads"];
 
+/// Options of `onboard` left out of its product's `history` besides [`HISTORY_OMITS`]:
+/// its other outputs and the partial of a shard, which do not change the product, so
+/// that the whole run (with `--report`) and the merge of its shards (with `--partial`)
+/// record the same history.
+pub const PRODUCT_HISTORY_OMITS: [&str; 3] = ["--report", "--partial", "--raw"];
+
 /// The command line as `history` records it: the program as `lidarsim`, then every
 /// argument but those of [`HISTORY_OMITS`] (as `-o X`, `--output=X` or `-oX`).
 pub fn history_command(args: impl IntoIterator<Item = String>) -> String {
+    history_command_omitting(args, &[])
+}
+
+/// [`history_command`] leaving out `extra` options with their values too (`onboard`'s
+/// other outputs, which do not change its product: [`PRODUCT_HISTORY_OMITS`]).
+pub fn history_command_omitting(args: impl IntoIterator<Item = String>, extra: &[&str]) -> String {
+    let omitted = |o: &str| HISTORY_OMITS.contains(&o) || extra.contains(&o);
     let mut args = args.into_iter();
     let mut kept = vec![];
     if args.next().is_some() {
@@ -44,9 +57,9 @@ pub fn history_command(args: impl IntoIterator<Item = String>) -> String {
     }
     while let Some(a) = args.next() {
         let option = a.split('=').next().unwrap_or(&a);
-        if HISTORY_OMITS.contains(&a.as_str()) {
+        if omitted(a.as_str()) {
             args.next(); // its value
-        } else if !(HISTORY_OMITS.contains(&option) && a.contains('=')
+        } else if !(omitted(option) && a.contains('=')
             || a.starts_with("-o") && !a.starts_with("--"))
         {
             kept.push(a);

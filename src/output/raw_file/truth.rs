@@ -9,11 +9,12 @@ use crate::detector::DeadTimeModel;
 use crate::scenario::{ExpectedProfile, Lidar, Scenario};
 
 /// A point truth of one bin of a column's channel.
-type Truth = fn(&ExpectedProfile, usize) -> f64;
+pub(crate) type Truth = fn(&ExpectedProfile, usize) -> f64;
 
 /// The point truth at the bin centre by species (model.md §8), each (column, channel,
-/// bin): name, long name, units, value.
-const COLUMN_TRUTH: [(&str, &str, &str, Truth); 17] = [
+/// bin): name, long name, units, value. The onboard product averages the same table over
+/// each region bin's native bins (`crate::onboard::truth`).
+pub(crate) const COLUMN_TRUTH: [(&str, &str, &str, Truth); 17] = [
     (
         "alpha_mol",
         "molecular (Rayleigh) extinction coefficient at the bin centre",
@@ -183,7 +184,7 @@ pub fn column_variables(lidar: &Lidar, columns: &[&[ExpectedProfile]]) -> Vec<Va
 /// `beta_mol`'s attributes: the part of the line the channels see and its lidar ratio
 /// (one value when every channel agrees; else see `molecular_line` and
 /// `molecular_lidar_ratio`).
-fn beta_mol_attributes(lidar: &Lidar) -> Vec<(String, AttrValue)> {
+pub(crate) fn beta_mol_attributes(lidar: &Lidar) -> Vec<(String, AttrValue)> {
     let m = |k: usize| lidar.channels[k].atmosphere.molecular_lidar_ratio_sr();
     let same = |f: &dyn Fn(usize) -> String| (1..lidar.channels.len()).all(|k| f(k) == f(0));
     let line = |k: usize| lidar.channels[k].atmosphere.molecular_line_name();
