@@ -47,6 +47,16 @@ fn config_message(file: &str, key: &str, reason: &str) -> String {
     }
 }
 
+/// A shape for a message: `3 × 1 × 334`.
+pub fn shape_text(shape: &[usize]) -> String {
+    let v: Vec<String> = shape.iter().map(usize::to_string).collect();
+    if v.is_empty() {
+        "a scalar".into()
+    } else {
+        v.join(" × ")
+    }
+}
+
 /// A number for a message, in compact form: `1000`, `0.25`, `1e308`, `2.5e-10` (the
 /// shortest representation that reads back to the same value).
 pub fn compact(x: f64) -> String {

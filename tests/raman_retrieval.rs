@@ -229,3 +229,59 @@ fn raman_keys_are_checked() {
         }
     }
 }
+
+/// `validate --file` judges a Raman channel like any other: the preset's file is
+/// CONSISTENT, and the same file with the Raman channels' expectation 2 % high
+/// (`expected_signal` and `expected_counts` of `387_raman_N2` and `607_raman_N2` × 1.02)
+/// is INCONSISTENT (near 1 km each Raman bin holds ~4e4 counts over 8 profiles: a 2 %
+/// shift is a z of ~4 per bin, over hundreds of bins).
+#[test]
+fn validate_rejects_a_raman_expectation_two_percent_off() {
+    let dir = scratch("validate");
+    let cfg = config_path("ground/pollyxt_like.toml");
+    let args = [
+        "simulate",
+        cfg.to_str().unwrap(),
+        "-o",
+        "v.h5",
+        "--profiles",
+        "8",
+    ];
+    ok(lidarsim(&dir, &args, &[]));
+    let genuine = lidarsim(&dir, &["validate", "--file", "v.h5"], &[]);
+    let out = String::from_utf8_lossy(&genuine.stdout).to_string();
+    assert_eq!(genuine.status.code(), Some(0), "{out}");
+    assert!(out.contains("CONSISTENT"), "{out}");
+    std::fs::copy(dir.join("v.h5"), dir.join("off.h5")).unwrap();
+    {
+        let f = hdf5::File::open_rw(dir.join("off.h5")).unwrap();
+        let names = strings(&f, "channel");
+        for name in ["expected_signal", "expected_counts"] {
+            let d = f.dataset(name).unwrap();
+            let shape = d.shape();
+            let mut v = d.read_raw::<f64>().unwrap();
+            let bins = v.len() / names.len();
+            for (k, c) in names.iter().enumerate() {
+                if c.contains("raman") {
+                    v[k * bins..(k + 1) * bins]
+                        .iter_mut()
+                        .for_each(|x| *x *= 1.02);
+                }
+            }
+            drop(d);
+            f.unlink(name).unwrap();
+            f.new_dataset::<f64>()
+                .shape(shape)
+                .create(name)
+                .unwrap()
+                .write_raw(&v)
+                .unwrap();
+        }
+        f.close().unwrap();
+    }
+    let off = lidarsim(&dir, &["validate", "--file", "off.h5"], &[]);
+    let out = String::from_utf8_lossy(&off.stdout).to_string();
+    assert_eq!(off.status.code(), Some(1), "{out}");
+    assert!(out.contains("INCONSISTENT"), "{out}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -84,7 +84,7 @@ pub fn segments(path: &Path) -> Result<Vec<SegmentConfig>> {
                 if d.shape() != [x.len(), z.len()] {
                     return Err(fail(format!(
                         "curtain: `{name}` is {}, not (along_track, altitude) = {} × {}",
-                        crate::output::raw_file::read::shape_text(&d.shape()),
+                        crate::error::shape_text(&d.shape()),
                         x.len(),
                         z.len()
                     )));

@@ -268,15 +268,7 @@ const OTHER_SHAPES: [&[Dim]; 7] = [
     &[Dim::Col, Dim::C, Dim::B],
 ];
 
-/// A shape for a message: `3 × 1 × 334`.
-pub fn shape_text(shape: &[usize]) -> String {
-    let v: Vec<String> = shape.iter().map(usize::to_string).collect();
-    if v.is_empty() {
-        "a scalar".into()
-    } else {
-        v.join(" × ")
-    }
-}
+pub use crate::error::shape_text;
 
 fn dims_name(dims: &[Dim]) -> String {
     let names: Vec<&str> = dims
