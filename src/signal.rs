@@ -83,8 +83,8 @@ impl BeamPath {
             .filter(|s| geometry.kind == PlatformKind::Spaceborne && s.altitude_m >= z_far)
             .map(|s| SurfaceEcho {
                 range_m: geometry.range_at_altitude(s.altitude_m),
-                integrated_backscatter_sr: s
-                    .integrated_backscatter_sr(geometry.local_cos_at(s.altitude_m)),
+                integrated_backscatter_sr: atmosphere.surface_echo_share()
+                    * s.integrated_backscatter_sr(geometry.local_cos_at(s.altitude_m)),
             });
         let (z_lo, z_hi) = match geometry.kind {
             // The beam stops at the surface.

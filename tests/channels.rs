@@ -484,7 +484,8 @@ fn channel_errors_name_their_keys() {
 }
 
 /// `kind` says what scattering a channel sees: `"elastic"` (the default) is accepted
-/// and changes nothing; `"raman"` is a Raman channel (tests/raman_retrieval.rs); any
+/// and changes nothing; `"raman"` and `"hsrl_molecular"` are tested in
+/// tests/raman_retrieval.rs and tests/hsrl_retrieval.rs; any
 /// other value is refused in one line naming the channel's key and the kinds accepted.
 #[test]
 fn channel_kind_is_elastic_or_refused() {
@@ -503,6 +504,6 @@ fn channel_kind_is_elastic_or_refused() {
     let e = config_error(&base.replacen(from, &format!("{from}kind = \"hsrl\"\n"), 1));
     assert_eq!(
         e,
-        "test.toml: key `instrument.channels[0].kind`: unknown variant 'hsrl', expected 'elastic' or 'raman'"
+        "test.toml: key `instrument.channels[0].kind`: unknown variant 'hsrl', expected one of 'elastic', 'hsrl_molecular', 'raman'"
     );
 }

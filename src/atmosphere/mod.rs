@@ -16,7 +16,7 @@ use crate::config::{
 use crate::constants::BOLTZMANN_J_PER_K;
 use crate::error::Result;
 use crate::loaded::LoadedConfig;
-use crate::receiver::ChannelKind;
+use crate::receiver::{ChannelKind, LineTransmission};
 use profile_file::MolecularProfile;
 
 /// Temperature at which a Raman channel's band cross-section is taken, K: the band
@@ -353,6 +353,9 @@ pub struct Atmosphere {
     pub ozone_cross_section_m2: Option<f64>,
     /// A Raman channel's return (None for an elastic channel).
     pub raman: Option<RamanReturn>,
+    /// What the channel's filter passes of the elastic molecular (Cabannes) and particle
+    /// lines: 1 and 1 but in an HSRL molecular channel.
+    pub lines: LineTransmission,
 }
 
 impl Atmosphere {
@@ -394,7 +397,11 @@ impl Atmosphere {
         let rho_n = m
             .depolarization
             .unwrap_or_else(|| rayleigh::depolarization_rho_n(wl));
+        let channel = loaded.channels.first();
+        let hsrl = channel.is_some_and(|c| c.kind == ChannelKind::HsrlMolecular);
         let cabannes = match m.line {
+            // an HSRL filter is far narrower than the rotational Raman wings
+            _ if hsrl => true,
             MolecularLine::Cabannes => true,
             MolecularLine::Rayleigh => false,
             MolecularLine::Auto => {
@@ -438,6 +445,7 @@ impl Atmosphere {
                 .then(|| ozone::cross_section_m2(wl))
                 .filter(|s| *s > 0.0),
             raman: raman_return(loaded)?,
+            lines: channel.map_or(LineTransmission::ELASTIC, |c| c.lines),
         })
     }
 
@@ -445,6 +453,16 @@ impl Atmosphere {
     /// atmosphere at the Raman line.
     pub fn detected_line(&self) -> &Atmosphere {
         self.raman.as_ref().map_or(self, |r| &r.line)
+    }
+
+    /// The share of the surface echo (an unbroadened line at the laser's wavelength) the
+    /// channel sees: the particle line's share, and none for a Raman channel.
+    pub fn surface_echo_share(&self) -> f64 {
+        if self.raman.is_some() {
+            0.0
+        } else {
+            self.lines.particle
+        }
     }
 
     /// The name of what the channel's `beta_mol` is: `cabannes` or `whole` (the part of
@@ -496,7 +514,8 @@ impl Atmosphere {
             ..Default::default()
         };
         o.beta_mol = o.alpha_mol / self.molecules.lidar_ratio_sr;
-        o.beta_channel = o.beta_mol * self.channel.share(o.depol_mol, self.crosstalk);
+        o.beta_channel =
+            self.lines.molecular * o.beta_mol * self.channel.share(o.depol_mol, self.crosstalk);
         if let Some(sigma) = self.ozone_cross_section_m2 {
             // absorption only: it attenuates, it does not backscatter
             o.alpha_o3 = sigma * ozone::number_density_m3(z_m);
@@ -508,7 +527,8 @@ impl Atmosphere {
             o.ms_alpha_aer += alpha;
             o.beta_aer += beta;
             o.beta_perp_aer += perpendicular(beta, a.depolarization);
-            o.beta_channel += beta * self.channel.share(a.depolarization, self.crosstalk);
+            o.beta_channel +=
+                self.lines.particle * beta * self.channel.share(a.depolarization, self.crosstalk);
         }
         for l in self.layers.iter().filter(|l| l.contains(z_m)) {
             let alpha = l.extinction_per_m;
@@ -531,7 +551,8 @@ impl Atmosphere {
             *ms += alpha * l.multiple_scattering;
             *b += beta;
             *perp += perpendicular(beta, l.depolarization);
-            o.beta_channel += beta * self.channel.share(l.depolarization, self.crosstalk);
+            o.beta_channel +=
+                self.lines.particle * beta * self.channel.share(l.depolarization, self.crosstalk);
         }
         o.alpha_total = o.alpha_mol + o.alpha_o3 + o.alpha_aer + o.alpha_cld;
         o.alpha_effective = o.alpha_mol + o.alpha_o3 + o.ms_alpha_aer + o.ms_alpha_cld;

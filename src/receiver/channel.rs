@@ -24,6 +24,10 @@ pub enum ChannelKind {
     /// Elastic backscatter at the laser's wavelength, molecules and particles (default).
     #[default]
     Elastic,
+    /// An HSRL molecular channel: the elastic line through a narrow filter that passes
+    /// `f_m` of the Doppler-broadened Cabannes line and `f_p` ≪ 1 of the particle line.
+    #[serde(rename = "hsrl_molecular")]
+    HsrlMolecular,
     /// The vibrational Raman band of `species` (`instrument.channels[i].species`),
     /// detected at the shifted line: molecules only, up at the laser line and back at the
     /// Raman line.
@@ -38,6 +42,26 @@ pub enum RamanSpecies {
     N2,
     /// Water vapour: named so that a config asking for it is told it is not modelled yet.
     H2O,
+}
+
+/// What an HSRL molecular channel's spectral filter passes (model.md §8 "High spectral
+/// resolution"): `f_m` of the Cabannes line and `f_p` of the particle line
+/// (`instrument.channels[i].molecular_transmission`, `.particle_transmission`). An
+/// elastic channel passes 1 and 1; a Raman channel sees neither line.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LineTransmission {
+    /// `f_m`: the share of the Cabannes line passed.
+    pub molecular: f64,
+    /// `f_p`: the share of the particle line (and of the surface echo) passed.
+    pub particle: f64,
+}
+
+impl LineTransmission {
+    /// An elastic channel's: both lines whole.
+    pub const ELASTIC: LineTransmission = LineTransmission {
+        molecular: 1.0,
+        particle: 1.0,
+    };
 }
 
 impl RamanSpecies {
@@ -65,10 +89,11 @@ impl RamanSpecies {
 }
 
 impl ChannelKind {
-    /// The kind's name in the config and the file: `elastic`, `raman`.
+    /// The kind's name in the config and the file: `elastic`, `hsrl_molecular`, `raman`.
     pub fn name(self) -> &'static str {
         match self {
             ChannelKind::Elastic => "elastic",
+            ChannelKind::HsrlMolecular => "hsrl_molecular",
             ChannelKind::Raman => "raman",
         }
     }
@@ -90,6 +115,9 @@ pub struct ChannelConfig {
     /// The species of a Raman channel (N2 unless `species` says otherwise; unused by
     /// other kinds, which refuse the key).
     pub species: RamanSpecies,
+    /// What the channel's filter passes of the elastic lines: 1 and 1 but in an HSRL
+    /// molecular channel.
+    pub lines: LineTransmission,
     /// The whole config with `[instrument]` as this channel sees it.
     pub config: ScenarioConfig,
 }
@@ -128,7 +156,7 @@ impl ChannelConfig {
     pub fn detection_wavelength_nm(&self) -> f64 {
         let laser = self.config.instrument.wavelength_nm;
         match self.kind {
-            ChannelKind::Elastic => laser,
+            ChannelKind::Elastic | ChannelKind::HsrlMolecular => laser,
             ChannelKind::Raman => {
                 crate::atmosphere::raman::shifted_wavelength_nm(laser, self.species.shift_per_m())
             }
@@ -140,6 +168,9 @@ impl ChannelConfig {
         let i = &self.config.instrument;
         match self.kind {
             ChannelKind::Elastic => channel_name(i.wavelength_nm, i.channel),
+            ChannelKind::HsrlMolecular => {
+                format!("{}_molecular_{}", i.wavelength_nm, i.channel.name())
+            }
             ChannelKind::Raman => raman_channel_name(self.detection_wavelength_nm(), self.species),
         }
     }
@@ -159,6 +190,56 @@ pub fn channel_name(wavelength_nm: f64, polarization: Channel) -> String {
 /// `386.7_raman_N2`.
 pub fn raman_channel_name(detection_nm: f64, species: RamanSpecies) -> String {
     format!("{:.1}_raman_{}", detection_nm, species.name())
+}
+
+/// An HSRL molecular channel's filter from its keys (`given`: `molecular_transmission`,
+/// `particle_transmission`, each None when absent): both required, `0 < f_p < f_m ≤ 1`
+/// (the filter blocks the particle line more than the molecular one); other kinds refuse
+/// the keys.
+pub fn line_transmission(
+    kind: ChannelKind,
+    given: (Option<f64>, Option<f64>),
+    key: &dyn Fn(&str) -> String,
+    file: &str,
+) -> Result<LineTransmission> {
+    let names = ["molecular_transmission", "particle_transmission"];
+    if kind != ChannelKind::HsrlMolecular {
+        return match given {
+            (None, None) => Ok(LineTransmission::ELASTIC),
+            (m, _) => Err(Error::config(
+                file,
+                key(names[usize::from(m.is_none())]),
+                "is for HSRL molecular channels (kind = \"hsrl_molecular\")",
+            )),
+        };
+    }
+    let (Some(molecular), Some(particle)) = given else {
+        let missing = names[usize::from(given.0.is_some())];
+        return Err(Error::config(
+            file,
+            key(missing),
+            "is required for an hsrl_molecular channel (the share of the Cabannes line, \
+             or of the particle line, its filter passes)",
+        ));
+    };
+    if !(molecular > 0.0 && molecular <= 1.0) {
+        return Err(Error::config(file, key(names[0]), "must be in (0, 1]"));
+    }
+    if !(0.0..molecular).contains(&particle) {
+        return Err(Error::config(
+            file,
+            key(names[1]),
+            format!(
+                "must be in [0, molecular_transmission = {}): the filter blocks the particle \
+                 line more than the molecular one",
+                crate::error::compact(molecular)
+            ),
+        ));
+    }
+    Ok(LineTransmission {
+        molecular,
+        particle,
+    })
 }
 
 /// The checks of a channel's kind against its other keys (`key` gives an entry's key):

@@ -13,7 +13,9 @@
 
 pub mod channel;
 
-pub use channel::{ChannelConfig, ChannelKind, Filter, RamanSpecies, channel_name};
+pub use channel::{
+    ChannelConfig, ChannelKind, Filter, LineTransmission, RamanSpecies, channel_name,
+};
 
 use crate::config::{self, ScenarioConfig};
 use crate::error::{Error, Result};
@@ -65,6 +67,7 @@ pub fn expand(
             name: channel_name(i.wavelength_nm, i.channel),
             kind: ChannelKind::default(),
             species: RamanSpecies::default(),
+            lines: LineTransmission::ELASTIC,
             config: base.clone(),
         }]);
     }
@@ -109,6 +112,7 @@ fn expand_one(
     let mut name = None;
     let mut kind = ChannelKind::default();
     let mut species = None;
+    let mut lines = (None, None);
     {
         let Some(toml::Value::Table(inst)) = root.get_mut("instrument") else {
             return Err(Error::config(file, "instrument", "must be a table"));
@@ -125,6 +129,8 @@ fn expand_one(
                         file,
                     )?)
                 }
+                "molecular_transmission" => lines.0 = Some(number(value, &key(field), file)?),
+                "particle_transmission" => lines.1 = Some(number(value, &key(field), file)?),
                 "polarization" | "channel" => {
                     inst.remove("polarization");
                     inst.insert("channel".into(), value.clone());
@@ -173,14 +179,30 @@ fn expand_one(
     let config = config::deserialize(toml::Value::Table(root), file).map_err(in_channel)?;
     validate(&config, file).map_err(in_channel)?;
     channel::check_kind(kind, species, config.instrument.channel, &key, file)?;
+    let lines = channel::line_transmission(kind, lines, &key, file)?;
     let mut channel = ChannelConfig {
         name: String::new(),
         kind,
         species: species.unwrap_or_default(),
+        lines,
         config,
     };
     channel.name = name.unwrap_or_else(|| channel.default_name());
     Ok(channel)
+}
+
+/// A finite number (an integer is taken as a float), for a channel's own keys.
+fn number(value: &toml::Value, key: &str, file: &str) -> Result<f64> {
+    let x = match value {
+        toml::Value::Float(x) => *x,
+        toml::Value::Integer(i) => *i as f64,
+        _ => return Err(Error::config(file, key, "must be a number")),
+    };
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(Error::config(file, key, "must be a finite number"))
+    }
 }
 
 /// `inst[key]` = `value`, merged key by key into an existing table.

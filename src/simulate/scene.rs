@@ -575,6 +575,7 @@ fn column_scenario(
             name: c.channel_name.clone(),
             kind: c.loaded.channels[0].kind,
             species: c.loaded.channels[0].species,
+            lines: c.loaded.channels[0].lines,
             config: config.clone(),
         }],
         config,

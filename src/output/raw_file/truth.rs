@@ -300,18 +300,18 @@ pub fn instrument_variables(lidar: &Lidar, e0: &ExpectedProfile) -> Vec<Variable
         var(
             "molecular_transmission",
             Channel,
-            "filter transmission of the molecular (Cabannes) line relative to the particle line (1 but in hsrl_molecular channels)",
+            "share of the molecular (Cabannes) line the channel's filter passes, f_m (1 but in hsrl_molecular channels)",
             "1",
             &[],
-            per(|_| 1.0),
+            per(|c| c.loaded.channels[0].lines.molecular),
         ),
         var(
             "particle_transmission",
             Channel,
-            "filter transmission of the particle line (1 but in hsrl_molecular channels)",
+            "share of the particle line the channel's filter passes, f_p (1 but in hsrl_molecular channels)",
             "1",
             &[],
-            per(|_| 1.0),
+            per(|c| c.loaded.channels[0].lines.particle),
         ),
         var(
             "molecular_lidar_ratio",
