@@ -181,3 +181,22 @@ fn hsrl_keys_are_checked() {
         }
     }
 }
+
+/// `validate` on the ATLID-like preset, both ways of drawing: CONSISTENT (its
+/// statistics' false-alarm rate is `validate`'s own, docs/config.md; fixed seed).
+#[test]
+fn validate_is_consistent_on_the_preset() {
+    let dir = scratch("consistent");
+    let cfg = config_path("instruments/atlid_like.toml");
+    for method in ["aggregate", "shot"] {
+        let o = lidarsim(
+            &dir,
+            &["validate", cfg.to_str().unwrap(), "--method", method],
+            &[],
+        );
+        let out = String::from_utf8_lossy(&o.stdout).to_string();
+        assert_eq!(o.status.code(), Some(0), "{method}: {out}");
+        assert!(out.contains("CONSISTENT"), "{out}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -285,3 +285,22 @@ fn validate_rejects_a_raman_expectation_two_percent_off() {
     assert!(out.contains("INCONSISTENT"), "{out}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `validate` on the PollyXT-like preset, both ways of drawing: CONSISTENT (its
+/// statistics' false-alarm rate is `validate`'s own, docs/config.md; fixed seed).
+#[test]
+fn validate_is_consistent_on_the_preset() {
+    let dir = scratch("consistent");
+    let cfg = config_path("ground/pollyxt_like.toml");
+    for method in ["aggregate", "shot"] {
+        let o = lidarsim(
+            &dir,
+            &["validate", cfg.to_str().unwrap(), "--method", method],
+            &[],
+        );
+        let out = String::from_utf8_lossy(&o.stdout).to_string();
+        assert_eq!(o.status.code(), Some(0), "{method}: {out}");
+        assert!(out.contains("CONSISTENT"), "{out}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
