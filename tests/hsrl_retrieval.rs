@@ -19,40 +19,9 @@
 
 mod common;
 
-use std::path::PathBuf;
-
-use common::cli::{lidarsim, ok};
+use common::cli::scratch;
 use common::config_path;
-
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("lidarsim-hsrl-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn floats(f: &hdf5::File, name: &str) -> Vec<f64> {
-    f.dataset(name)
-        .unwrap_or_else(|_| panic!("no `{name}`"))
-        .read_raw::<f64>()
-        .unwrap()
-}
-
-fn strings(f: &hdf5::File, name: &str) -> Vec<String> {
-    let d = f.dataset(name).unwrap();
-    d.read_raw::<hdf5::types::VarLenUnicode>()
-        .unwrap()
-        .iter()
-        .map(|s| s.as_str().to_string())
-        .collect()
-}
-
-/// Rows of a (channel, bin) or (column, channel, bin) variable of a one-column file.
-fn rows(f: &hdf5::File, name: &str, channels: usize) -> Vec<Vec<f64>> {
-    let v = floats(f, name);
-    let bins = v.len() / channels;
-    v.chunks(bins).map(<[f64]>::to_vec).collect()
-}
+use common::h5::{channel_rows as rows, floats, simulate, strings, validate_consistent_both_ways};
 
 /// Measured over the 43 bins of the three layers more than two bins from their edges:
 /// backscatter within 6e-5, extinction within 3e-5. The molecular or the particle line
@@ -60,18 +29,13 @@ fn rows(f: &hdf5::File, name: &str, channels: usize) -> Vec<Vec<f64>> {
 /// by hand).
 #[test]
 fn the_hsrl_retrieval_of_the_expected_signals_recovers_backscatter_and_extinction() {
-    let dir = scratch("retrieval");
-    let cfg = config_path("instruments/atlid_like.toml");
-    let args = [
-        "simulate",
-        cfg.to_str().unwrap(),
-        "-o",
+    let dir = scratch("hsrl-retrieval");
+    let f = simulate(
+        &dir,
+        &config_path("instruments/atlid_like.toml"),
         "a.h5",
-        "--profiles",
         "2",
-    ];
-    ok(lidarsim(&dir, &args, &[]));
-    let f = hdf5::File::open(dir.join("a.h5")).unwrap();
+    );
     let names = strings(&f, "channel");
     let n = names.len();
     let k = |name: &str| names.iter().position(|c| c == name).unwrap();
@@ -182,21 +146,10 @@ fn hsrl_keys_are_checked() {
     }
 }
 
-/// `validate` on the ATLID-like preset, both ways of drawing: CONSISTENT (its
-/// statistics' false-alarm rate is `validate`'s own, docs/config.md; fixed seed).
+/// `validate` on the ATLID-like preset, both ways of drawing: CONSISTENT.
 #[test]
 fn validate_is_consistent_on_the_preset() {
-    let dir = scratch("consistent");
-    let cfg = config_path("instruments/atlid_like.toml");
-    for method in ["aggregate", "shot"] {
-        let o = lidarsim(
-            &dir,
-            &["validate", cfg.to_str().unwrap(), "--method", method],
-            &[],
-        );
-        let out = String::from_utf8_lossy(&o.stdout).to_string();
-        assert_eq!(o.status.code(), Some(0), "{method}: {out}");
-        assert!(out.contains("CONSISTENT"), "{out}");
-    }
+    let dir = scratch("hsrl-consistent");
+    validate_consistent_both_ways(&dir, &config_path("instruments/atlid_like.toml"));
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -12,52 +12,17 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use common::cli::{lidarsim, ok};
+use common::cli::{lidarsim, ok, scratch};
 use common::config_path;
-
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("lidarsim-raman-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use common::h5::{
+    channel_rows as per_channel, floats, simulate, strings, validate_consistent_both_ways,
+};
 
 /// The preset's raw file (2 profiles).
 fn preset_file(dir: &Path) -> hdf5::File {
-    let cfg = config_path("ground/pollyxt_like.toml");
-    let args = [
-        "simulate",
-        cfg.to_str().unwrap(),
-        "-o",
-        "p.h5",
-        "--profiles",
-        "2",
-    ];
-    ok(lidarsim(dir, &args, &[]));
-    hdf5::File::open(dir.join("p.h5")).unwrap()
-}
-
-/// A (channel, bin) or (column, channel, bin) variable as rows per channel.
-fn per_channel(f: &hdf5::File, name: &str, channels: usize) -> Vec<Vec<f64>> {
-    let d = f.dataset(name).unwrap_or_else(|_| panic!("no `{name}`"));
-    let v = d.read_raw::<f64>().unwrap();
-    let bins = v.len() / channels;
-    v.chunks(bins).map(<[f64]>::to_vec).collect()
-}
-
-fn floats(f: &hdf5::File, name: &str) -> Vec<f64> {
-    f.dataset(name).unwrap().read_raw::<f64>().unwrap()
-}
-
-fn strings(f: &hdf5::File, name: &str) -> Vec<String> {
-    let d = f.dataset(name).unwrap();
-    d.read_raw::<hdf5::types::VarLenUnicode>()
-        .unwrap()
-        .iter()
-        .map(|s| s.as_str().to_string())
-        .collect()
+    simulate(dir, &config_path("ground/pollyxt_like.toml"), "p.h5", "2")
 }
 
 /// The worst relative error of the retrieval for the Raman channel `raman` and the elastic
@@ -112,7 +77,7 @@ fn ansmann_worst(f: &hdf5::File, elastic: usize, raman: usize) -> (f64, usize) {
 /// laser line fails (11 %); a Raman line 1 % off fails the next test (checked by hand).
 #[test]
 fn the_ansmann_retrieval_of_the_expected_raman_signal_recovers_the_aerosol() {
-    let dir = scratch("ansmann");
+    let dir = scratch("raman-ansmann");
     let f = preset_file(&dir);
     let names = strings(&f, "channel");
     let k = |name: &str| names.iter().position(|c| c == name).unwrap();
@@ -133,7 +98,7 @@ fn the_ansmann_retrieval_of_the_expected_raman_signal_recovers_the_aerosol() {
 /// laser line fails by 100 %).
 #[test]
 fn a_raman_channel_is_described_and_its_truth_is_its_own() {
-    let dir = scratch("describe");
+    let dir = scratch("raman-describe");
     let f = preset_file(&dir);
     let names = strings(&f, "channel");
     let n = names.len();
@@ -237,7 +202,7 @@ fn raman_keys_are_checked() {
 /// shift is a z of ~4 per bin, over hundreds of bins).
 #[test]
 fn validate_rejects_a_raman_expectation_two_percent_off() {
-    let dir = scratch("validate");
+    let dir = scratch("raman-validate");
     let cfg = config_path("ground/pollyxt_like.toml");
     let args = [
         "simulate",
@@ -286,21 +251,10 @@ fn validate_rejects_a_raman_expectation_two_percent_off() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// `validate` on the PollyXT-like preset, both ways of drawing: CONSISTENT (its
-/// statistics' false-alarm rate is `validate`'s own, docs/config.md; fixed seed).
+/// `validate` on the PollyXT-like preset, both ways of drawing: CONSISTENT.
 #[test]
 fn validate_is_consistent_on_the_preset() {
-    let dir = scratch("consistent");
-    let cfg = config_path("ground/pollyxt_like.toml");
-    for method in ["aggregate", "shot"] {
-        let o = lidarsim(
-            &dir,
-            &["validate", cfg.to_str().unwrap(), "--method", method],
-            &[],
-        );
-        let out = String::from_utf8_lossy(&o.stdout).to_string();
-        assert_eq!(o.status.code(), Some(0), "{method}: {out}");
-        assert!(out.contains("CONSISTENT"), "{out}");
-    }
+    let dir = scratch("raman-consistent");
+    validate_consistent_both_ways(&dir, &config_path("ground/pollyxt_like.toml"));
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -32,9 +32,7 @@
 
 use rand::Rng;
 
-use rayon::prelude::*;
-
-use crate::sampling::{SHOT_BLOCK, ShotCounts, ShotSampler, stream_rng};
+use crate::sampling::{SHOT_BLOCK, ShotCounts, ShotSampler, add_block_sums, stream_rng};
 
 /// Seed offset of the arrival-time streams.
 pub const ARRIVAL_STREAM: u64 = 0xA441_7A1E_0000_0001;
@@ -286,28 +284,18 @@ pub fn recorded_profile(
     acc: &mut [u64],
 ) {
     let bins = acc.len();
-    let sum = (0..shots.div_ceil(SHOT_BLOCK))
-        .into_par_iter()
-        .map(|b| {
-            let mut part = vec![0u64; bins];
-            let mut scratch = Scratch::default();
-            let n = SHOT_BLOCK.min(shots - b * SHOT_BLOCK);
-            // arrival times from a stream of their own: the photons are those of the
-            // shot path without dead time, shot for shot
-            let mut arrivals = stream_rng(seed ^ ARRIVAL_STREAM, profile, b);
-            photons.for_each_shot(&mut stream_rng(seed, profile, b), n, |shot| {
-                dead.record_shot(&mut arrivals, shot, &mut scratch, &mut part)
-            });
-            part
-        })
-        .reduce(
-            || vec![0u64; bins],
-            |mut x, y| {
-                x.iter_mut().zip(&y).for_each(|(a, b)| *a += b);
-                x
-            },
-        );
-    acc.iter_mut().zip(&sum).for_each(|(a, s)| *a += s);
+    add_block_sums(acc, shots.div_ceil(SHOT_BLOCK), |b| {
+        let mut part = vec![0u64; bins];
+        let mut scratch = Scratch::default();
+        let n = SHOT_BLOCK.min(shots - b * SHOT_BLOCK);
+        // arrival times from a stream of their own: the photons are those of the
+        // shot path without dead time, shot for shot
+        let mut arrivals = stream_rng(seed ^ ARRIVAL_STREAM, profile, b);
+        photons.for_each_shot(&mut stream_rng(seed, profile, b), n, |shot| {
+            dead.record_shot(&mut arrivals, shot, &mut scratch, &mut part)
+        });
+        part
+    });
 }
 
 /// A uniform in [0, 1) from the top 53 bits of `x`.

@@ -7,11 +7,9 @@
 //! and `stream_rng(seed ^ ARRIVAL_STREAM, profile, block)` for their arrival times, so
 //! results depend on the seed only.
 
-use rayon::prelude::*;
-
 use super::dead_time::{ARRIVAL_STREAM, DeadTime, Scratch};
 use crate::sampling::jitter::ModulatedShots;
-use crate::sampling::{SHOT_BLOCK, ShotCounts, stream_rng};
+use crate::sampling::{SHOT_BLOCK, ShotCounts, add_block_sums, stream_rng};
 
 /// Shots of varying energy recorded by the detector: every photon (an ideal linear
 /// detector) or through its dead time.
@@ -94,29 +92,19 @@ impl DetectedShots {
             return self.photons.profile(seed, profile, shots, acc);
         };
         let bins = acc.len();
-        let sum = (0..shots.div_ceil(SHOT_BLOCK))
-            .into_par_iter()
-            .map(|b| {
-                let mut part = vec![0u64; bins];
-                let mut buf = Buffers::new(bins, Vec::new());
+        add_block_sums(acc, shots.div_ceil(SHOT_BLOCK), |b| {
+            let mut part = vec![0u64; bins];
+            let mut buf = Buffers::new(bins, Vec::new());
+            self.photons
+                .block_factors(seed, profile, shots, b, &mut buf.factors);
+            let mut arrivals = stream_rng(seed ^ ARRIVAL_STREAM, profile, b);
+            let mut rng = stream_rng(seed, profile, b);
+            for &f in &buf.factors {
                 self.photons
-                    .block_factors(seed, profile, shots, b, &mut buf.factors);
-                let mut arrivals = stream_rng(seed ^ ARRIVAL_STREAM, profile, b);
-                let mut rng = stream_rng(seed, profile, b);
-                for &f in &buf.factors {
-                    self.photons
-                        .draw_shot(&mut rng, f, &mut buf.envelope, &mut buf.shot);
-                    dead.record_shot(&mut arrivals, &buf.shot, &mut buf.scratch, &mut part);
-                }
-                part
-            })
-            .reduce(
-                || vec![0u64; bins],
-                |mut x, y| {
-                    x.iter_mut().zip(&y).for_each(|(a, b)| *a += b);
-                    x
-                },
-            );
-        acc.iter_mut().zip(&sum).for_each(|(a, s)| *a += s);
+                    .draw_shot(&mut rng, f, &mut buf.envelope, &mut buf.shot);
+                dead.record_shot(&mut arrivals, &buf.shot, &mut buf.scratch, &mut part);
+            }
+            part
+        });
     }
 }

@@ -19,9 +19,8 @@
 
 use rand::Rng;
 use rand_distr::{Binomial, Distribution};
-use rayon::prelude::*;
 
-use super::{CountSink, SHOT_BLOCK, ShotCounts, ShotSampler, stream_rng};
+use super::{CountSink, SHOT_BLOCK, ShotCounts, ShotSampler, add_block_sums, stream_rng};
 use crate::laser::PulseEnergy;
 
 /// Samplers for shots of varying energy: the signal at its envelope, the rest unchanged.
@@ -132,25 +131,15 @@ impl ModulatedShots {
     pub fn profile(&self, seed: u64, profile: u64, shots: u64, acc: &mut [u64]) {
         let bins = acc.len();
         let nblocks = shots.div_ceil(SHOT_BLOCK);
-        let sum = (0..nblocks)
-            .into_par_iter()
-            .map(|b| {
-                let mut part = vec![0u64; bins];
-                let mut factors = Vec::new();
-                self.block_factors(seed, profile, shots, b, &mut factors);
-                let mut envelope = ShotCounts::new(bins);
-                let mut rng = stream_rng(seed, profile, b);
-                self.add_block(&mut rng, &factors, &mut part, &mut envelope);
-                part
-            })
-            .reduce(
-                || vec![0u64; bins],
-                |mut x, y| {
-                    x.iter_mut().zip(&y).for_each(|(a, b)| *a += b);
-                    x
-                },
-            );
-        acc.iter_mut().zip(&sum).for_each(|(a, s)| *a += s);
+        add_block_sums(acc, nblocks, |b| {
+            let mut part = vec![0u64; bins];
+            let mut factors = Vec::new();
+            self.block_factors(seed, profile, shots, b, &mut factors);
+            let mut envelope = ShotCounts::new(bins);
+            let mut rng = stream_rng(seed, profile, b);
+            self.add_block(&mut rng, &factors, &mut part, &mut envelope);
+            part
+        });
     }
 }
 

@@ -207,6 +207,25 @@ pub fn stream_rng(seed: u64, profile: u64, block: u64) -> Pcg64Mcg {
     Pcg64Mcg::new((u128::from(h) << 64) | u128::from(lo))
 }
 
+/// Adds into `acc` the counts of blocks `0..nblocks`, each drawn by `block` into a
+/// buffer of its own (of `acc.len()` bins), the blocks in parallel (rayon): integer sums,
+/// so the result does not depend on the thread count.
+pub fn add_block_sums(
+    acc: &mut [u64],
+    nblocks: u64,
+    block: impl Fn(u64) -> Vec<u64> + Sync + Send,
+) {
+    let bins = acc.len();
+    let sum = (0..nblocks).into_par_iter().map(block).reduce(
+        || vec![0u64; bins],
+        |mut x, y| {
+            x.iter_mut().zip(&y).for_each(|(a, b)| *a += b);
+            x
+        },
+    );
+    acc.iter_mut().zip(&sum).for_each(|(a, s)| *a += s);
+}
+
 /// Accumulate one profile of `shots` shots by the shot path into `acc`.
 ///
 /// Shots are cut into blocks of [`SHOT_BLOCK`]; block `b` is drawn with

@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod cli;
+pub mod h5;
 pub mod reference;
 
 use std::path::{Path, PathBuf};

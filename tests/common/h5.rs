@@ -1,0 +1,58 @@
+//! Reading a raw file's variables in tests, with the hdf5 crate.
+
+use std::path::Path;
+
+use super::cli::{lidarsim, ok};
+
+/// A float variable's values, C order.
+pub fn floats(f: &hdf5::File, name: &str) -> Vec<f64> {
+    f.dataset(name)
+        .unwrap_or_else(|_| panic!("no `{name}`"))
+        .read_raw::<f64>()
+        .unwrap()
+}
+
+/// A string variable's values.
+pub fn strings(f: &hdf5::File, name: &str) -> Vec<String> {
+    f.dataset(name)
+        .unwrap_or_else(|_| panic!("no `{name}`"))
+        .read_raw::<hdf5::types::VarLenUnicode>()
+        .unwrap()
+        .iter()
+        .map(|s| s.as_str().to_string())
+        .collect()
+}
+
+/// A (channel, bin) variable, or a one-column file's (column, channel, bin), as one row
+/// per channel.
+pub fn channel_rows(f: &hdf5::File, name: &str, channels: usize) -> Vec<Vec<f64>> {
+    let v = floats(f, name);
+    let bins = v.len() / channels;
+    v.chunks(bins).map(<[f64]>::to_vec).collect()
+}
+
+/// `lidarsim simulate CONFIG -o OUT --profiles N` in `dir`, opened.
+pub fn simulate(dir: &Path, config: &Path, out: &str, profiles: &str) -> hdf5::File {
+    let args = [
+        "simulate",
+        config.to_str().unwrap(),
+        "-o",
+        out,
+        "--profiles",
+        profiles,
+    ];
+    ok(lidarsim(dir, &args, &[]));
+    hdf5::File::open(dir.join(out)).unwrap()
+}
+
+/// `lidarsim validate CONFIG --method M` is CONSISTENT (exit 0) for the aggregate and the
+/// shot path (its statistics' false-alarm rate is `validate`'s own; fixed seed).
+pub fn validate_consistent_both_ways(dir: &Path, config: &Path) {
+    for method in ["aggregate", "shot"] {
+        let args = ["validate", config.to_str().unwrap(), "--method", method];
+        let o = lidarsim(dir, &args, &[]);
+        let out = String::from_utf8_lossy(&o.stdout).to_string();
+        assert_eq!(o.status.code(), Some(0), "{method}: {out}");
+        assert!(out.contains("CONSISTENT"), "{out}");
+    }
+}
