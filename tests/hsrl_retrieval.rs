@@ -153,3 +153,34 @@ fn validate_is_consistent_on_the_preset() {
     validate_consistent_both_ways(&dir, &config_path("instruments/atlid_like.toml"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The surface echo is an unbroadened line at the laser's wavelength: an HSRL molecular
+/// channel sees `f_p` of it, a Raman channel none (its filter blocks the laser line).
+/// Raising the albedo from 0.3 to 0.6 adds to each channel's expected signal exactly
+/// `particle_transmission` times what it adds to the co-polar total channel (same
+/// lidar constant and polarization), and nothing to a Raman channel's.
+#[test]
+fn the_surface_echo_passes_the_particle_share_and_no_raman_line() {
+    let base = std::fs::read_to_string(config_path("instruments/atlid_like.toml")).unwrap();
+    let raman = "[[instrument.channels]]\nname = \"387_raman_N2\"\nkind = \"raman\"\n\n[platform]";
+    let text = base.replacen("[platform]", raman, 1);
+    let added = |albedo: &str| -> Vec<Vec<f64>> {
+        let over = vec![format!("surface.albedo={albedo}")];
+        let loaded =
+            lidarsim::loaded::load_str(&text, std::path::Path::new("a.toml"), &over).unwrap();
+        let lidar = lidarsim::scenario::Lidar::from_loaded(loaded).unwrap();
+        lidar
+            .expected()
+            .unwrap()
+            .into_iter()
+            .map(|e| e.signal)
+            .collect()
+    };
+    let (low, high) = (added("0.3"), added("0.6"));
+    let delta: Vec<f64> = (0..4)
+        .map(|k| low[k].iter().zip(&high[k]).map(|(a, b)| b - a).sum())
+        .collect();
+    assert!(delta[0] > 0.0);
+    assert!((delta[1] / delta[0] / 0.02 - 1.0).abs() < 1e-9, "{delta:?}");
+    assert_eq!(delta[3], 0.0, "{delta:?}");
+}
