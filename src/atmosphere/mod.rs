@@ -49,8 +49,10 @@ impl RamanReturn {
     /// that `T² = T_λ₀·T_λR` (model.md §8).
     fn optics(&self, up: &Optics, z_m: f64) -> Optics {
         let down = self.line.elastic_optics_at(z_m);
-        let beta_r =
-            self.line.molecules.number_density_m3(z_m) * self.backscatter_per_air_molecule_m2_sr;
+        // β_R = N·σ_R from the Rayleigh extinction N·σ(λ_R) already computed: the
+        // number density is evaluated once per point
+        let beta_r = down.alpha_mol
+            * (self.backscatter_per_air_molecule_m2_sr / self.line.molecules.cross_section_m2);
         Optics {
             beta_mol: beta_r,
             beta_aer: 0.0,
