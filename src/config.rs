@@ -284,6 +284,21 @@ pub struct AtmosphereConfig {
     /// (`src/atmosphere/ozone.rs`); on unless set to false.
     #[serde(default = "yes")]
     pub ozone: bool,
+    /// Water vapour (`src/atmosphere/water_vapour.rs`): what an H₂O Raman channel sees;
+    /// absent = none (and no H₂O channel).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub water_vapour: Option<WaterVapourConfig>,
+}
+
+/// A water-vapour mixing-ratio profile (`[atmosphere.water_vapour]`): rows of altitude
+/// and mass mixing ratio to dry air, checked by `src/atmosphere/water_vapour.rs`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct WaterVapourConfig {
+    /// Altitudes above sea level, km, strictly increasing.
+    pub altitude_km: Vec<f64>,
+    /// Mass mixing ratio of water vapour to dry air at those altitudes, g kg⁻¹.
+    pub mixing_ratio_g_per_kg: Vec<f64>,
 }
 
 /// Molecular atmosphere options.
@@ -482,6 +497,10 @@ pub struct SegmentConfig {
     /// The surface of this stretch (replacing `[surface]`); absent = that one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub surface: Option<SurfaceConfig>,
+    /// The water vapour of this stretch (replacing `[atmosphere.water_vapour]`); absent
+    /// = that one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub water_vapour: Option<WaterVapourConfig>,
 }
 
 /// A segment's aerosol: `"none"` or a whole `[atmosphere.aerosol]` table.
@@ -943,6 +962,8 @@ pub struct OwnerChecks {
     pub detector: OwnerCheck,
     /// `atmosphere.ozone` (the ozone cross-section table).
     pub ozone: OwnerCheck,
+    /// `[atmosphere.water_vapour]` and the segments' (the mixing-ratio profile).
+    pub water_vapour: OwnerCheck,
     /// `[orbit]` (an orbit that exists).
     pub orbit: OwnerCheck,
     /// `[simulation]` (the sampler's tolerance).
@@ -1430,6 +1451,7 @@ impl ScenarioConfig {
         }
         c.range("atmosphere.molecular.grid_m", m.grid_m, 0.1, 1000.0)?;
         (owners.ozone)(self, c)?;
+        (owners.water_vapour)(self, c)?;
         if let Some(a) = &self.atmosphere.aerosol {
             c.positive("atmosphere.aerosol.visibility_km", a.visibility_km, 1e4)?;
             c.range(

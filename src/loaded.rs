@@ -103,6 +103,7 @@ const OWNERS: OwnerChecks = OwnerChecks {
     laser: crate::laser::validate,
     detector: crate::detector::validate,
     ozone: crate::atmosphere::ozone::validate,
+    water_vapour: crate::atmosphere::water_vapour::validate,
     orbit: crate::scene::orbit::validate,
     simulation: |config, c| crate::sampling::approx::validate(&config.simulation, c),
 };

@@ -389,7 +389,7 @@ impl Scenario {
             e.altitude_m.push(z);
             e.range_m.push(r);
             e.point.push(o);
-            e.state.push(self.atmosphere.molecules.state_at(z));
+            e.state.push(self.atmosphere.state_at(z));
             e.overlap.push(self.path.overlap().eta(r));
             e.t2.push(self.path.two_way_transmission(r));
             e.signal.push(signal);
@@ -419,7 +419,7 @@ impl Scenario {
         e.altitude_m.push(self.geometry.altitude_at_range(r_m));
         e.range_m.push(r_m);
         e.point.push(self.atmosphere.no_optics());
-        e.state.push(self.atmosphere.molecules.state_at(station_m));
+        e.state.push(self.atmosphere.state_at(station_m));
         e.overlap.push(0.0);
         e.t2.push(1.0);
         e.signal.push(0.0);

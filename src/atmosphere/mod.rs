@@ -9,6 +9,7 @@ pub mod profile_file;
 pub mod raman;
 pub mod rayleigh;
 pub mod us76;
+pub mod water_vapour;
 
 use crate::config::{
     Channel, ExtinctionSource, LayerKind, MolecularLine, MolecularModel, ScenarioConfig,
@@ -16,7 +17,7 @@ use crate::config::{
 use crate::constants::BOLTZMANN_J_PER_K;
 use crate::error::Result;
 use crate::loaded::LoadedConfig;
-use crate::receiver::{ChannelKind, LineTransmission};
+use crate::receiver::{ChannelKind, LineTransmission, RamanSpecies};
 use profile_file::MolecularProfile;
 
 /// Temperature at which a Raman channel's band cross-section is taken, K: the band
@@ -26,22 +27,33 @@ use profile_file::MolecularProfile;
 pub const RAMAN_TEMPERATURE_K: f64 = 288.15;
 
 /// What a Raman channel sees (docs/model.md §4h): the atmosphere at its detected line,
-/// which attenuates the return on its way back, and the Raman backscatter per air
-/// molecule.
+/// which attenuates the return on its way back, and the species' band.
 #[derive(Debug, Clone)]
 pub struct RamanReturn {
-    /// The species (`N2`).
-    pub species: &'static str,
+    /// The species (`N2`, `H2O`).
+    pub species: RamanSpecies,
     /// The detected line, nm.
     pub line_nm: f64,
-    /// The atmosphere at the detected line (its elastic optics give the extinction back).
+    /// The atmosphere at the detected line (its elastic optics give the extinction back;
+    /// it carries the water-vapour profile).
     pub line: Box<Atmosphere>,
-    /// The species' share of the air's molecules times its band's backscatter
-    /// cross-section at the laser line, m² sr⁻¹: `β_R = N·this`.
-    pub backscatter_per_air_molecule_m2_sr: f64,
+    /// The species' band backscatter cross-section at the laser line times the share of
+    /// the band the filter passes, m² sr⁻¹ (`raman::n2_backscatter_cross_section_m2_sr`,
+    /// `raman::h2o_…`).
+    pub cross_section_m2_sr: f64,
 }
 
 impl RamanReturn {
+    /// The species' molecules per air molecule at `z_m`: N₂'s share of dry air, or the
+    /// water-vapour profile's `w·M_d/M_w`.
+    pub fn molecules_per_air_molecule(&self, z_m: f64) -> f64 {
+        match (self.species, &self.line.water_vapour) {
+            (RamanSpecies::N2, _) => raman::N2_FRACTION_OF_AIR,
+            (RamanSpecies::H2O, Some(w)) => w.molecules_per_air_molecule(z_m),
+            (RamanSpecies::H2O, None) => 0.0,
+        }
+    }
+
     /// The optics a Raman channel sees at `z_m`, from the elastic optics `up` at the laser
     /// line: extinction by species at the detected line (the truth of the channel), the
     /// Raman backscatter as the molecular one (particles scatter no Raman light), and
@@ -49,10 +61,11 @@ impl RamanReturn {
     /// that `T² = T_λ₀·T_λR` (model.md §8).
     fn optics(&self, up: &Optics, z_m: f64) -> Optics {
         let down = self.line.elastic_optics_at(z_m);
-        // β_R = N·σ_R from the Rayleigh extinction N·σ(λ_R) already computed: the
+        // β_R = N_X·σ_R from the Rayleigh extinction N·σ(λ_R) already computed: the
         // number density is evaluated once per point
         let beta_r = down.alpha_mol
-            * (self.backscatter_per_air_molecule_m2_sr / self.line.molecules.cross_section_m2);
+            * self.molecules_per_air_molecule(z_m)
+            * (self.cross_section_m2_sr / self.line.molecules.cross_section_m2);
         Optics {
             beta_mol: beta_r,
             beta_aer: 0.0,
@@ -165,6 +178,7 @@ impl Molecules {
             pressure_pa,
             temperature_k,
             number_density_m3: n,
+            water_vapour_mixing_ratio: f64::NAN,
         }
     }
 
@@ -186,6 +200,9 @@ pub struct MolecularState {
     pub temperature_k: f64,
     /// Number density, m⁻³: the one the model uses, `p/(k_B·T)` where p and T are known.
     pub number_density_m3: f64,
+    /// Mass mixing ratio of water vapour to dry air, kg kg⁻¹ (NaN where the scene has no
+    /// water-vapour profile; `Atmosphere::state_at` fills it).
+    pub water_vapour_mixing_ratio: f64,
 }
 
 /// The background aerosol of Eq. 5–6: `α_aer(z) = α_aer(0)·Np(z)/Np(0)`.
@@ -355,6 +372,8 @@ pub struct Atmosphere {
     pub ozone_cross_section_m2: Option<f64>,
     /// A Raman channel's return (None for an elastic channel).
     pub raman: Option<RamanReturn>,
+    /// The water-vapour profile (`[atmosphere.water_vapour]`), if the scene has one.
+    pub water_vapour: Option<water_vapour::WaterVapour>,
     /// What the channel's filter passes of the elastic molecular (Cabannes) and particle
     /// lines: 1 and 1 but in an HSRL molecular channel.
     pub lines: LineTransmission,
@@ -447,6 +466,11 @@ impl Atmosphere {
                 .then(|| ozone::cross_section_m2(wl))
                 .filter(|s| *s > 0.0),
             raman: raman_return(loaded)?,
+            water_vapour: cfg
+                .atmosphere
+                .water_vapour
+                .as_ref()
+                .map(water_vapour::WaterVapour::from_config),
             lines: channel.map_or(LineTransmission::ELASTIC, |c| c.lines),
         })
     }
@@ -471,19 +495,36 @@ impl Atmosphere {
     /// the elastic molecular line its filter passes), `raman_N2`.
     pub fn molecular_line_name(&self) -> String {
         match &self.raman {
-            Some(r) => format!("raman_{}", r.species),
+            Some(r) => format!("raman_{}", r.species.name()),
             None if self.molecules.cabannes => "cabannes".into(),
             None => "whole".into(),
         }
     }
 
     /// `α_mol/β_mol` of what the channel sees, sr: the molecular lidar ratio of its part
-    /// of the elastic line, or for a Raman channel the Rayleigh extinction at the Raman
-    /// line over the Raman backscatter (both ∝ N: a constant).
+    /// of the elastic line, or for an N₂ Raman channel the Rayleigh extinction at the
+    /// Raman line over the Raman backscatter (both ∝ N: a constant); NaN for an H₂O one
+    /// (its backscatter follows the mixing ratio, not the air).
     pub fn molecular_lidar_ratio_sr(&self) -> f64 {
         match &self.raman {
-            Some(r) => r.line.molecules.cross_section_m2 / r.backscatter_per_air_molecule_m2_sr,
+            Some(r) if r.species == RamanSpecies::N2 => {
+                r.line.molecules.cross_section_m2
+                    / (raman::N2_FRACTION_OF_AIR * r.cross_section_m2_sr)
+            }
+            Some(_) => f64::NAN,
             None => self.molecules.lidar_ratio_sr,
+        }
+    }
+
+    /// The state at altitude `z_m`: the molecules' ([`Molecules::state_at`]) and the
+    /// water-vapour mixing ratio (NaN without a profile).
+    pub fn state_at(&self, z_m: f64) -> MolecularState {
+        MolecularState {
+            water_vapour_mixing_ratio: self
+                .water_vapour
+                .as_ref()
+                .map_or(f64::NAN, |w| w.mixing_ratio_kg_per_kg(z_m)),
+            ..self.molecules.state_at(z_m)
         }
     }
 
@@ -609,7 +650,7 @@ impl Atmosphere {
 
 /// A Raman channel's return: its atmosphere at the detected line (the layers' and the
 /// aerosol's values carried there by their Ångström exponents, Rayleigh and ozone at that
-/// line) and the N₂ band's backscatter (docs/model.md §4h); None for another kind.
+/// line) and the species' band backscatter (docs/model.md §4h); None for another kind.
 fn raman_return(loaded: &LoadedConfig) -> Result<Option<RamanReturn>> {
     let Some(channel) = loaded
         .channels
@@ -624,13 +665,17 @@ fn raman_return(loaded: &LoadedConfig) -> Result<Option<RamanReturn>> {
     down.config.instrument.wavelength_nm = line_nm;
     down.channels[0].kind = ChannelKind::Elastic;
     down.channels[0].config.instrument.wavelength_nm = line_nm;
-    let share = raman::N2_FRACTION_OF_AIR;
+    let cross_section_m2_sr = match channel.species {
+        RamanSpecies::N2 => {
+            raman::n2_backscatter_cross_section_m2_sr(laser_nm, RAMAN_TEMPERATURE_K)
+        }
+        RamanSpecies::H2O => raman::h2o_backscatter_cross_section_m2_sr(laser_nm),
+    };
     Ok(Some(RamanReturn {
-        species: channel.species.name(),
+        species: channel.species,
         line_nm,
         line: Box::new(Atmosphere::from_config(&down)?),
-        backscatter_per_air_molecule_m2_sr: share
-            * raman::n2_backscatter_cross_section_m2_sr(laser_nm, RAMAN_TEMPERATURE_K),
+        cross_section_m2_sr: cross_section_m2_sr * channel.band_transmission,
     }))
 }
 

@@ -42,9 +42,18 @@ use crate::constants::{
 pub const N2_SHIFT_PER_M: f64 = 233_070.0;
 
 /// Vibrational wavenumber of H₂O (the ν₁ Q branch), m⁻¹: 3652 cm⁻¹ (Wandinger 2005,
-/// p. 251): 354.7 → 407.5 nm, 532.1 → 660.4 nm. Only the line: lidarsim does not model
-/// water vapour's profile or cross-section yet.
+/// p. 251): 354.7 → 407.5 nm, 532.1 → 660.4 nm.
 pub const H2O_SHIFT_PER_M: f64 = 365_200.0;
+
+/// The whole H₂O stretching band's differential backscatter cross-section excited at
+/// 354.7 nm, m² sr⁻¹: Avila, Fernández, Tejeda & Montero (2004, J. Mol. Spectrosc. 228,
+/// 38), Table 4 (819 lines of the ν₁ and ν₃ bands and 2ν₂), their Eq. 15
+/// `σ_line = ν̃_s⁴·exp(−E/kT)/Z(T)·Φ`, summed over the ν₁ and ν₃ lines and both of the
+/// table's polarization components (parallel and perpendicular), at 288.15 K.
+pub const H2O_BAND_CROSS_SECTION_355_M2_SR: f64 = 9.087e-34;
+
+/// The laser line of [`H2O_BAND_CROSS_SECTION_355_M2_SR`], nm.
+pub const H2O_REFERENCE_LASER_NM: f64 = 354.7;
 
 /// Volume (number) fraction of N₂ in dry air (U.S. Standard Atmosphere 1976, Table 3).
 pub const N2_FRACTION_OF_AIR: f64 = 0.780_84;
@@ -105,6 +114,25 @@ pub fn n2_backscatter_cross_section_m2_sr(laser_nm: f64, temperature_k: f64) -> 
         * (a_sq + 7.0 / 45.0 * g_sq)
 }
 
+/// Differential backscatter cross-section of the H₂O stretching band excited at
+/// `laser_nm`, m² sr⁻¹ (Eq. R2): Avila et al.'s band at 354.7 nm carried by the fourth
+/// power of the Raman line's wavenumber, as their Eq. 15 carries each line:
+///
+/// ```text
+/// dσ_H2O/dΩ(π; λ₀) = σ_A · (ν̃_R(λ₀)/ν̃_R(354.7 nm))⁴,   ν̃_R = 1/λ₀ − 3652 cm⁻¹       (R2)
+/// ```
+///
+/// Against the band summed line by line at each laser line: 0.08 % above at 337.1 nm,
+/// 0.4 % above at 532.1 nm (1.312e-34 m² sr⁻¹). The band's temperature dependence
+/// (−0.1 % from 250 to 300 K) is neglected. It is 3.31 times the N₂ band (R1) at 354.7
+/// nm, 3.26 times at 532.1 nm; about 85 % of it lies in the ν₁ Q branch (3600–3670
+/// cm⁻¹), which a narrow filter passes alone (`band_transmission`).
+pub fn h2o_backscatter_cross_section_m2_sr(laser_nm: f64) -> f64 {
+    let line_wavenumber = |nm: f64| 1.0 / shifted_wavelength_nm(nm, H2O_SHIFT_PER_M);
+    H2O_BAND_CROSS_SECTION_355_M2_SR
+        * (line_wavenumber(laser_nm) / line_wavenumber(H2O_REFERENCE_LASER_NM)).powi(4)
+}
+
 #[cfg(test)]
 mod tests {
     //! Internal properties; the comparison with ARC and with Inaba & Kobayasi is in
@@ -129,6 +157,22 @@ mod tests {
         let line = shifted_wavelength_nm(532.1, N2_SHIFT_PER_M);
         assert!(line > 532.1);
         assert!((shifted_wavelength_nm(line, -N2_SHIFT_PER_M) - 532.1).abs() < 1e-9);
+    }
+
+    /// Eq. R2 against Avila et al.'s (2004) band summed line by line (their Table 4 and
+    /// Eq. 15, ν₁ + ν₃, both polarizations, 288.15 K) at the other laser lines:
+    /// 1.148e-33 m² sr⁻¹ at 337.1 nm and 1.312e-34 at 532.1 nm. A 1 % error in the
+    /// anchor or the λ⁻⁴ law's exponent off by 0.1 fails.
+    #[test]
+    fn the_water_band_follows_the_line_sums_at_other_laser_lines() {
+        for (laser_nm, sum, tol) in [(337.1, 1.148e-33, 2e-3), (532.1, 1.312e-34, 5e-3)] {
+            let got = h2o_backscatter_cross_section_m2_sr(laser_nm);
+            assert!(
+                (got / sum - 1.0).abs() < tol,
+                "{laser_nm} nm: {got:e} vs {sum:e}"
+            );
+        }
+        assert_eq!(h2o_backscatter_cross_section_m2_sr(354.7), 9.087e-34);
     }
 
     #[test]

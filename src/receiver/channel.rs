@@ -40,7 +40,7 @@ pub enum RamanSpecies {
     /// Nitrogen, 0.78084 of the air's molecules (default).
     #[default]
     N2,
-    /// Water vapour: named so that a config asking for it is told it is not modelled yet.
+    /// Water vapour, from the `[atmosphere.water_vapour]` mixing-ratio profile.
     H2O,
 }
 
@@ -118,6 +118,9 @@ pub struct ChannelConfig {
     /// What the channel's filter passes of the elastic lines: 1 and 1 but in an HSRL
     /// molecular channel.
     pub lines: LineTransmission,
+    /// The share of a Raman channel's band its filter passes (1: the whole band; 1 for
+    /// other kinds).
+    pub band_transmission: f64,
     /// The whole config with `[instrument]` as this channel sees it.
     pub config: ScenarioConfig,
 }
@@ -242,14 +245,39 @@ pub fn line_transmission(
     })
 }
 
+/// A channel's `band_transmission` (None when absent): on a Raman channel the share of
+/// the band its filter passes, in (0, 1], 1 when absent; other kinds refuse the key.
+pub fn band_transmission(
+    kind: ChannelKind,
+    given: Option<f64>,
+    key: &dyn Fn(&str) -> String,
+    file: &str,
+) -> Result<f64> {
+    match (kind, given) {
+        (_, None) => Ok(1.0),
+        (ChannelKind::Raman, Some(t)) if t > 0.0 && t <= 1.0 => Ok(t),
+        (ChannelKind::Raman, Some(_)) => Err(Error::config(
+            file,
+            key("band_transmission"),
+            "must be in (0, 1] (the share of the Raman band the filter passes)",
+        )),
+        (_, Some(_)) => Err(Error::config(
+            file,
+            key("band_transmission"),
+            "is for Raman channels (kind = \"raman\")",
+        )),
+    }
+}
+
 /// The checks of a channel's kind against its other keys (`key` gives an entry's key):
-/// `species` only on a Raman channel, N2 only (H2O needs a humidity profile lidarsim
-/// does not model yet), and a Raman channel sees the total band (its depolarization is
+/// `species` only on a Raman channel, H2O only with a water-vapour profile
+/// (`has_water_vapour`), and a Raman channel sees the total band (its depolarization is
 /// not modelled).
 pub fn check_kind(
     kind: ChannelKind,
     species: Option<RamanSpecies>,
     polarization: Channel,
+    has_water_vapour: bool,
     key: &dyn Fn(&str) -> String,
     file: &str,
 ) -> Result<()> {
@@ -259,11 +287,11 @@ pub fn check_kind(
             key("species"),
             "is for Raman channels (kind = \"raman\"); an elastic channel sees the laser line",
         )),
-        (ChannelKind::Raman, Some(RamanSpecies::H2O)) => Err(Error::config(
+        (ChannelKind::Raman, Some(RamanSpecies::H2O)) if !has_water_vapour => Err(Error::config(
             file,
             key("species"),
-            "H2O needs a water-vapour mixing-ratio profile, which lidarsim does not model \
-             yet; \"N2\" is the species it simulates",
+            "H2O needs a water-vapour profile: give [atmosphere.water_vapour] \
+                 (altitude_km, mixing_ratio_g_per_kg)",
         )),
         (ChannelKind::Raman, _) if polarization != Channel::Total => Err(Error::config(
             file,

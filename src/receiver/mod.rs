@@ -68,6 +68,7 @@ pub fn expand(
             kind: ChannelKind::default(),
             species: RamanSpecies::default(),
             lines: LineTransmission::ELASTIC,
+            band_transmission: 1.0,
             config: base.clone(),
         }]);
     }
@@ -113,6 +114,7 @@ fn expand_one(
     let mut kind = ChannelKind::default();
     let mut species = None;
     let mut lines = (None, None);
+    let mut band = None;
     {
         let Some(toml::Value::Table(inst)) = root.get_mut("instrument") else {
             return Err(Error::config(file, "instrument", "must be a table"));
@@ -131,6 +133,7 @@ fn expand_one(
                 }
                 "molecular_transmission" => lines.0 = Some(number(value, &key(field), file)?),
                 "particle_transmission" => lines.1 = Some(number(value, &key(field), file)?),
+                "band_transmission" => band = Some(number(value, &key(field), file)?),
                 "polarization" | "channel" => {
                     inst.remove("polarization");
                     inst.insert("channel".into(), value.clone());
@@ -178,13 +181,22 @@ fn expand_one(
     let in_channel = |e: Error| rename_key(e, k, entry, &label);
     let config = config::deserialize(toml::Value::Table(root), file).map_err(in_channel)?;
     validate(&config, file).map_err(in_channel)?;
-    channel::check_kind(kind, species, config.instrument.channel, &key, file)?;
+    channel::check_kind(
+        kind,
+        species,
+        config.instrument.channel,
+        config.atmosphere.water_vapour.is_some(),
+        &key,
+        file,
+    )?;
     let lines = channel::line_transmission(kind, lines, &key, file)?;
+    let band_transmission = channel::band_transmission(kind, band, &key, file)?;
     let mut channel = ChannelConfig {
         name: String::new(),
         kind,
         species: species.unwrap_or_default(),
         lines,
+        band_transmission,
         config,
     };
     channel.name = name.unwrap_or_else(|| channel.default_name());

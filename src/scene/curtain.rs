@@ -161,6 +161,7 @@ pub fn segments(path: &Path) -> Result<Vec<SegmentConfig>> {
                 layers: Some(layers),
                 aerosol: None,
                 surface: None,
+                water_vapour: None,
             }
         })
         .collect())

@@ -233,7 +233,7 @@ impl Track {
         most.min(cap)
     }
 
-    /// The config of one column: the segment's layers, aerosol and surface in place of
+    /// The config of one column: the segment's layers, aerosol, surface and water vapour in place of
     /// the atmosphere's, its absent broken layers removed and its present ones whole.
     pub fn column_config(&self, base: &ScenarioConfig, c: Column) -> ScenarioConfig {
         let mut cfg = base.clone();
@@ -246,6 +246,9 @@ impl Track {
             }
             if let Some(s) = &seg.surface {
                 cfg.surface = Some(s.clone());
+            }
+            if let Some(w) = &seg.water_vapour {
+                cfg.atmosphere.water_vapour = Some(w.clone());
             }
         }
         let mut k = 0;

@@ -576,6 +576,7 @@ fn column_scenario(
             kind: c.loaded.channels[0].kind,
             species: c.loaded.channels[0].species,
             lines: c.loaded.channels[0].lines,
+            band_transmission: c.loaded.channels[0].band_transmission,
             config: config.clone(),
         }],
         config,

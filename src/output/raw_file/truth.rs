@@ -121,7 +121,7 @@ pub(crate) const COLUMN_TRUTH: [(&str, &str, &str, Truth); 17] = [
 
 /// The molecular state at the bin centre, each (column, bin): name, long name, units,
 /// standard name, value.
-const COLUMN_STATE: [(&str, &str, &str, &str, Truth); 3] = [
+const COLUMN_STATE: [(&str, &str, &str, &str, Truth); 4] = [
     (
         "pressure",
         "air pressure at the bin centre",
@@ -143,6 +143,13 @@ const COLUMN_STATE: [(&str, &str, &str, &str, Truth); 3] = [
         "",
         |e, i| e.state[i].number_density_m3,
     ),
+    (
+        "water_vapour_mixing_ratio",
+        "mass mixing ratio of water vapour to dry air at the bin centre (written when the scene has a water-vapour profile)",
+        "g kg-1",
+        "humidity_mixing_ratio",
+        |e, i| e.state[i].water_vapour_mixing_ratio * 1e3,
+    ),
 ];
 
 /// The truth of every column of the scene: `columns[c][k]` is column `c`'s model of
@@ -162,7 +169,17 @@ pub fn column_variables(lidar: &Lidar, columns: &[&[ExpectedProfile]]) -> Vec<Va
         }
         vars.push(v);
     }
+    let config = &lidar.channels[0].loaded.config;
+    let humid = config.atmosphere.water_vapour.is_some()
+        || config
+            .scene
+            .iter()
+            .flat_map(|s| s.segments.iter())
+            .any(|s| s.water_vapour.is_some());
     for (name, long_name, units, standard_name, f) in COLUMN_STATE {
+        if name == "water_vapour_mixing_ratio" && !humid {
+            continue;
+        }
         let mut data = Vec::new();
         for e in columns.iter().map(|col| &col[0]) {
             data.extend((0..e.n_bins()).map(|i| f(e, i)));
@@ -224,7 +241,7 @@ pub fn channel_text(lidar: &Lidar) -> Vec<TextVariable> {
                 c.atmosphere
                     .raman
                     .as_ref()
-                    .map_or_else(String::new, |r| r.species.into())
+                    .map_or_else(String::new, |r| r.species.name().into())
             },
         ),
         text(
@@ -312,6 +329,14 @@ pub fn instrument_variables(lidar: &Lidar, e0: &ExpectedProfile) -> Vec<Variable
             "1",
             &[],
             per(|c| c.loaded.channels[0].lines.particle),
+        ),
+        var(
+            "band_transmission",
+            Channel,
+            "share of the Raman band the channel's filter passes (1 but in raman channels that give less)",
+            "1",
+            &[],
+            per(|c| c.loaded.channels[0].band_transmission),
         ),
         var(
             "molecular_lidar_ratio",
