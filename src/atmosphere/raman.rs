@@ -1,6 +1,8 @@
-//! Vibrational Raman backscatter by N₂ (model.md §8 "Raman channels"; docs/model.md
-//! §4h): the line a Raman channel detects and the molecule's differential backscatter
-//! cross-section, from which `β_R(z) = N_N2(z) · dσ_R/dΩ(π)`.
+//! Vibrational Raman backscatter by N₂ and H₂O (model.md §8 "Raman channels";
+//! docs/model.md §4h): the line a Raman channel detects and the molecule's differential
+//! backscatter cross-section, from which `β_R(z) = N_X(z) · dσ_R/dΩ(π)`. N₂ below; H₂O
+//! at [`h2o_backscatter_cross_section_m2_sr`] (Eq. R2), its number density from
+//! `super::water_vapour`.
 //!
 //! **Line.** A laser line λ₀ is shifted by the molecule's vibrational wavenumber Δν̃:
 //! `1/λ_R = 1/λ₀ − Δν̃` (Stokes side). N₂: Δν̃ = 2330.7 cm⁻¹ (Wandinger 2005, in Weitkamp
