@@ -11,10 +11,12 @@
 //! into pieces no longer than 10 % of their start range; on each piece `g` is replaced by
 //! its degree-5 interpolant at Chebyshev nodes (relative error < 2e-9 for `1/r²`), and
 //! the exponential is integrated exactly against each power through the moments
-//! `μ_j(t) = ∫₀¹ y^j e^{−ty} dy` (product integration). The moments use a power series
-//! for `t < 2` and the stable upward recursion `μ_j = (j·μ_{j−1} − e^{−t})/t` (with
-//! `μ_0 = −expm1(−t)/t`) above, so α → 0 and optical depths in the hundreds are both
-//! accurate; `T²` underflows to 0, never to NaN.
+//! `μ_j(t) = ∫₀¹ y^j e^{−ty} dy` (product integration). The moments use, for `t < 2`, a
+//! power series for the highest and the downward recursion `μ_{j−1} = (t·μ_j + e^{−t})/j`
+//! (stable: it damps errors by t/j) for the others, and above the stable upward recursion
+//! `μ_j = (j·μ_{j−1} − e^{−t})/t` (with `μ_0 = −expm1(−t)/t`), so α → 0 and optical
+//! depths in the hundreds are both accurate; `T²` underflows to 0, never to NaN. Pieces
+//! shrink geometrically only towards the overlap's kinks, where η is not smooth.
 
 use std::sync::OnceLock;
 
@@ -64,6 +66,9 @@ pub struct BeamPath {
     surface: Option<SurfaceEcho>,
     /// Range below which η ≡ 0 (0 when the receiver sees from r = 0).
     zero_overlap_until_m: f64,
+    /// The overlap's kinks (`Overlap::breakpoints_m`), ascending: the bin integral splits
+    /// there and grades its pieces towards them.
+    kinks_m: Vec<f64>,
 }
 
 impl BeamPath {
@@ -130,11 +135,14 @@ impl BeamPath {
                 .fold(f64::INFINITY, f64::min)
                 .min(r_max)
         };
+        let mut kinks_m = overlap.breakpoints_m();
+        kinks_m.sort_by(f64::total_cmp);
         BeamPath {
             segments,
             overlap,
             surface,
             zero_overlap_until_m,
+            kinks_m,
         }
     }
 
@@ -226,37 +234,35 @@ impl BeamPath {
 
     /// `∫_a^b η(r)/r² · e^{−k(r−a)} dr`, splitting at the overlap's kinks.
     fn attenuated_range_integral(&self, a: f64, b: f64, k: f64) -> f64 {
-        let mut cuts: Vec<f64> = self
-            .overlap
-            .breakpoints_m()
-            .into_iter()
-            .filter(|r| *r > a && *r < b)
-            .collect();
-        cuts.sort_by(f64::total_cmp);
-        cuts.push(b);
+        let is_kink = |r: f64| self.kinks_m.contains(&r);
         let mut total = 0.0;
         let mut start = a;
-        for end in cuts {
-            total += (-k * (start - a)).exp() * self.smooth_range_integral(start, end, k);
+        let inside = self.kinks_m.iter().copied().filter(|r| *r > a && *r < b);
+        for end in inside.chain(std::iter::once(b)) {
+            let grade = (is_kink(start), is_kink(end));
+            total += (-k * (start - a)).exp() * self.smooth_range_integral(start, end, k, grade);
             start = end;
         }
         total
     }
 
     /// `∫_a^b η(r)/r² · e^{−k(r−a)} dr` where η is smooth inside (a, b): pieces of length
-    /// ≤ 10 % of their start range, product integration on each. With an overlap function
-    /// the pieces also shrink geometrically towards a and b, where η may have a
-    /// non-polynomial kink (circles starting to touch: η ∝ (r − r₀)^{3/2}).
-    fn smooth_range_integral(&self, a: f64, b: f64, k: f64) -> f64 {
-        let graded = !matches!(self.overlap, Overlap::Full);
+    /// ≤ 10 % of their start range, product integration on each. Towards an end that is
+    /// an overlap kink (`grade`: at a, at b), where η may have a non-polynomial kink
+    /// (circles starting to touch: η ∝ (r − r₀)^{3/2}), the pieces also shrink
+    /// geometrically, down to 0.1 mm.
+    fn smooth_range_integral(&self, a: f64, b: f64, k: f64, grade: (bool, bool)) -> f64 {
         let mut total = 0.0;
         let mut s = a;
         while s < b {
             let mut w = (MAX_PIECE_FRACTION * s).min(b - s);
-            if graded {
-                let to_edge = (s - a).min(b - s);
-                w = w.min(GRADED_MIN_PIECE_M.max(0.5 * to_edge)).min(b - s);
-            }
+            let to_kink = match grade {
+                (true, true) => (s - a).min(b - s),
+                (true, false) => s - a,
+                (false, true) => b - s,
+                (false, false) => f64::INFINITY,
+            };
+            w = w.min(GRADED_MIN_PIECE_M.max(0.5 * to_kink)).min(b - s);
             let decay = (-k * (s - a)).exp();
             if decay == 0.0 {
                 break;
@@ -336,20 +342,26 @@ fn product_weights(t: f64) -> [f64; NODES] {
 /// upward recursion from `μ_0 = −expm1(−t)/t` above (stable there since j/t ≤ 2.5).
 pub fn exponential_moments(t: f64) -> [f64; NODES] {
     if t < 2.0 {
-        std::array::from_fn(|j| {
-            // Σ_n (−t)^n / (n! (j+n+1))
-            let mut term = 1.0;
-            let mut sum = 1.0 / (j + 1) as f64;
-            for n in 1..60 {
-                term *= -t / n as f64;
-                let add = term / (j + n + 1) as f64;
-                sum += add;
-                if add.abs() < 1e-18 * sum.abs() {
-                    break;
-                }
+        // the highest moment by its series Σ_n (−t)^n / (n! (j+n+1)), the others by the
+        // downward recursion μ_{j−1} = (t·μ_j + e^{−t})/j, which damps errors by t/j
+        let j = NODES - 1;
+        let mut term = 1.0;
+        let mut top = 1.0 / (j + 1) as f64;
+        for n in 1..60 {
+            term *= -t / n as f64;
+            let add = term / (j + n + 1) as f64;
+            top += add;
+            if add.abs() < 1e-18 * top.abs() {
+                break;
             }
-            sum
-        })
+        }
+        let e = (-t).exp();
+        let mut mu = [0.0; NODES];
+        mu[j] = top;
+        for i in (1..NODES).rev() {
+            mu[i - 1] = (t * mu[i] + e) / i as f64;
+        }
+        mu
     } else {
         let e = (-t).exp();
         let mut mu = [0.0; NODES];
