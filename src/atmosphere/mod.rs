@@ -283,6 +283,9 @@ pub struct Optics {
     pub depol_mol: f64,
     /// Backscatter seen by the receiver channel, m⁻¹ sr⁻¹.
     pub beta_channel: f64,
+    /// The share of the Cabannes line the channel's filter passes here, `f_m`: 1 but in
+    /// an HSRL molecular channel, where a filter table makes it follow the temperature.
+    pub molecular_transmission: f64,
 }
 
 /// `a/b`, or `absent` where `b` is 0 (the species is not there).
@@ -377,6 +380,10 @@ pub struct Atmosphere {
     /// What the channel's filter passes of the elastic molecular (Cabannes) and particle
     /// lines: 1 and 1 but in an HSRL molecular channel.
     pub lines: LineTransmission,
+    /// An HSRL channel's filter table and the laser line, nm: then `f_m` is the share of
+    /// the Doppler-broadened Cabannes line at the point's temperature it passes
+    /// (`cabannes_line`, docs/model.md §4i), instead of `lines.molecular`.
+    pub molecular_filter: Option<(cabannes_line::SpectralFilter, f64)>,
 }
 
 impl Atmosphere {
@@ -445,6 +452,7 @@ impl Atmosphere {
             }
             _ => None,
         };
+        let molecular_filter = molecular_filter(loaded, &source)?;
         let molecules = Molecules {
             cabannes,
             us76_above_scale,
@@ -472,6 +480,7 @@ impl Atmosphere {
                 .as_ref()
                 .map(water_vapour::WaterVapour::from_config),
             lines: channel.map_or(LineTransmission::ELASTIC, |c| c.lines),
+            molecular_filter,
         })
     }
 
@@ -528,6 +537,24 @@ impl Atmosphere {
         }
     }
 
+    /// `f_m` at `z_m`: the filter table's share of the Cabannes line at the air's
+    /// temperature there (Eq. H2), or the channel's constant (also where the temperature
+    /// is unknown: no molecules there).
+    pub fn molecular_transmission_at(&self, z_m: f64) -> f64 {
+        match &self.molecular_filter {
+            None => self.lines.molecular,
+            Some((filter, wavelength_nm)) => {
+                let t = self.molecules.state_at(z_m).temperature_k;
+                if t.is_finite() && t > 0.0 {
+                    filter
+                        .molecular_transmission(cabannes_line::doppler_sigma_hz(*wavelength_nm, t))
+                } else {
+                    self.lines.molecular
+                }
+            }
+        }
+    }
+
     /// The optics where the beam sees nothing (below the surface, before the pulse
     /// leaves): every extinction and backscatter 0, the molecular line's depolarization
     /// kept (it describes the channel's line, not the air).
@@ -557,8 +584,9 @@ impl Atmosphere {
             ..Default::default()
         };
         o.beta_mol = o.alpha_mol / self.molecules.lidar_ratio_sr;
+        o.molecular_transmission = self.molecular_transmission_at(z_m);
         o.beta_channel =
-            self.lines.molecular * o.beta_mol * self.channel.share(o.depol_mol, self.crosstalk);
+            o.molecular_transmission * o.beta_mol * self.channel.share(o.depol_mol, self.crosstalk);
         if let Some(sigma) = self.ozone_cross_section_m2 {
             // absorption only: it attenuates, it does not backscatter
             o.alpha_o3 = sigma * ozone::number_density_m3(z_m);
@@ -677,6 +705,33 @@ fn raman_return(loaded: &LoadedConfig) -> Result<Option<RamanReturn>> {
         line: Box::new(Atmosphere::from_config(&down)?),
         cross_section_m2_sr: cross_section_m2_sr * channel.band_transmission,
     }))
+}
+
+/// An HSRL channel's filter table with its laser line, if it has one; a filter table
+/// needs the air's temperature, which a profile file of number densities does not give.
+fn molecular_filter(
+    loaded: &LoadedConfig,
+    source: &MolecularSource,
+) -> Result<Option<(cabannes_line::SpectralFilter, f64)>> {
+    let Some(filter) = loaded
+        .channels
+        .first()
+        .and_then(|c| c.spectral_filter.clone())
+    else {
+        return Ok(None);
+    };
+    if let MolecularSource::Profile(profile) = source
+        && profile.pressure_pa(profile.top_altitude_m()).is_none()
+    {
+        return Err(crate::error::Error::config(
+            loaded.file_label(),
+            "atmosphere.molecular.model.file",
+            "gives number densities only: an HSRL channel's spectral_filter needs the \
+                 air's temperature (a profile of altitude_km, pressure_hpa, temperature_k, or \
+                 \"us76\")",
+        ));
+    }
+    Ok(Some((filter, loaded.config.instrument.wavelength_nm)))
 }
 
 /// Eq. 5 near-surface extinction at the laser wavelength, from the visibility or from

@@ -11,6 +11,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::atmosphere::cabannes_line::{SpectralFilter, doppler_sigma_hz};
 use crate::config::{self, Channel, DetectorConfig, ScenarioConfig};
 use crate::error::{Error, Result};
 
@@ -121,6 +122,11 @@ pub struct ChannelConfig {
     /// The share of a Raman channel's band its filter passes (1: the whole band; 1 for
     /// other kinds).
     pub band_transmission: f64,
+    /// An HSRL molecular channel's filter as a table of transmission against frequency
+    /// offset (`spectral_filter`): then `f_m` follows the temperature (docs/model.md §4i)
+    /// and `lines` holds `f_p = t(0)` and `f_m` at 288.15 K.
+    #[serde(skip)]
+    pub spectral_filter: Option<SpectralFilter>,
     /// The whole config with `[instrument]` as this channel sees it.
     pub config: ScenarioConfig,
 }
@@ -244,6 +250,90 @@ pub fn line_transmission(
         particle,
     })
 }
+
+/// Temperature at which a filter table's `f_m` is reported as the channel's constant
+/// (`LineTransmission::molecular`), K: US76's sea level.
+pub const FILTER_REFERENCE_TEMPERATURE_K: f64 = 288.15;
+
+/// An HSRL channel's `spectral_filter = { offset_ghz = [...], transmission = [...] }`:
+/// the table ([`SpectralFilter`], offsets in GHz from the laser line, strictly
+/// increasing, transmissions in [0, 1], 1 to 10,000 points); only on an
+/// `hsrl_molecular` channel, and instead of `molecular_transmission` and
+/// `particle_transmission`. Returns the filter and the line shares it gives (`f_m` at
+/// 288.15 K, `f_p = t(0)`).
+pub fn spectral_filter(
+    value: &toml::Value,
+    kind: ChannelKind,
+    wavelength_nm: f64,
+    key: &dyn Fn(&str) -> String,
+    file: &str,
+) -> Result<(SpectralFilter, LineTransmission)> {
+    let name = key("spectral_filter");
+    let fail = |why: String| Error::config(file, &name, why);
+    if kind != ChannelKind::HsrlMolecular {
+        return Err(fail(
+            "is for HSRL molecular channels (kind = \"hsrl_molecular\")".into(),
+        ));
+    }
+    let table = value.as_table().ok_or_else(|| {
+        fail("must be a table { offset_ghz = [...], transmission = [...] }".into())
+    })?;
+    if let Some(other) = table
+        .keys()
+        .find(|k| *k != "offset_ghz" && *k != "transmission")
+    {
+        return Err(fail(format!(
+            "unknown key '{other}', expected 'offset_ghz' or 'transmission'"
+        )));
+    }
+    let column = |k: &str| -> Result<Vec<f64>> {
+        let values = table
+            .get(k)
+            .and_then(toml::Value::as_array)
+            .ok_or_else(|| fail(format!("needs `{k}`, an array of numbers")))?;
+        if values.is_empty() || values.len() > MAX_FILTER_POINTS {
+            return Err(fail(format!(
+                "`{k}` needs 1 to {MAX_FILTER_POINTS} values, has {}",
+                values.len()
+            )));
+        }
+        values
+            .iter()
+            .map(|v| match v {
+                toml::Value::Float(x) => Ok(*x),
+                toml::Value::Integer(i) => Ok(*i as f64),
+                _ => Err(fail(format!("`{k}` must hold numbers"))),
+            })
+            .collect()
+    };
+    let (offsets, transmissions) = (column("offset_ghz")?, column("transmission")?);
+    if offsets.len() != transmissions.len() {
+        return Err(fail(format!(
+            "has {} offsets and {} transmissions: give one transmission per offset",
+            offsets.len(),
+            transmissions.len()
+        )));
+    }
+    let points = offsets.iter().map(|f| f * 1e9).zip(transmissions).collect();
+    let filter = SpectralFilter::new(points).map_err(fail)?;
+    let sigma = doppler_sigma_hz(wavelength_nm, FILTER_REFERENCE_TEMPERATURE_K);
+    let lines = LineTransmission {
+        molecular: filter.molecular_transmission(sigma),
+        particle: filter.particle_transmission(),
+    };
+    if lines.molecular.is_nan() || lines.molecular <= 0.0 || lines.particle >= lines.molecular {
+        return Err(fail(format!(
+            "passes {} of the Cabannes line at 288.15 K and {} of the particle line: an \
+             HSRL filter must pass more of the molecules than of the particles",
+            crate::error::compact(lines.molecular),
+            crate::error::compact(lines.particle)
+        )));
+    }
+    Ok((filter, lines))
+}
+
+/// Most points a filter table may have.
+pub const MAX_FILTER_POINTS: usize = 10_000;
 
 /// A channel's `band_transmission` (None when absent): on a Raman channel the share of
 /// the band its filter passes, in (0, 1], 1 when absent; other kinds refuse the key.

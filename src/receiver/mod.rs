@@ -69,6 +69,7 @@ pub fn expand(
             species: RamanSpecies::default(),
             lines: LineTransmission::ELASTIC,
             band_transmission: 1.0,
+            spectral_filter: None,
             config: base.clone(),
         }]);
     }
@@ -115,6 +116,7 @@ fn expand_one(
     let mut species = None;
     let mut lines = (None, None);
     let mut band = None;
+    let mut filter_table = None;
     {
         let Some(toml::Value::Table(inst)) = root.get_mut("instrument") else {
             return Err(Error::config(file, "instrument", "must be a table"));
@@ -134,6 +136,7 @@ fn expand_one(
                 "molecular_transmission" => lines.0 = Some(number(value, &key(field), file)?),
                 "particle_transmission" => lines.1 = Some(number(value, &key(field), file)?),
                 "band_transmission" => band = Some(number(value, &key(field), file)?),
+                "spectral_filter" => filter_table = Some(value.clone()),
                 "polarization" | "channel" => {
                     inst.remove("polarization");
                     inst.insert("channel".into(), value.clone());
@@ -189,7 +192,26 @@ fn expand_one(
         &key,
         file,
     )?;
-    let lines = channel::line_transmission(kind, lines, &key, file)?;
+    let (spectral_filter, lines) = match (&filter_table, lines) {
+        (Some(_), (Some(_), _) | (_, Some(_))) => {
+            let given = if lines.0.is_some() {
+                "molecular_transmission"
+            } else {
+                "particle_transmission"
+            };
+            return Err(Error::config(
+                file,
+                key(given),
+                "is given by the channel's spectral_filter table: give one or the other",
+            ));
+        }
+        (Some(table), _) => {
+            let wl = config.instrument.wavelength_nm;
+            let (filter, lines) = channel::spectral_filter(table, kind, wl, &key, file)?;
+            (Some(filter), lines)
+        }
+        (None, given) => (None, channel::line_transmission(kind, given, &key, file)?),
+    };
     let band_transmission = channel::band_transmission(kind, band, &key, file)?;
     let mut channel = ChannelConfig {
         name: String::new(),
@@ -197,6 +219,7 @@ fn expand_one(
         species: species.unwrap_or_default(),
         lines,
         band_transmission,
+        spectral_filter,
         config,
     };
     channel.name = name.unwrap_or_else(|| channel.default_name());

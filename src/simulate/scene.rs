@@ -577,6 +577,7 @@ fn column_scenario(
             species: c.loaded.channels[0].species,
             lines: c.loaded.channels[0].lines,
             band_transmission: c.loaded.channels[0].band_transmission,
+            spectral_filter: c.loaded.channels[0].spectral_filter.clone(),
             config: config.clone(),
         }],
         config,

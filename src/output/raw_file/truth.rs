@@ -176,6 +176,20 @@ pub fn column_variables(lidar: &Lidar, columns: &[&[ExpectedProfile]]) -> Vec<Va
             .iter()
             .flat_map(|s| s.segments.iter())
             .any(|s| s.water_vapour.is_some());
+    if filter_tables(lidar) {
+        let mut data = Vec::new();
+        for e in columns.iter().flat_map(|col| col.iter()) {
+            data.extend(e.point.iter().map(|o| o.molecular_transmission));
+        }
+        vars.push(var(
+            "molecular_transmission",
+            Dims::ColumnChannelBin,
+            MOLECULAR_TRANSMISSION_LONG_NAME,
+            "1",
+            &[],
+            data,
+        ));
+    }
     for (name, long_name, units, standard_name, f) in COLUMN_STATE {
         if name == "water_vapour_mixing_ratio" && !humid {
             continue;
@@ -196,6 +210,15 @@ pub fn column_variables(lidar: &Lidar, columns: &[&[ExpectedProfile]]) -> Vec<Va
         vars.push(v);
     }
     vars
+}
+
+/// Whether some channel's `f_m` follows the temperature (an HSRL filter table): then
+/// `molecular_transmission` is written per (column, channel, bin), not per channel.
+fn filter_tables(lidar: &Lidar) -> bool {
+    lidar
+        .channels
+        .iter()
+        .any(|c| c.loaded.channels[0].spectral_filter.is_some())
 }
 
 /// `beta_mol`'s attributes: the part of the line the channels see and its lidar ratio
@@ -273,7 +296,17 @@ pub fn channel_text(lidar: &Lidar) -> Vec<TextVariable> {
 pub fn instrument_variables(lidar: &Lidar, e0: &ExpectedProfile) -> Vec<Variable> {
     use Dims::{Bin, Channel};
     let per = |f: fn(&Scenario) -> f64| lidar.channels.iter().map(f).collect::<Vec<f64>>();
-    vec![
+    let constant_f_m = (!filter_tables(lidar)).then(|| {
+        var(
+            "molecular_transmission",
+            Channel,
+            MOLECULAR_TRANSMISSION_LONG_NAME,
+            "1",
+            &[],
+            per(|c| c.loaded.channels[0].lines.molecular),
+        )
+    });
+    constant_f_m.into_iter().chain([
         var(
             "emission_wavelength",
             Channel,
@@ -315,14 +348,6 @@ pub fn instrument_variables(lidar: &Lidar, e0: &ExpectedProfile) -> Vec<Variable
             per(|c| c.loaded.config.instrument.filter_width_nm),
         ),
         var(
-            "molecular_transmission",
-            Channel,
-            "share of the molecular (Cabannes) line the channel's filter passes, f_m (1 but in hsrl_molecular channels)",
-            "1",
-            &[],
-            per(|c| c.loaded.channels[0].lines.molecular),
-        ),
-        var(
             "particle_transmission",
             Channel,
             "share of the particle line the channel's filter passes, f_p (1 but in hsrl_molecular channels)",
@@ -354,5 +379,9 @@ pub fn instrument_variables(lidar: &Lidar, e0: &ExpectedProfile) -> Vec<Variable
             &[],
             e0.overlap.clone(),
         ),
-    ]
+    ])
+    .collect()
 }
+
+/// `molecular_transmission`'s long name, per channel or per (column, channel, bin).
+const MOLECULAR_TRANSMISSION_LONG_NAME: &str = "share of the molecular (Cabannes) line the channel's filter passes, f_m (1 but in hsrl_molecular channels; per bin where a filter table makes it follow the temperature)";
