@@ -280,7 +280,7 @@ pub struct AtmosphereConfig {
     /// Aerosol and cloud layers.
     #[serde(default)]
     pub layers: Vec<LayerConfig>,
-    /// Ozone absorption (Chappuis band) in T² from a standard ozone profile
+    /// Ozone absorption (Huggins and Chappuis bands) in T² from a standard ozone profile
     /// (`src/atmosphere/ozone.rs`); on unless set to false.
     #[serde(default = "yes")]
     pub ozone: bool,

@@ -156,13 +156,16 @@ fn channel_errors_name_the_key_where_it_was_set() {
     );
 }
 
-/// The ozone cross-section's edges: from 350 nm (inclusive) to 360 nm the 360–370 nm bin's
-/// value, NaN below (survivor "replace < with <=" in `cross_section_m2`).
+/// The ozone cross-section's edges: from 350 nm (inclusive) the Huggins band's 1-nm bins
+/// (DBM, 228 K: 8.185e-27 m² over [350, 351), 4.654e-27 over [359, 360)), from 360 nm
+/// (inclusive) the 360–370 nm bin's 1.18e-27, NaN below 350 nm (survivors "replace < with
+/// <=" in `cross_section_m2`, at either edge).
 #[test]
 fn the_ozone_cross_section_starts_at_350_nm() {
     use lidarsim::atmosphere::ozone::cross_section_m2;
-    assert_eq!(cross_section_m2(350.0), 1.18e-27);
-    assert_eq!(cross_section_m2(359.999), 1.18e-27);
+    assert_eq!(cross_section_m2(350.0), 8.185e-27);
+    assert_eq!(cross_section_m2(359.999), 4.654e-27);
+    assert_eq!(cross_section_m2(360.0), 1.18e-27);
     assert!(cross_section_m2(349.999).is_nan());
 }
 

