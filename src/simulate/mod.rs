@@ -682,7 +682,21 @@ pub fn run(
         }
         None => (0..profiles, spec),
     };
-    check_sizes(&totals, method, shots, rows.len(), components, opts)?;
+    // true photons per shot through the dead-time path (its cost follows them)
+    let dead_time_photons: f64 = lidar
+        .channels
+        .iter()
+        .zip(&expected)
+        .filter(|(c, _)| c.instrument.dead_time.is_some() && method == ResolvedMethod::Shot)
+        .map(|(_, e)| e.total_per_shot().iter().sum::<f64>())
+        .sum();
+    let sizes = RunSizes {
+        shots,
+        profiles: rows.len(),
+        components,
+        dead_time_photons,
+    };
+    check_sizes(&totals, method, &sizes, opts)?;
     let mut writer = RawFileWriter::create(outputs.temp_path(raw)?, &opts.output, &spec)?;
     let orbit = orbit_of(lidar)?;
 
@@ -1178,17 +1192,35 @@ pub fn estimated_file_bytes(totals: &[f64], shots: u64, profiles: usize, streams
         + profiles as f64 * (per_profile * streams as f64 + FILE_BYTES_PER_PROFILE)
 }
 
+/// What [`check_sizes`] weighs of a run besides its per-bin means.
+#[derive(Debug, Clone, Copy)]
+struct RunSizes {
+    /// Shots per profile.
+    shots: u64,
+    /// Profiles this process writes.
+    profiles: usize,
+    /// Component-resolved counts.
+    components: bool,
+    /// True photons per shot recorded through the dead-time arrival path (summed over
+    /// its channels' bins; 0 without dead time or in the aggregate path).
+    dead_time_photons: f64,
+}
+
 /// Refuses a run whose memory or file cannot fit, and announces a long one
 /// (docs/outputs.md: sizes checked before work starts). `totals` are the per-shot means of
 /// every bin of every channel.
 fn check_sizes(
     totals: &[f64],
     method: ResolvedMethod,
-    shots: u64,
-    profiles: usize,
-    components: bool,
+    sizes: &RunSizes,
     opts: &RunOptions,
 ) -> Result<()> {
+    let RunSizes {
+        shots,
+        profiles,
+        components,
+        dead_time_photons,
+    } = *sizes;
     let streams = if components { 4 } else { 1 };
     let bins = totals.len() as f64;
     // one bit per profile (written yet?), the batch of drawn rows, the samplers' tables,
@@ -1204,7 +1236,7 @@ fn check_sizes(
     let draw_ns_per_profile = match method {
         ResolvedMethod::Shot => ShotSampler::new(totals).strategy().est_ns_per_shot * shots as f64,
         _ => bins * cost::AGGREGATE_LARGE_NS,
-    };
+    } + dead_time_photons * shots as f64 * dead_time::NS_PER_PHOTON;
     let ns = profiles as f64
         * (draw_ns_per_profile * streams.min(3) as f64 / threads as f64
             + bins * streams as f64 * FILE_NS_PER_COUNT);
