@@ -341,49 +341,71 @@ fn rates_beyond_the_linear_range_are_warned_of() {
 /// A run whose photons go through the dead-time arrival path at high rates announces
 /// its duration before it starts (docs/outputs.md: long runs are announced): the
 /// depolarization lidar at 4 mJ (~26,000 true photons per shot over its two channels)
-/// for 20 profiles of 75,000 shots, ~7 min on two cores, says so on its first line
-/// (the path's cost per photon was left out of the estimate, and such runs started
-/// silently: with `NS_PER_PHOTON` 0 this fails after 30 s). The run is stopped once the
-/// line is read.
+/// for 20 profiles of 75,000 shots, ~7 min on two cores, and its shot-level validation
+/// (1,000 realizations, hours) say so on their first line (the path's cost per photon
+/// was left out of the estimates, and such runs started silently: with
+/// `NS_PER_PHOTON` 0 this fails after 30 s). Each run is stopped once the line is read.
 #[test]
 fn a_long_dead_time_run_announces_its_duration() {
-    use std::io::BufRead;
     let dir = common::cli::scratch("dead-time-announce");
     let cfg = common::config_path("ground/ground_532_depol.toml");
+    let cfg = cfg.to_str().unwrap();
+    let energy = "instrument.pulse_energy_j=4e-3";
+    for (args, unit) in [
+        (
+            vec![
+                "simulate",
+                cfg,
+                "-o",
+                "long.h5",
+                "--profiles",
+                "20",
+                "--set",
+                energy,
+            ],
+            "min",
+        ),
+        (
+            vec!["validate", cfg, "--method", "shot", "--set", energy],
+            " h",
+        ),
+    ] {
+        let line = first_stderr_line(&dir, &args);
+        assert!(
+            line.contains("expected to take about") && line.contains(unit),
+            "{args:?}: {line}"
+        );
+    }
+}
+
+/// The first line `lidarsim ARGS` writes to stderr, the process killed then (and after
+/// 30 s at the latest).
+fn first_stderr_line(dir: &std::path::Path, args: &[&str]) -> String {
+    use std::io::BufRead;
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_lidarsim"))
-        .current_dir(&dir)
-        .args([
-            "simulate",
-            cfg.to_str().unwrap(),
-            "-o",
-            "long.h5",
-            "--profiles",
-            "20",
-            "--set",
-            "instrument.pulse_energy_j=4e-3",
-        ])
+        .current_dir(dir)
+        .args(args)
         .stderr(std::process::Stdio::piped())
         .stdout(std::process::Stdio::null())
         .spawn()
         .unwrap();
-    // a run that does not announce itself is stopped after 30 s (its first line is then
-    // not the announcement, or there is none)
     let pid = child.id().to_string();
+    let child = std::sync::Arc::new(std::sync::Mutex::new(child));
+    let stderr = child.lock().unwrap().stderr.take().unwrap();
+    // the watchdog kills through the same handle (never a pid reused after the wait)
+    let watched = std::sync::Arc::clone(&child);
     std::thread::spawn(move || {
         std::thread::sleep(std::time::Duration::from_secs(30));
-        std::process::Command::new("kill")
-            .args(["-9", &pid])
-            .status()
-            .ok();
+        let mut c = watched.lock().unwrap();
+        if c.try_wait().ok().flatten().is_none() {
+            eprintln!("killing lidarsim {pid} after 30 s");
+            c.kill().ok();
+        }
     });
     let mut line = String::new();
-    std::io::BufReader::new(child.stderr.take().unwrap())
-        .read_line(&mut line)
-        .ok();
-    child.kill().ok();
-    child.wait().ok();
-    assert!(
-        line.contains("expected to take about") && line.contains("min"),
-        "{line}"
-    );
+    std::io::BufReader::new(stderr).read_line(&mut line).ok();
+    let mut c = child.lock().unwrap();
+    c.kill().ok();
+    c.wait().ok();
+    line
 }
