@@ -382,7 +382,7 @@ fn a_long_dead_time_run_announces_its_duration() {
 /// 30 s at the latest).
 fn first_stderr_line(dir: &std::path::Path, args: &[&str]) -> String {
     use std::io::BufRead;
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_lidarsim"))
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_lidarsim"))
         .current_dir(dir)
         .args(args)
         .stderr(std::process::Stdio::piped())
