@@ -93,6 +93,15 @@ pub struct InstrumentConfig {
     /// Fraction of the other polarization's light a polarization channel sees (docs/model.md §4c).
     #[serde(default)]
     pub crosstalk: f64,
+    /// Diattenuation D of the receiving optics in front of the calibrator: `(1+D)` of the
+    /// light polarized parallel to the laser passes, `(1−D)` of the perpendicular
+    /// (`src/receiver/polarization.rs`).
+    #[serde(default)]
+    pub diattenuation: f64,
+    /// Rotation of the received light's polarization plane in front of the polarizing
+    /// beam splitter, degrees: 0 to measure, ±45 for the Δ90 calibration runs.
+    #[serde(default)]
+    pub receiver_rotation_deg: f64,
     /// Slow drift of the emitted pulse energy (the energy monitor reports it); absent = none.
     #[serde(default)]
     pub energy_drift: Option<EnergyDriftConfig>,
@@ -168,19 +177,6 @@ pub enum Channel {
 }
 
 impl Channel {
-    /// The share of a species' backscatter this channel sees, for linear depolarization δ
-    /// and cross-talk x (docs/model.md §4c): total 1; a polarization channel `(1−x)` of its own
-    /// polarization and `x` of the other, with `β_∥ = β/(1+δ)` and `β_⊥ = β·δ/(1+δ)`.
-    pub fn share(self, depolarization: f64, crosstalk: f64) -> f64 {
-        let parallel = 1.0 / (1.0 + depolarization);
-        let perpendicular = depolarization / (1.0 + depolarization);
-        match self {
-            Channel::Total => 1.0,
-            Channel::Parallel => (1.0 - crosstalk) * parallel + crosstalk * perpendicular,
-            Channel::Perpendicular => (1.0 - crosstalk) * perpendicular + crosstalk * parallel,
-        }
-    }
-
     /// The name of the polarization: `total`, `parallel` or `perpendicular`.
     pub fn name(self) -> &'static str {
         match self {
@@ -1301,6 +1297,13 @@ impl ScenarioConfig {
         )?;
         c.range("instrument.bin_width_s", i.bin_width_s, 1e-10, 1e-3)?;
         c.range("instrument.crosstalk", i.crosstalk, 0.0, 0.5)?;
+        c.range("instrument.diattenuation", i.diattenuation, -0.99, 0.99)?;
+        c.range(
+            "instrument.receiver_rotation_deg",
+            i.receiver_rotation_deg,
+            -90.0,
+            90.0,
+        )?;
         if i.crosstalk > 0.0 && i.channel == Channel::Total {
             return Err(c.fail(
                 "instrument.crosstalk",

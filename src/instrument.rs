@@ -82,12 +82,10 @@ impl Instrument {
             BackgroundEfficiency::Receiver => i.receiver_efficiency * i.quantum_efficiency,
             BackgroundEfficiency::Paper => 1.0,
         };
-        // Sky light is unpolarized: a polarization channel receives half of it.
-        let polarization_share = if i.channel == Channel::Total {
-            1.0
-        } else {
-            0.5
-        };
+        // Sky light is unpolarized (δ = 1): a polarization channel receives half of it
+        // (with diattenuation D, `(1 ± D)/2` at φ = 0)
+        let polarization_share =
+            crate::receiver::PolarizationOptics::from_config(i).share(i.channel, 1.0);
         // Eq. 3: N_bkg = Lλ·A·Ω·Δλ·TF (photons/s), then ·Δt·ε_bkg per bin.
         let background_per_radiance = i.telescope_area_m2
             * solid_angle_sr(i.fov_rad)

@@ -141,7 +141,7 @@ fn volume_depolarization_of_a_cirrus_from_two_channels() {
     let (par, perp) = (&lidar.channels[0], &lidar.channels[1]);
     assert_eq!(par.instrument.channel, Channel::Parallel);
     assert_eq!(perp.instrument.channel, Channel::Perpendicular);
-    let x = perp.atmosphere.crosstalk;
+    let x = perp.atmosphere.polarization.crosstalk;
     assert!(x > 0.0);
     let (src, expected) = source(&lidar, ResolvedMethod::Aggregate, 9);
     let n = expected[0].n_bins();

@@ -17,7 +17,7 @@ use crate::config::{
 use crate::constants::BOLTZMANN_J_PER_K;
 use crate::error::Result;
 use crate::loaded::LoadedConfig;
-use crate::receiver::{ChannelKind, LineTransmission, RamanSpecies};
+use crate::receiver::{ChannelKind, LineTransmission, PolarizationOptics, RamanSpecies};
 use profile_file::MolecularProfile;
 
 /// Temperature at which a Raman channel's band cross-section is taken, K: the band
@@ -369,8 +369,8 @@ pub struct Atmosphere {
     pub grid_m: f64,
     /// Receiver channel (weights each species' backscatter by its depolarization).
     pub channel: Channel,
-    /// The channel's polarization cross-talk.
-    pub crosstalk: f64,
+    /// The receiver's polarization optics (cross-talk, diattenuation, rotation).
+    pub polarization: PolarizationOptics,
     /// Ozone absorption at this wavelength, if on: the Huggins- or Chappuis-band
     /// cross-section (`ozone::cross_section_m2`), m².
     pub ozone_cross_section_m2: Option<f64>,
@@ -468,7 +468,7 @@ impl Atmosphere {
             layers: layers(cfg),
             grid_m: m.grid_m,
             channel: cfg.instrument.channel,
-            crosstalk: cfg.instrument.crosstalk,
+            polarization: PolarizationOptics::from_config(&cfg.instrument),
             ozone_cross_section_m2: cfg
                 .atmosphere
                 .ozone
@@ -586,8 +586,9 @@ impl Atmosphere {
         };
         o.beta_mol = o.alpha_mol / self.molecules.lidar_ratio_sr;
         o.molecular_transmission = self.molecular_transmission_at(z_m);
-        o.beta_channel =
-            o.molecular_transmission * o.beta_mol * self.channel.share(o.depol_mol, self.crosstalk);
+        o.beta_channel = o.molecular_transmission
+            * o.beta_mol
+            * self.polarization.share(self.channel, o.depol_mol);
         if let Some(sigma) = self.ozone_cross_section_m2 {
             // absorption only: it attenuates, it does not backscatter
             o.alpha_o3 = sigma * ozone::number_density_m3(z_m);
@@ -599,8 +600,9 @@ impl Atmosphere {
             o.ms_alpha_aer += alpha;
             o.beta_aer += beta;
             o.beta_perp_aer += perpendicular(beta, a.depolarization);
-            o.beta_channel +=
-                self.lines.particle * beta * self.channel.share(a.depolarization, self.crosstalk);
+            o.beta_channel += self.lines.particle
+                * beta
+                * self.polarization.share(self.channel, a.depolarization);
         }
         for l in self.layers.iter().filter(|l| l.contains(z_m)) {
             let alpha = l.extinction_per_m;
@@ -623,8 +625,9 @@ impl Atmosphere {
             *ms += alpha * l.multiple_scattering;
             *b += beta;
             *perp += perpendicular(beta, l.depolarization);
-            o.beta_channel +=
-                self.lines.particle * beta * self.channel.share(l.depolarization, self.crosstalk);
+            o.beta_channel += self.lines.particle
+                * beta
+                * self.polarization.share(self.channel, l.depolarization);
         }
         o.alpha_total = o.alpha_mol + o.alpha_o3 + o.alpha_aer + o.alpha_cld;
         o.alpha_effective = o.alpha_mol + o.alpha_o3 + o.ms_alpha_aer + o.ms_alpha_cld;

@@ -421,19 +421,6 @@ mod tests {
     }
 
     #[test]
-    fn crosstalk_mixes_the_polarizations() {
-        let d = 0.4;
-        let (par, per) = (1.0 / 1.4, 0.4 / 1.4);
-        assert_eq!(Channel::Total.share(d, 0.1), 1.0);
-        assert!((Channel::Parallel.share(d, 0.0) - par).abs() < 1e-15);
-        assert!((Channel::Parallel.share(d, 0.1) - (0.9 * par + 0.1 * per)).abs() < 1e-15);
-        assert!((Channel::Perpendicular.share(d, 0.1) - (0.9 * per + 0.1 * par)).abs() < 1e-15);
-        // the two polarization channels together see all of it, whatever the cross-talk
-        let sum = Channel::Parallel.share(d, 0.03) + Channel::Perpendicular.share(d, 0.03);
-        assert!((sum - 1.0).abs() < 1e-15);
-    }
-
-    #[test]
     fn kinds_are_named_and_refused_by_key() {
         let v = |s: &str| toml::Value::String(s.into());
         let key = "instrument.channels[1].kind";

@@ -12,10 +12,12 @@
 //! a channel at another wavelength through their Ångström exponent.
 
 pub mod channel;
+pub mod polarization;
 
 pub use channel::{
     ChannelConfig, ChannelKind, Filter, LineTransmission, RamanSpecies, channel_name,
 };
+pub use polarization::PolarizationOptics;
 
 use crate::config::{self, ScenarioConfig};
 use crate::error::{Error, Result};

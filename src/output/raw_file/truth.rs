@@ -356,6 +356,33 @@ pub fn instrument_variables(lidar: &Lidar, e0: &ExpectedProfile) -> Vec<Variable
             per(|c| c.loaded.channels[0].lines.particle),
         ),
         var(
+            "diattenuation",
+            Channel,
+            "diattenuation D of the receiving optics: (1+D) of the light polarized parallel to the laser passes, (1-D) of the perpendicular",
+            "1",
+            &[],
+            per(|c| c.loaded.config.instrument.diattenuation),
+        ),
+        var(
+            "receiver_rotation",
+            Channel,
+            "rotation of the polarization plane in front of the polarizing beam splitter (0 to measure, +-45 in Delta-90 calibration runs)",
+            "degree",
+            &[],
+            per(|c| c.loaded.config.instrument.receiver_rotation_deg),
+        ),
+        Variable {
+            attributes: vec![("_FillValue".into(), AttrValue::F64(f64::NAN))],
+            ..var(
+                "polarization_calibration_constant",
+                Channel,
+                "calibration constant eta* of a perpendicular channel: its lidar constant over that of the parallel channel at the same laser wavelength (what the Delta-90 method recovers); NaN for other channels",
+                "1",
+                &[],
+                calibration_constants(lidar),
+            )
+        },
+        var(
             "band_transmission",
             Channel,
             "share of the Raman band the channel's filter passes (1 but in raman channels that give less)",
@@ -381,6 +408,29 @@ pub fn instrument_variables(lidar: &Lidar, e0: &ExpectedProfile) -> Vec<Variable
         ),
     ])
     .collect()
+}
+
+/// Each channel's Δ90 calibration constant η* (src/receiver/polarization.rs): for a
+/// perpendicular channel its lidar constant over that of the parallel channel at the same
+/// laser wavelength; NaN for other channels and where there is no such parallel channel.
+fn calibration_constants(lidar: &Lidar) -> Vec<f64> {
+    use crate::config::Channel as Pol;
+    let pol = |c: &Scenario| c.loaded.config.instrument.channel;
+    lidar
+        .channels
+        .iter()
+        .map(|c| {
+            let parallel = lidar.channels.iter().find(|p| {
+                pol(p) == Pol::Parallel && p.instrument.wavelength_nm == c.instrument.wavelength_nm
+            });
+            match (pol(c), parallel) {
+                (Pol::Perpendicular, Some(p)) => {
+                    c.instrument.signal_constant / p.instrument.signal_constant
+                }
+                _ => f64::NAN,
+            }
+        })
+        .collect()
 }
 
 /// `molecular_transmission`'s long name, per channel or per (column, channel, bin).
