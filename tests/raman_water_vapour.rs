@@ -241,3 +241,56 @@ fn each_segment_has_its_own_water_vapour() {
         "{dry} dry and {moist} moist columns"
     );
 }
+
+/// The profile's limits, at their edges: one row is refused, two are enough; 100,000
+/// rows are accepted and 100,001 refused; every altitude may lie in [−1, 100] km (a
+/// profile wholly below 1 km, or ending at 100 km, is accepted; one ending above 100 km
+/// is refused). Each error names the key.
+#[test]
+fn water_vapour_rows_are_checked_at_their_limits() {
+    let base = std::fs::read_to_string(config_path("ground/pollyxt_like.toml")).unwrap();
+    let start = base.find("altitude_km = [0.0, 1.0, 1.8,").unwrap();
+    let end = start + base[start..].find("\n\n").unwrap();
+    let with = |heights: &[f64], ratios: &[f64]| {
+        let list = |v: &[f64]| {
+            v.iter()
+                .map(|x| format!("{x:?}"))
+                .collect::<Vec<_>>()
+                .join(",")
+        };
+        let table = format!(
+            "altitude_km = [{}]\nmixing_ratio_g_per_kg = [{}]",
+            list(heights),
+            list(ratios)
+        );
+        format!("{}{table}{}", &base[..start], &base[end..])
+    };
+    let load = |text: String| lidarsim::loaded::load_str(&text, Path::new("p.toml"), &[]);
+    let rows = |n: usize| -> (Vec<f64>, Vec<f64>) {
+        ((0..n).map(|i| i as f64 * 1e-3).collect(), vec![1.0; n])
+    };
+    for (heights, ratios) in [
+        (vec![-0.5, 0.5], vec![8.0, 6.0]),
+        (vec![0.0, 100.0], vec![8.0, 0.0]),
+        rows(2),
+        rows(100_000),
+    ] {
+        if let Err(e) = load(with(&heights, &ratios)) {
+            panic!("{} rows from {} km refused: {e}", heights.len(), heights[0]);
+        }
+    }
+    for ((heights, ratios), words) in [
+        (rows(1), "needs 2 to 100000 rows, has 1"),
+        (rows(100_001), "needs 2 to 100000 rows, has 100001"),
+        ((vec![0.0, 100.5], vec![8.0, 0.0]), "altitude_km[1]"),
+    ] {
+        let e = match load(with(&heights, &ratios)) {
+            Ok(_) => panic!("accepted: {words}"),
+            Err(e) => e.to_string(),
+        };
+        assert!(
+            e.contains("atmosphere.water_vapour.altitude_km") && e.contains(words),
+            "{e}"
+        );
+    }
+}
