@@ -368,3 +368,64 @@ fn a_filter_table_refuses_a_profile_without_temperatures() {
     assert_eq!(err.trim().lines().count(), 1, "{err}");
     assert!(!dir.join("x.h5").exists());
 }
+
+/// A filter table's limits at their edges: integers are numbers; 1 to 10,000 points
+/// (10,000 accepted, 10,001 and an empty table refused); each error names the key.
+#[test]
+fn filter_tables_are_checked_at_their_limits() {
+    let dir = scratch("hsrl-notch-limits");
+    let notch = std::fs::read_to_string(notch_config(&dir)).unwrap();
+    let table = |offsets: &[f64], t: &[f64]| {
+        let list = |v: &[f64]| {
+            v.iter()
+                .map(|x| format!("{x:?}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        notch.replacen(
+            NOTCH.trim_end(),
+            &format!(
+                "spectral_filter = {{ offset_ghz = [{}], transmission = [{}] }}",
+                list(offsets),
+                list(t)
+            ),
+            1,
+        )
+    };
+    let notch_of = |n: usize| -> (Vec<f64>, Vec<f64>) {
+        let f: Vec<f64> = (0..n)
+            .map(|i| -5.0 + 10.0 * i as f64 / (n - 1) as f64)
+            .collect();
+        let t = f
+            .iter()
+            .map(|x| if x.abs() < 0.5 { 0.02 } else { 0.9 })
+            .collect();
+        (f, t)
+    };
+    let load = |text: &str| lidarsim::loaded::load_str(text, std::path::Path::new("a.toml"), &[]);
+    let integers = notch.replacen(
+        NOTCH.trim_end(),
+        "spectral_filter = { offset_ghz = [-2, -1, 1, 2], transmission = [1, 0, 0, 1] }",
+        1,
+    );
+    let (f, t) = notch_of(10_000);
+    for text in [integers, table(&f, &t)] {
+        if let Err(e) = load(&text) {
+            panic!("refused: {e}");
+        }
+    }
+    let (f, t) = notch_of(10_001);
+    for (text, words) in [
+        (table(&f, &t), "needs 1 to 10000 values, has 10001"),
+        (table(&[], &[]), "needs 1 to 10000 values, has 0"),
+    ] {
+        let e = match load(&text) {
+            Ok(_) => panic!("accepted: {words}"),
+            Err(e) => e.to_string(),
+        };
+        assert!(
+            e.contains("instrument.channels[1].spectral_filter") && e.contains(words),
+            "{e}"
+        );
+    }
+}
