@@ -131,8 +131,8 @@ fn a_water_vapour_channel_is_described_and_its_truth_is_its_own() {
 
 /// Water vapour's keys are checked, each error one line naming the key: an H₂O channel
 /// without a profile, a profile whose columns differ in length, whose altitudes do not
-/// increase or whose mixing ratio is negative, a band share out of (0, 1] or on an
-/// elastic channel.
+/// increase or whose mixing ratio is negative, a band share out of (0, 1] (1.5, and 0 at
+/// the open edge) or on an elastic channel.
 #[test]
 fn water_vapour_keys_are_checked() {
     let base = std::fs::read_to_string(config_path("ground/pollyxt_like.toml")).unwrap();
@@ -171,6 +171,10 @@ fn water_vapour_keys_are_checked() {
         ),
         (
             base.replacen(band, "band_transmission = 1.5", 1),
+            &["instrument.channels[3].band_transmission", "(0, 1]"][..],
+        ),
+        (
+            base.replacen(band, "band_transmission = 0.0", 1),
             &["instrument.channels[3].band_transmission", "(0, 1]"][..],
         ),
         (
