@@ -113,6 +113,10 @@ enum Command {
         /// K and N from an array job's environment (SLURM_ARRAY_TASK_ID, ...).
         #[arg(long, value_name = "K/N|auto", value_parser = cli_values::shard)]
         shard: Option<ShardArg>,
+        /// A Δ90 depolarization calibration run: the receiver's polarization plane
+        /// rotated by +45° or −45° (`--set instrument.receiver_rotation_deg=±45`).
+        #[arg(long, value_enum)]
+        calibration: Option<Calibration>,
     },
     /// Merges the shards of a run (`simulate --shard K/N`) into the file of the whole run.
     Merge {
@@ -298,6 +302,7 @@ fn main() -> ExitCode {
             threads,
             format,
             shard,
+            calibration,
         } => shard
             .map(ShardArg::resolve)
             .transpose()
@@ -315,7 +320,9 @@ fn main() -> ExitCode {
                     ),
                     shard,
                 };
-                lidarsim::commands::simulate_as(config, set, &opts, *threads, *format)
+                let mut set = set.clone();
+                set.extend(calibration.map(Calibration::rotation_override));
+                lidarsim::commands::simulate_as(config, &set, &opts, *threads, *format)
             })
             .map(|()| true),
         Command::Merge { output, shards } => {
@@ -434,5 +441,25 @@ fn main() -> ExitCode {
             eprintln!("lidarsim: error: {e}");
             ExitCode::from(2)
         }
+    }
+}
+
+/// `simulate --calibration`: the two runs of the Δ90 depolarization calibration.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum Calibration {
+    /// The receiver's polarization plane rotated by +45°.
+    Plus45,
+    /// Rotated by −45°.
+    Minus45,
+}
+
+impl Calibration {
+    /// The config override the run is: `instrument.receiver_rotation_deg=±45`.
+    fn rotation_override(self) -> String {
+        let deg = match self {
+            Calibration::Plus45 => 45,
+            Calibration::Minus45 => -45,
+        };
+        format!("instrument.receiver_rotation_deg={deg}")
     }
 }

@@ -140,3 +140,33 @@ fn calibration_keys_are_checked() {
         assert!(!e.contains('\n') && e.contains(key), "{e}");
     }
 }
+
+/// `simulate --calibration plus45|minus45` is the run with the receiver rotated by
+/// ±45°: the file says so (`receiver_rotation`), and its expected signals are the
+/// config key's.
+#[test]
+fn the_calibration_flag_rotates_the_receiver() {
+    let dir = scratch("delta90-flag");
+    let measured = calibration_config(&dir, 0.08, 0.0);
+    for (flag, deg) in [("plus45", 45.0), ("minus45", -45.0)] {
+        let out = format!("{flag}.h5");
+        let args = [
+            "simulate",
+            measured.to_str().unwrap(),
+            "-o",
+            &out,
+            "--profiles",
+            "1",
+            "--calibration",
+            flag,
+        ];
+        common::cli::ok(common::cli::lidarsim(&dir, &args, &[]));
+        let f = hdf5::File::open(dir.join(&out)).unwrap();
+        assert!(floats(&f, "receiver_rotation").iter().all(|&r| r == deg));
+        let keyed = simulate(&dir, &calibration_config(&dir, 0.08, deg), "k.h5", "1");
+        assert_eq!(
+            floats(&f, "expected_signal"),
+            floats(&keyed, "expected_signal")
+        );
+    }
+}
