@@ -9,6 +9,27 @@ use std::path::{Path, PathBuf};
 
 use lidarsim::scenario::{Lidar, Scenario};
 
+/// The error `loaded::load_str` gives for a config `text` it must refuse (`what` names
+/// the case in the panic if it is accepted), checked to be one line.
+pub fn refusal(text: &str, what: &str) -> String {
+    match lidarsim::loaded::load_str(text, Path::new("config.toml"), &[]) {
+        Ok(_) => panic!("accepted: {what}"),
+        Err(e) => {
+            let e = e.to_string();
+            assert!(!e.contains('\n'), "{what}: {e}");
+            e
+        }
+    }
+}
+
+/// Numbers as a TOML array's items: `1.0, 2.5, -3.0`.
+pub fn toml_list(v: &[f64]) -> String {
+    v.iter()
+        .map(|x| format!("{x:?}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// Where every skip is recorded, one line each, so that it shows after the harness
 /// (which hides a passing test's output): `.ci/run` empties it before the tests and
 /// prints it after them.
