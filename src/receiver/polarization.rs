@@ -56,7 +56,12 @@ impl PolarizationOptics {
         let d = self.diattenuation;
         let a = (1.0 + d) / (1.0 + depolarization);
         let b = (1.0 - d) * depolarization / (1.0 + depolarization);
-        let (sin, cos) = self.rotation_rad.sin_cos();
+        // no trigonometry on the model's hot path in a measurement (φ = 0)
+        let (sin, cos) = if self.rotation_rad == 0.0 {
+            (0.0, 1.0)
+        } else {
+            self.rotation_rad.sin_cos()
+        };
         let p = a * cos * cos + b * sin * sin;
         let s = a * sin * sin + b * cos * cos;
         let x = self.crosstalk;
