@@ -19,8 +19,8 @@
 //! and are not modelled; nor is absorption by water vapour (none at the Raman lines of
 //! 355 and 532 nm lasers).
 //!
-//! Cost: one binary search in the rows per point of a Raman channel's model; nothing for
-//! a config without an H₂O channel (the profile is only read by one).
+//! Cost: one binary search in the rows per point of an H₂O channel's model and per bin
+//! of the truth's `water_vapour_mixing_ratio`; nothing for a scene without a profile.
 
 use crate::config::{Checker, ScenarioConfig, WaterVapourConfig};
 use crate::error::Result;
@@ -39,16 +39,26 @@ pub const MAX_MIXING_RATIO_G_PER_KG: f64 = 60.0;
 /// altitudes as mixing ratios, altitudes finite in [−1, 100] km and strictly
 /// increasing, mixing ratios finite in [0, 60] g kg⁻¹.
 pub fn validate(config: &ScenarioConfig, c: &Checker) -> Result<()> {
-    if let Some(w) = &config.atmosphere.water_vapour {
-        check(w, "atmosphere.water_vapour", c)?;
-    }
-    let segments = config.scene.iter().flat_map(|s| s.segments.iter());
-    for (i, seg) in segments.enumerate() {
-        if let Some(w) = &seg.water_vapour {
-            check(w, &format!("scene.segments[{i}].water_vapour"), c)?;
-        }
+    for (prefix, w) in profiles(config) {
+        check(w, &prefix, c)?;
     }
     Ok(())
+}
+
+/// Every water-vapour profile of a config with its table's key: `[atmosphere.water_vapour]`
+/// and each segment's.
+pub fn profiles(config: &ScenarioConfig) -> impl Iterator<Item = (String, &WaterVapourConfig)> {
+    let base = config
+        .atmosphere
+        .water_vapour
+        .iter()
+        .map(|w| ("atmosphere.water_vapour".to_string(), w));
+    let segments = config.scene.iter().flat_map(|s| s.segments.iter());
+    let own = segments.enumerate().filter_map(|(i, seg)| {
+        let w = seg.water_vapour.as_ref()?;
+        Some((format!("scene.segments[{i}].water_vapour"), w))
+    });
+    base.chain(own)
 }
 
 /// Checks one profile, `prefix` naming its table in errors.
@@ -71,27 +81,16 @@ fn check(w: &WaterVapourConfig, prefix: &str, c: &Checker) -> Result<()> {
             ),
         ));
     }
-    for (k, pair) in z.windows(2).enumerate() {
-        c.range(
-            &format!("{}[{k}]", key("altitude_km")),
-            pair[0],
-            -1.0,
-            100.0,
-        )?;
-        if pair[1].is_finite() && pair[1] <= pair[0] {
+    for (k, &zk) in z.iter().enumerate() {
+        let at = format!("{}[{k}]", key("altitude_km"));
+        c.range(&at, zk, -1.0, 100.0)?;
+        if k > 0 && zk <= z[k - 1] {
             return Err(c.fail(
-                &format!("{}[{}]", key("altitude_km"), k + 1),
-                format!("must be above the row before ({} km)", pair[0]),
+                &at,
+                format!("must be above the row before ({} km)", z[k - 1]),
             ));
         }
     }
-    let last = z.len() - 1;
-    c.range(
-        &format!("{}[{last}]", key("altitude_km")),
-        z[last],
-        -1.0,
-        100.0,
-    )?;
     for (k, &v) in r.iter().enumerate() {
         c.range(
             &format!("{}[{k}]", key("mixing_ratio_g_per_kg")),

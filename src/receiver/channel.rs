@@ -297,13 +297,11 @@ pub fn spectral_filter(
                 values.len()
             )));
         }
+        // each value as the channel's other numeric keys: a finite number
         values
             .iter()
-            .map(|v| match v {
-                toml::Value::Float(x) => Ok(*x),
-                toml::Value::Integer(i) => Ok(*i as f64),
-                _ => Err(fail(format!("`{k}` must hold numbers"))),
-            })
+            .enumerate()
+            .map(|(i, v)| super::number(v, &format!("{name}.{k}[{i}]"), file))
             .collect()
     };
     let (offsets, transmissions) = (column("offset_ghz")?, column("transmission")?);

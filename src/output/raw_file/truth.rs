@@ -170,12 +170,9 @@ pub fn column_variables(lidar: &Lidar, columns: &[&[ExpectedProfile]]) -> Vec<Va
         vars.push(v);
     }
     let config = &lidar.channels[0].loaded.config;
-    let humid = config.atmosphere.water_vapour.is_some()
-        || config
-            .scene
-            .iter()
-            .flat_map(|s| s.segments.iter())
-            .any(|s| s.water_vapour.is_some());
+    let humid = crate::atmosphere::water_vapour::profiles(config)
+        .next()
+        .is_some();
     if filter_tables(lidar) {
         let mut data = Vec::new();
         for e in columns.iter().flat_map(|col| col.iter()) {
