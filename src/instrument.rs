@@ -28,8 +28,12 @@ pub struct Instrument {
     pub background_per_radiance: f64,
     /// Expected dark counts per shot per bin, `λ_dc = R_dc·Δt`.
     pub dark_per_bin: f64,
-    /// The detector's dead time; `None` for an ideal linear detector (τ = 0).
+    /// The detector's dead time; `None` for an ideal linear detector (τ = 0) and for
+    /// an analog record.
     pub dead_time: Option<crate::detector::DeadTime>,
+    /// The analog chain of a channel that records analog codes; `None` for a photon
+    /// counter.
+    pub analog: Option<crate::detector::Analog>,
 }
 
 /// The sky radiance the instrument sees, photons m⁻² s⁻¹ sr⁻¹ nm⁻¹: the fixed
@@ -113,7 +117,22 @@ impl Instrument {
                     model: d.dead_time_model,
                     bin_width_s: i.bin_width_s,
                 }),
+            analog: None,
         }
+    }
+
+    /// The instrument as the file channel that records `record` sees it: an analog
+    /// record has the detector's analog chain and no dead time (a photon counter's).
+    pub fn recording(
+        mut self,
+        record: crate::receiver::Record,
+        detector: Option<&crate::config::DetectorConfig>,
+    ) -> Self {
+        if let (crate::receiver::Record::Analog, Some(d)) = (record, detector) {
+            self.dead_time = None;
+            self.analog = Some(crate::detector::Analog::from_config(d, self.bin_width_s));
+        }
+        self
     }
 
     /// Shots accumulated in `accumulation_time_s`: `M = round(fL·TC)`.

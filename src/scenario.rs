@@ -59,6 +59,17 @@ impl Lidar {
         Ok(Lidar { channels })
     }
 
+    /// The channel whose photons channel `k` records, for its seed: itself, or for the
+    /// photon-counting half of a `both` pair the analog half before it (the same draws
+    /// from the same seed, so that both record the same photons).
+    pub fn photon_source(&self, k: usize) -> usize {
+        let c = &self.channels[k].loaded.channels[0];
+        match c.glue_partner {
+            Some(j) if j < k => j,
+            _ => k,
+        }
+    }
+
     /// The first channel: the config, geometry and timing every channel shares.
     pub fn first(&self) -> &Scenario {
         &self.channels[0]
@@ -213,7 +224,9 @@ impl Scenario {
             bins * MODEL_BYTES_PER_BIN,
         )?;
         let mut atmosphere = Atmosphere::from_config(&loaded)?;
-        let instrument = Instrument::from_config(cfg, atmosphere.detected_line());
+        let channel = &loaded.channels[0];
+        let instrument = Instrument::from_config(cfg, atmosphere.detected_line())
+            .recording(channel.record, channel.detector());
         // at least four slabs per bin, so that the piecewise representation resolves every bin
         let lowest = cfg.acquisition.bottom_altitude_km * 1e3;
         atmosphere.grid_m = atmosphere
@@ -334,6 +347,9 @@ impl Scenario {
     /// linear range (the commands print it after a successful run, so that an error
     /// stays one line).
     pub fn linear_range_warning(&self, e: &ExpectedProfile) -> Option<String> {
+        if let Some(a) = &self.instrument.analog {
+            return a.clipping_warning(&e.total_per_shot(), &e.altitude_m);
+        }
         if self.instrument.dead_time.is_some() {
             return None;
         }
@@ -404,7 +420,11 @@ impl Scenario {
                     .0
             }
             Some(d) => d.recorded_means(&e.total_per_shot()),
-            None => e.total_per_shot(),
+            None => match &self.instrument.analog {
+                // the mean code is linear in the photoelectrons: jitter leaves it
+                Some(a) => a.expected_codes(&e.total_per_shot()),
+                None => e.total_per_shot(),
+            },
         };
         e.background_bin_indices = self.background_bin_indices();
         e.background_bins = e.background_bin_indices.len();

@@ -1,20 +1,25 @@
 //! What the detector records of the photons that reach it (architecture: sampler →
 //! detector → output). Absent for an ideal linear detector: a scene without dead time
-//! has no detector stage and keeps every exact fast path.
+//! has no detector stage and keeps every exact fast path. A photon counter records
+//! through its dead time ([`dead_time`]); an analog channel records ADC codes
+//! ([`analog`]).
 
+pub mod analog;
 pub mod dead_time;
 pub mod modulated;
 
+pub use analog::Analog;
 pub use dead_time::{DeadTime, DeadTimeModel};
 pub use modulated::DetectedShots;
 
-use crate::config::{Checker, ScenarioConfig};
+use crate::config::{Checker, DetectionMode, DetectorConfig, ScenarioConfig};
 use crate::error::Result;
 
 /// Longest dead time a photon counter may have, s.
 pub const MAX_DEAD_TIME_S: f64 = 1e-6;
 
-/// Checks `[instrument.detector]`: a dead time from 0 to [`MAX_DEAD_TIME_S`].
+/// Checks `[instrument.detector]`: a dead time from 0 to [`MAX_DEAD_TIME_S`] (none in
+/// analog mode), and the analog keys where the mode records analog (refused elsewhere).
 pub fn validate(config: &ScenarioConfig, c: &Checker) -> Result<()> {
     if let Some(d) = &config.instrument.detector {
         c.range(
@@ -23,8 +28,89 @@ pub fn validate(config: &ScenarioConfig, c: &Checker) -> Result<()> {
             0.0,
             MAX_DEAD_TIME_S,
         )?;
+        validate_analog(d, c)?;
     }
     Ok(())
+}
+
+/// The analog keys of `d` with their limits: each a finite number in its range; the
+/// offset and the noise within the ADC's range.
+fn validate_analog(d: &DetectorConfig, c: &Checker) -> Result<()> {
+    let key = |k: &str| format!("instrument.detector.{k}");
+    let set: Vec<&str> = [
+        ("gain", d.gain.is_some()),
+        ("excess_noise_factor", d.excess_noise_factor.is_some()),
+        ("load_resistance_ohm", d.load_resistance_ohm.is_some()),
+        ("bandwidth_hz", d.bandwidth_hz.is_some()),
+        ("electronic_noise_v", d.electronic_noise_v.is_some()),
+        ("offset_v", d.offset_v.is_some()),
+        ("adc_bits", d.adc_bits.is_some()),
+        ("adc_range_v", d.adc_range_v.is_some()),
+    ]
+    .into_iter()
+    .filter_map(|(k, is_set)| is_set.then_some(k))
+    .collect();
+    if d.mode == DetectionMode::PhotonCounting {
+        return match set.first() {
+            Some(k) => Err(c.fail(
+                &key(k),
+                "is an analog key and the detector counts photons; set \
+                 instrument.detector.mode = \"analog\" or \"both\", or leave the key out",
+            )),
+            None => Ok(()),
+        };
+    }
+    if d.mode == DetectionMode::Analog && d.dead_time_s > 0.0 {
+        return Err(c.fail(
+            &key("dead_time_s"),
+            "is a photon counter's and this detector records analog only; use mode = \"both\" \
+             for a photon-counting record beside the analog one",
+        ));
+    }
+    let a = Analog::from_config(d, 1.0);
+    c.positive(&key("gain"), a.gain, 1e9)?;
+    c.range(
+        &key("excess_noise_factor"),
+        a.excess_noise_factor,
+        1.0,
+        10.0,
+    )?;
+    c.positive(&key("load_resistance_ohm"), a.load_resistance_ohm, 1e6)?;
+    c.range(&key("bandwidth_hz"), a.bandwidth_hz, 0.0, 1e12)?;
+    c.positive(&key("adc_range_v"), a.adc_range_v, 100.0)?;
+    if !(1..=24).contains(&a.adc_bits) {
+        return Err(c.fail(
+            &key("adc_bits"),
+            format!("must be within [1, 24], got {}", a.adc_bits),
+        ));
+    }
+    c.range(
+        &key("electronic_noise_v"),
+        a.electronic_noise_v,
+        0.0,
+        a.adc_range_v,
+    )?;
+    c.range(&key("offset_v"), a.offset_v, 0.0, a.adc_range_v)?;
+    Ok(())
+}
+
+/// Largest relative loss of a photon counter's record to its dead time in a bin the
+/// file's `linear_range` still calls linear (where gluing may use it).
+pub const GLUE_LOSS: f64 = 0.01;
+
+/// Whether each bin of a channel's record is linear in the photons (the file's
+/// `linear_range`): an analog record by [`Analog::linear_bins`]; a photon counter where
+/// its dead time loses at most [`GLUE_LOSS`] of the photons `lambda` (per shot), i.e.
+/// `recorded ≥ (1 − GLUE_LOSS)·lambda` (everywhere without dead time).
+pub fn linear_bins(analog: Option<&Analog>, lambda: &[f64], recorded: &[f64]) -> Vec<bool> {
+    match analog {
+        Some(a) => a.linear_bins(lambda),
+        None => lambda
+            .iter()
+            .zip(recorded)
+            .map(|(&l, &r)| r >= (1.0 - GLUE_LOSS) * l)
+            .collect(),
+    }
 }
 
 /// Count rate above which a photon counter without a dead-time model is out of its

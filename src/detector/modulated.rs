@@ -7,6 +7,7 @@
 //! and `stream_rng(seed ^ ARRIVAL_STREAM, profile, block)` for their arrival times, so
 //! results depend on the seed only.
 
+use super::analog::{ANALOG_STREAM, Analog, AnalogScratch};
 use super::dead_time::{ARRIVAL_STREAM, DeadTime, Scratch};
 use crate::sampling::jitter::ModulatedShots;
 use crate::sampling::{SHOT_BLOCK, ShotCounts, add_block_sums, stream_rng};
@@ -17,6 +18,7 @@ use crate::sampling::{SHOT_BLOCK, ShotCounts, add_block_sums, stream_rng};
 pub struct DetectedShots {
     photons: ModulatedShots,
     dead: Option<DeadTime>,
+    analog: Option<Analog>,
 }
 
 /// Reusable buffers of one block.
@@ -25,6 +27,7 @@ struct Buffers {
     shot: ShotCounts,
     factors: Vec<f64>,
     scratch: Scratch,
+    analog: AnalogScratch,
 }
 
 impl Buffers {
@@ -34,6 +37,7 @@ impl Buffers {
             shot: ShotCounts::new(bins),
             factors,
             scratch: Scratch::default(),
+            analog: AnalogScratch::default(),
         }
     }
 }
@@ -44,7 +48,15 @@ impl DetectedShots {
         DetectedShots {
             photons,
             dead: None,
+            analog: None,
         }
+    }
+
+    /// The same shots recorded by an analog chain (ADC codes; its gains and noise from
+    /// `stream_rng(seed ^ ANALOG_STREAM, profile, block)`).
+    pub fn through_analog(mut self, analog: Option<Analog>) -> Self {
+        self.analog = analog;
+        self
     }
 
     /// The same shots recorded through `dead`.
@@ -53,9 +65,9 @@ impl DetectedShots {
         self
     }
 
-    /// Whether every shot is recorded through a dead-time detector.
+    /// Whether every shot is recorded through a detector stage (dead time or analog).
     pub fn has_detector(&self) -> bool {
-        self.dead.is_some()
+        self.dead.is_some() || self.analog.is_some()
     }
 
     /// Draws one shot per factor of `factors` (these shots' emitted energies relative to
@@ -88,6 +100,9 @@ impl DetectedShots {
 
     /// Accumulates one profile of `shots` shots into `acc`.
     pub fn profile(&self, seed: u64, profile: u64, shots: u64, acc: &mut [u64]) {
+        if let Some(analog) = &self.analog {
+            return self.analog_profile(analog, seed, profile, shots, acc);
+        }
         let Some(dead) = &self.dead else {
             return self.photons.profile(seed, profile, shots, acc);
         };
@@ -103,6 +118,33 @@ impl DetectedShots {
                 self.photons
                     .draw_shot(&mut rng, f, &mut buf.envelope, &mut buf.shot);
                 dead.record_shot(&mut arrivals, &buf.shot, &mut buf.scratch, &mut part);
+            }
+            part
+        });
+    }
+
+    /// [`profile`](Self::profile) through an analog chain: the photons as without it,
+    /// shot for shot.
+    fn analog_profile(
+        &self,
+        analog: &Analog,
+        seed: u64,
+        profile: u64,
+        shots: u64,
+        acc: &mut [u64],
+    ) {
+        let bins = acc.len();
+        add_block_sums(acc, shots.div_ceil(SHOT_BLOCK), |b| {
+            let mut part = vec![0u64; bins];
+            let mut buf = Buffers::new(bins, Vec::new());
+            self.photons
+                .block_factors(seed, profile, shots, b, &mut buf.factors);
+            let mut electronics = stream_rng(seed ^ ANALOG_STREAM, profile, b);
+            let mut rng = stream_rng(seed, profile, b);
+            for &f in &buf.factors {
+                self.photons
+                    .draw_shot(&mut rng, f, &mut buf.envelope, &mut buf.shot);
+                analog.record_shot(&mut electronics, &buf.shot, &mut buf.analog, &mut part);
             }
             part
         });

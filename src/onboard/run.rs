@@ -366,8 +366,8 @@ impl Draw {
             .zip(&native.expected)
             .enumerate()
             .map(|(k, (c, e))| {
-                let seed = simulate::channel_seed(seed, k);
-                simulate::stream_samplers(e, method, energy, false, seed, c.instrument.dead_time)
+                let seed = simulate::channel_seed(seed, lidar.photon_source(k));
+                simulate::stream_samplers(e, method, energy, false, seed, &c.instrument)
             })
             .collect();
         Ok(Draw {

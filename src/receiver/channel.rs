@@ -127,8 +127,35 @@ pub struct ChannelConfig {
     /// and `lines` holds `f_p = t(0)` and `f_m` at 288.15 K.
     #[serde(skip)]
     pub spectral_filter: Option<SpectralFilter>,
+    /// What this channel of the file records: photon counts or analog codes (a `both`
+    /// detector is two channels of the file, one of each, [`super::split_detection_modes`]).
+    #[serde(skip)]
+    pub record: Record,
+    /// The other channel of a `both` pair (its index among the receiver's channels).
+    #[serde(skip)]
+    pub glue_partner: Option<usize>,
     /// The whole config with `[instrument]` as this channel sees it.
     pub config: ScenarioConfig,
+}
+
+/// What one channel of the file records.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Record {
+    /// Photon counts (through the dead time where the detector has one).
+    #[default]
+    PhotonCounting,
+    /// Summed ADC codes of the analog chain (`src/detector/analog.rs`).
+    Analog,
+}
+
+impl Record {
+    /// The name in files (`acquisition_mode`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Record::PhotonCounting => "photon_counting",
+            Record::Analog => "analog",
+        }
+    }
 }
 
 /// A channel's filter: the band it passes and the share of it it transmits.

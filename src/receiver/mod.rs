@@ -15,7 +15,7 @@ pub mod channel;
 pub mod polarization;
 
 pub use channel::{
-    ChannelConfig, ChannelKind, Filter, LineTransmission, RamanSpecies, channel_name,
+    ChannelConfig, ChannelKind, Filter, LineTransmission, RamanSpecies, Record, channel_name,
 };
 pub use polarization::PolarizationOptics;
 
@@ -65,15 +65,18 @@ pub fn expand(
     }
     if entries.is_empty() {
         let i = &base.instrument;
-        return Ok(vec![ChannelConfig {
+        let channels = vec![ChannelConfig {
             name: channel_name(i.wavelength_nm, i.channel),
             kind: ChannelKind::default(),
             species: RamanSpecies::default(),
             lines: LineTransmission::ELASTIC,
             band_transmission: 1.0,
             spectral_filter: None,
+            record: Record::default(),
+            glue_partner: None,
             config: base.clone(),
-        }]);
+        }];
+        return split_detection_modes(channels, file);
     }
     if entries.len() > MAX_CHANNELS {
         return Err(Error::config(
@@ -100,7 +103,57 @@ pub fn expand(
         }
         channels.push(channel);
     }
-    Ok(channels)
+    split_detection_modes(channels, file)
+}
+
+/// Each channel as the file records it: an `analog` detector's channel records analog
+/// codes; a `both` detector's channel becomes two, `<name>_an` (analog) then `<name>_pc`
+/// (photon counting), partners of each other, recording the same photons.
+pub fn split_detection_modes(
+    channels: Vec<ChannelConfig>,
+    file: &str,
+) -> Result<Vec<ChannelConfig>> {
+    let mut out: Vec<ChannelConfig> = Vec::with_capacity(channels.len());
+    for channel in channels {
+        let mode = channel.detector().map(|d| d.mode).unwrap_or_default();
+        match mode {
+            config::DetectionMode::PhotonCounting => out.push(channel),
+            config::DetectionMode::Analog => out.push(ChannelConfig {
+                record: Record::Analog,
+                ..channel
+            }),
+            config::DetectionMode::Both => {
+                let k = out.len();
+                let analog = ChannelConfig {
+                    name: format!("{}_an", channel.name),
+                    record: Record::Analog,
+                    glue_partner: Some(k + 1),
+                    ..channel.clone()
+                };
+                out.push(analog);
+                out.push(ChannelConfig {
+                    name: format!("{}_pc", channel.name),
+                    record: Record::PhotonCounting,
+                    glue_partner: Some(k),
+                    ..channel
+                });
+            }
+        }
+    }
+    for (k, c) in out.iter().enumerate() {
+        if let Some(j) = out[..k].iter().position(|o| o.name == c.name) {
+            return Err(Error::config(
+                file,
+                "instrument.channels",
+                format!(
+                    "two channels are named `{}` (channels {j} and {k} of the file, after a \
+                     `both` detector's channel became `<name>_an` and `<name>_pc`); rename one",
+                    c.name
+                ),
+            ));
+        }
+    }
+    Ok(out)
 }
 
 /// The config as channel `k` (`entry`) sees it.
@@ -222,6 +275,8 @@ fn expand_one(
         lines,
         band_transmission,
         spectral_filter,
+        record: Record::default(),
+        glue_partner: None,
         config,
     };
     channel.name = name.unwrap_or_else(|| channel.default_name());

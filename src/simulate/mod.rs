@@ -16,7 +16,7 @@ use rayon::prelude::*;
 pub mod scene;
 
 use crate::config::Method;
-use crate::detector::{DeadTime, DetectedShots, dead_time};
+use crate::detector::{Analog, DeadTime, DetectedShots, analog, dead_time};
 use crate::error::{Error, Result};
 use crate::laser::PulseEnergy;
 use crate::output::raw_file::content::{self, RunInfo};
@@ -316,6 +316,11 @@ pub enum StreamSampler {
     AggregateNormal(Vec<f64>, f64),
     /// Every shot drawn and recorded through the detector's dead time.
     DeadTimed(Box<ShotSampler>, DeadTime),
+    /// Every shot drawn and recorded by an analog chain (ADC codes).
+    AnalogShots(Box<ShotSampler>, Box<Analog>),
+    /// A profile's photoelectrons drawn by the inner (aggregate) sampler, recorded by an
+    /// analog chain as a whole (`Analog::record_profile`).
+    AnalogAggregate(Box<StreamSampler>, Box<Analog>),
 }
 
 impl StreamSampler {
@@ -380,6 +385,22 @@ impl StreamSampler {
         }
     }
 
+    /// The same sampler recorded by an analog chain: the same photons (the same draws
+    /// from the same seed), each shot's (`Shot`, `Modulated`) or the profile's sums (the
+    /// aggregate samplers) recorded as ADC codes.
+    pub fn through_analog(self, analog: Option<&Analog>) -> Self {
+        let Some(a) = analog else {
+            return self;
+        };
+        match self {
+            StreamSampler::Shot(s) => StreamSampler::AnalogShots(s, Box::new(a.clone())),
+            StreamSampler::Modulated(m) => {
+                StreamSampler::Modulated(Box::new(m.through_analog(Some(a.clone()))))
+            }
+            other => StreamSampler::AnalogAggregate(Box::new(other), Box::new(a.clone())),
+        }
+    }
+
     /// Draws profile `profile` of `shots` shots into `acc`: a function of the arguments only,
     /// so any profile can be regenerated alone.
     pub fn profile_counts(&self, seed: u64, profile: u64, shots: u64, acc: &mut [u64]) {
@@ -411,6 +432,14 @@ impl StreamSampler {
             StreamSampler::DeadTimed(s, d) => {
                 dead_time::recorded_profile(s, d, seed, profile, shots, acc)
             }
+            StreamSampler::AnalogShots(s, a) => {
+                analog::recorded_profile(s, a, seed, profile, shots, acc)
+            }
+            StreamSampler::AnalogAggregate(photons, a) => {
+                let mut n = vec![0u64; acc.len()];
+                photons.profile_counts(seed, profile, shots, &mut n);
+                a.record_profile(&mut analog::aggregate_rng(seed, profile), &n, shots, acc)
+            }
         }
     }
 }
@@ -423,7 +452,7 @@ pub fn stream_samplers(
     energy: RunEnergy,
     components: bool,
     seed: u64,
-    dead: Option<DeadTime>,
+    instrument: &crate::instrument::Instrument,
 ) -> Vec<(StreamSampler, u64)> {
     let n = e.n_bins();
     let zeros = vec![0.0; n];
@@ -445,8 +474,9 @@ pub fn stream_samplers(
         ]
     } else {
         let rest = vec![e.background + e.dark; n];
-        let sampler =
-            StreamSampler::with_energy(method, &e.signal, &rest, energy).through_detector(dead);
+        let sampler = StreamSampler::with_energy(method, &e.signal, &rest, energy)
+            .through_detector(instrument.dead_time)
+            .through_analog(instrument.analog.as_ref());
         vec![(sampler, seed)]
     }
 }
@@ -462,6 +492,13 @@ pub fn check_detector(lidar: &Lidar, components: bool) -> Result<()> {
         return Err(Error::Unsupported(
             "--components is not available with dead time: a recorded count is not a sum of \
              signal, background and dark counts"
+                .into(),
+        ));
+    }
+    if components && lidar.channels.iter().any(|c| c.instrument.analog.is_some()) {
+        return Err(Error::Unsupported(
+            "--components is not available with an analog detector: an ADC code is not a sum \
+             of signal, background and dark counts"
                 .into(),
         ));
     }
@@ -706,8 +743,8 @@ pub fn run(
         .zip(&expected)
         .enumerate()
         .map(|(k, (c, e))| {
-            let seed = channel_seed(seed, k);
-            stream_samplers(e, method, energy, components, seed, c.instrument.dead_time)
+            let seed = channel_seed(seed, lidar.photon_source(k));
+            stream_samplers(e, method, energy, components, seed, &c.instrument)
         })
         .collect();
     let nominal_energy_j = cfg.instrument.pulse_energy_j;
@@ -878,6 +915,17 @@ pub fn changing_scene(
         return Err(Error::Unsupported(
             "--components is not available for a scene that changes along the track yet".into(),
         ));
+    }
+    if let Some(c) = lidar
+        .channels
+        .iter()
+        .find(|c| c.instrument.analog.is_some())
+    {
+        return Err(Error::Unsupported(format!(
+            "channel {} records analog, which this version does not draw in a scene that \
+             changes along the track (or with the sun) yet; use photon counting there",
+            c.channel_name
+        )));
     }
     if matches!(method, ResolvedMethod::AggregateNormal { .. }) {
         *method = ResolvedMethod::Aggregate;

@@ -578,6 +578,8 @@ fn column_scenario(
             lines: c.loaded.channels[0].lines,
             band_transmission: c.loaded.channels[0].band_transmission,
             spectral_filter: c.loaded.channels[0].spectral_filter.clone(),
+            record: c.loaded.channels[0].record,
+            glue_partner: c.loaded.channels[0].glue_partner,
             config: config.clone(),
         }],
         config,

@@ -327,8 +327,12 @@ impl SimulatorSource {
             .map(|(k, (c, e))| {
                 let rest = vec![e.background + e.dark; e.n_bins()];
                 let sampler = StreamSampler::with_energy(method, &e.signal, &rest, energy)
-                    .through_detector(c.instrument.dead_time);
-                (sampler, simulate::channel_seed(seed, k))
+                    .through_detector(c.instrument.dead_time)
+                    .through_analog(c.instrument.analog.as_ref());
+                (
+                    sampler,
+                    simulate::channel_seed(seed, lidar.photon_source(k)),
+                )
             })
             .collect();
         SimulatorSource {

@@ -226,7 +226,7 @@ pub fn variables(
         var(
             "expected_counts",
             ChannelBin,
-            "expected recorded counts per shot after the detector (dead time); signal + background + dark for an ideal detector",
+            "expected recorded counts per shot after the detector (dead time; ADC codes of an analog channel); signal + background + dark for an ideal photon counter",
             "count",
             &[],
             per_channel(expected, |e| e.recorded.clone()),
@@ -252,6 +252,7 @@ pub fn variables(
         ),
     ];
     vars.extend(truth::instrument_variables(lidar, e0));
+    vars.extend(super::detection::analog_variables(lidar, expected));
     vars.extend(truth::column_variables(lidar, columns));
     if changing {
         // per profile, in the order the simulation gives their rows

@@ -29,6 +29,7 @@
 pub mod check;
 pub mod chunk;
 pub mod content;
+pub mod detection;
 pub(crate) mod hdf5_ds;
 pub mod layout;
 pub mod planes;

@@ -175,7 +175,7 @@ const fn channel_text(name: &'static str) -> Known {
 }
 
 /// The variables of the layout [`check`] knows by name (docs/file-format.md).
-const KNOWN: [Known; 25] = [
+const KNOWN: [Known; 27] = [
     known(COLUMN_DIM, &[Dim::Col], Class::Signed, false, Values::Any),
     known(SLOT_DIM, &[Dim::K], Class::Signed, false, Values::Any),
     known(
@@ -196,6 +196,8 @@ const KNOWN: [Known; 25] = [
     channel_text("channel_species"),
     channel_text("polarization"),
     channel_text("detection_mode"),
+    channel_text("acquisition_mode"),
+    channel_text("glue_partner"),
     channel_text("dead_time_model"),
     channel_text("molecular_line"),
     known(

@@ -241,7 +241,8 @@ pub(crate) fn beta_mol_attributes(lidar: &Lidar) -> Vec<(String, AttrValue)> {
 }
 
 /// The string variables of the channel dimension (format 3): kind, species,
-/// polarization, detection mode, dead-time model, molecular line.
+/// polarization, detection mode, acquisition mode, glue partner, dead-time model,
+/// molecular line.
 pub fn channel_text(lidar: &Lidar) -> Vec<TextVariable> {
     let text = |name: &str, long_name: &str, f: &dyn Fn(&Scenario) -> String| TextVariable {
         name: name.into(),
@@ -269,9 +270,32 @@ pub fn channel_text(lidar: &Lidar) -> Vec<TextVariable> {
             "polarization the channel sees: total, parallel or perpendicular",
             &|c| c.loaded.config.instrument.channel.name().into(),
         ),
-        text("detection_mode", "photon_counting, analog or both", &|_| {
-            "photon_counting".into()
-        }),
+        text(
+            "detection_mode",
+            "the detector's mode: photon_counting, analog or both (a both detector is two channels, <name>_an and <name>_pc, recording the same photons)",
+            &|c| {
+                c.loaded.channels[0]
+                    .detector()
+                    .map(|d| d.mode)
+                    .unwrap_or_default()
+                    .name()
+                    .into()
+            },
+        ),
+        text(
+            "acquisition_mode",
+            "what this channel's counts are: photon_counting (photon counts) or analog (ADC codes summed over the shots)",
+            &|c| c.loaded.channels[0].record.name().into(),
+        ),
+        text(
+            "glue_partner",
+            "the other channel of a both detector's pair, recording the same photons in the other mode (empty otherwise)",
+            &|c| {
+                c.loaded.channels[0]
+                    .glue_partner
+                    .map_or_else(String::new, |j| lidar.channels[j].channel_name.clone())
+            },
+        ),
         text(
             "dead_time_model",
             "detector dead-time model: none, nonparalyzable or paralyzable",

@@ -1,0 +1,431 @@
+//! Analog detection (docs/model.md §4b, "Analog detection"): the photomultiplier's anode
+//! current through a load resistance, a first-order low-pass, Gaussian electronic noise,
+//! an offset and an ADC; what the file holds is the sum over a profile's shots of each
+//! bin's ADC code, as a Licel transient recorder's analog memory does.
+//!
+//! **Law of one shot and bin.** `N ~ Poisson(λ)` photoelectrons (signal, background and
+//! dark: the shot path's own draw), each with a gain g of mean G and excess noise factor
+//! `F = 1 + Var(g)/G²`, Gamma-distributed with shape `k = 1/(F−1)` (a standard model of a
+//! photomultiplier's pulse-height spread; F = 1 is a noiseless gain). The sum of N
+//! Gamma(k, G/k) gains is Gamma(Nk, G/k), one draw whatever N. The charge `q·G·e` of a
+//! bin, spread evenly over its width Δt, gives the mean current `q·G·e/Δt` and the voltage
+//! `q·u` with `u = G·e·R/Δt` volts per photoelectron. The electronics' low-pass
+//! (bandwidth B, time constant `τ_e = 1/(2πB)`) moves a share `h_j` of a bin's charge into
+//! the bin j later ([`impulse_response`]); Gaussian noise of rms σ_e is added to every
+//! sample, then the offset V₀, and the ADC of `bits` bits over `[0, range]` rounds to the
+//! nearest code `round(V/LSB)`, `LSB = range/2^bits`, clipped to `[0, 2^bits − 1]`.
+//!
+//! **Expectation** (the file's `expected_counts`, codes per shot):
+//! `E[code_b] = V₀/LSB + c·Σ_j h_j λ_{b−j}`, `c = u/LSB` codes per photoelectron, and
+//! **variance** `Var[code_b] = c²·F·Σ_j h_j² λ_{b−j} + (σ_e/LSB)² + 1/12`. The rounding is
+//! taken as an independent uniform error (mean 0, variance 1/12 LSB²): with σ_e ≥ LSB its
+//! bias is below `e^{−2π²}/π ≈ 9e-10` LSB (the Gaussian part alone smooths the
+//! quantiser; Widrow & Kollár 2008, *Quantization Noise*, ch. 4), 2e-3 LSB at σ_e =
+//! LSB/2. Clipping is not in the law: `simulate` warns where a bin's mean is within four
+//! standard deviations of either end of the ADC range.
+//!
+//! **Shot path** ([`Analog::record_shot`]): exact, per shot and bin, as above.
+//! **Aggregate path** ([`Analog::record_profile`]): the photoelectrons of the M shots
+//! summed (one Poisson draw per bin, as the photon-counting aggregate path), their
+//! charge one Gamma(N_tot·k, 1/k) draw (exact), the low-pass applied to the sum (exact:
+//! it is linear), and the M shots' noise and rounding as one Gaussian of variance
+//! `M·((σ_e/LSB)² + 1/12)` around `M·V₀/LSB + c·Σ h q`, rounded and clipped to
+//! `[0, M·(2^bits − 1)]`. This approximates the per-shot quantisation (exact in mean and
+//! variance where the law above holds) and ignores per-shot clipping.
+
+use rand::Rng;
+use rand_distr::{Distribution, Gamma, StandardNormal};
+
+use crate::config::DetectorConfig;
+use crate::sampling::stream_rng;
+use crate::sampling::{AGGREGATE_STREAM, SHOT_BLOCK, ShotCounts, ShotSampler, add_block_sums};
+
+/// One standard normal variate (rand_distr's ziggurat).
+fn normal<R: Rng + ?Sized>(rng: &mut R) -> f64 {
+    StandardNormal.sample(rng)
+}
+
+/// Elementary charge, C (SI 2019, exact).
+pub const ELEMENTARY_CHARGE_C: f64 = 1.602_176_634e-19;
+
+/// Seed offset of the gain and noise streams of an analog record (the photons are the
+/// photon-counting draw's own, stream for stream).
+pub const ANALOG_STREAM: u64 = 0xA7A1_06AD_C000_0001;
+
+/// The analog chain's defaults: a photomultiplier of gain 10⁶ and F = 1.2 (a first dynode
+/// gain of ~6) into 50 Ω, no bandwidth limit, 50 µV of noise, a 2 mV offset and a 12-bit
+/// ADC over 100 mV (one of a Licel TR's ranges; LSB 24.4 µV).
+pub mod defaults {
+    /// Mean gain G.
+    pub const GAIN: f64 = 1e6;
+    /// Excess noise factor F.
+    pub const EXCESS_NOISE_FACTOR: f64 = 1.2;
+    /// Load resistance, Ω.
+    pub const LOAD_RESISTANCE_OHM: f64 = 50.0;
+    /// −3 dB bandwidth, Hz (0 = none).
+    pub const BANDWIDTH_HZ: f64 = 0.0;
+    /// Electronic noise rms, V.
+    pub const ELECTRONIC_NOISE_V: f64 = 5e-5;
+    /// Offset, V.
+    pub const OFFSET_V: f64 = 2e-3;
+    /// ADC bits.
+    pub const ADC_BITS: u32 = 12;
+    /// ADC input range, V.
+    pub const ADC_RANGE_V: f64 = 0.1;
+}
+
+/// Weight of the low-pass's tail beyond which taps are dropped; what is dropped is added
+/// to the last tap kept, so that the response keeps a unit sum (the mean charge is kept).
+const KERNEL_TAIL: f64 = 1e-12;
+
+/// An analog recorder on a window of bins of equal width.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Analog {
+    /// Mean gain G, electrons per photoelectron.
+    pub gain: f64,
+    /// Excess noise factor F ≥ 1.
+    pub excess_noise_factor: f64,
+    /// Load resistance R, Ω.
+    pub load_resistance_ohm: f64,
+    /// −3 dB bandwidth B of the low-pass, Hz (0 = none).
+    pub bandwidth_hz: f64,
+    /// Electronic noise σ_e per sample, V.
+    pub electronic_noise_v: f64,
+    /// Offset V₀, V.
+    pub offset_v: f64,
+    /// ADC bits.
+    pub adc_bits: u32,
+    /// ADC input range, V.
+    pub adc_range_v: f64,
+    /// Bin width Δt, s.
+    pub bin_width_s: f64,
+    /// The low-pass's share of a bin's charge in each later bin, `h_0, h_1, …`.
+    kernel: Vec<f64>,
+}
+
+/// The share `h_j` of a bin's charge (spread evenly over the bin) that a first-order
+/// low-pass of time constant τ_e moves into the bin j later, for bin width Δt:
+/// `h_0 = 1 − r(1−a)`, `h_j = r(1−a)²a^{j−1}`, with `r = τ_e/Δt`, `a = e^{−Δt/τ_e}` (the
+/// step response `1 − e^{−t/τ_e}` averaged over each bin). The sum is 1. `τ_e = 0`: `[1]`.
+pub fn impulse_response(tau_e_s: f64, bin_width_s: f64) -> Vec<f64> {
+    if tau_e_s <= 0.0 {
+        return vec![1.0];
+    }
+    let r = tau_e_s / bin_width_s;
+    let a = (-bin_width_s / tau_e_s).exp();
+    let mut h = vec![1.0 - r * (1.0 - a)];
+    let mut tail = 1.0 - h[0];
+    let mut tap = r * (1.0 - a) * (1.0 - a);
+    while tail > KERNEL_TAIL && tap > 0.0 {
+        h.push(tap);
+        tail -= tap;
+        tap *= a;
+    }
+    if let Some(last) = h.last_mut() {
+        *last += tail.max(0.0);
+    }
+    h
+}
+
+/// Reusable buffer of [`Analog::record_shot`]: the smeared charge of every bin.
+#[derive(Debug, Default, Clone)]
+pub struct AnalogScratch {
+    charge: Vec<f64>,
+}
+
+impl Analog {
+    /// The recorder of `[instrument.detector]` (its analog keys, defaults where absent) on
+    /// bins of `bin_width_s`.
+    pub fn from_config(d: &DetectorConfig, bin_width_s: f64) -> Self {
+        let bandwidth_hz = d.bandwidth_hz.unwrap_or(defaults::BANDWIDTH_HZ);
+        let tau_e = if bandwidth_hz > 0.0 {
+            1.0 / (2.0 * std::f64::consts::PI * bandwidth_hz)
+        } else {
+            0.0
+        };
+        Analog {
+            gain: d.gain.unwrap_or(defaults::GAIN),
+            excess_noise_factor: d
+                .excess_noise_factor
+                .unwrap_or(defaults::EXCESS_NOISE_FACTOR),
+            load_resistance_ohm: d
+                .load_resistance_ohm
+                .unwrap_or(defaults::LOAD_RESISTANCE_OHM),
+            bandwidth_hz,
+            electronic_noise_v: d.electronic_noise_v.unwrap_or(defaults::ELECTRONIC_NOISE_V),
+            offset_v: d.offset_v.unwrap_or(defaults::OFFSET_V),
+            adc_bits: d.adc_bits.unwrap_or(defaults::ADC_BITS),
+            adc_range_v: d.adc_range_v.unwrap_or(defaults::ADC_RANGE_V),
+            bin_width_s,
+            kernel: impulse_response(tau_e, bin_width_s),
+        }
+    }
+
+    /// The low-pass's shares `h_j`.
+    pub fn kernel(&self) -> &[f64] {
+        &self.kernel
+    }
+
+    /// One ADC code (LSB), V: `range/2^bits`.
+    pub fn volts_per_code(&self) -> f64 {
+        self.adc_range_v / 2f64.powi(self.adc_bits as i32)
+    }
+
+    /// The largest code of one shot, `2^bits − 1`.
+    pub fn full_scale_code(&self) -> u64 {
+        (1u64 << self.adc_bits) - 1
+    }
+
+    /// Mean voltage of one photoelectron in its bin, `u = G·e·R/Δt`, V.
+    pub fn volts_per_photoelectron(&self) -> f64 {
+        self.gain * ELEMENTARY_CHARGE_C * self.load_resistance_ohm / self.bin_width_s
+    }
+
+    /// Mean codes per photoelectron, `c = u/LSB`: the gluing constant (analog over
+    /// photon counting in their common linear range, with the offset taken off).
+    pub fn codes_per_photoelectron(&self) -> f64 {
+        self.volts_per_photoelectron() / self.volts_per_code()
+    }
+
+    /// The offset in codes, `V₀/LSB`.
+    pub fn offset_codes(&self) -> f64 {
+        self.offset_v / self.volts_per_code()
+    }
+
+    /// The electronic noise in codes, `σ_e/LSB`.
+    pub fn noise_codes(&self) -> f64 {
+        self.electronic_noise_v / self.volts_per_code()
+    }
+
+    /// `Σ_j h_j^power x_{b−j}` for every bin b (the low-pass applied to `x`; its squares
+    /// etc. for the cumulants).
+    pub fn smear(&self, x: &[f64], power: i32) -> Vec<f64> {
+        let mut y = vec![0.0; x.len()];
+        for (b, &v) in x.iter().enumerate() {
+            if v == 0.0 {
+                continue;
+            }
+            for (j, h) in self.kernel.iter().enumerate() {
+                match y.get_mut(b + j) {
+                    Some(t) => *t += h.powi(power) * v,
+                    None => break,
+                }
+            }
+        }
+        y
+    }
+
+    /// Expected code per shot of each bin for photoelectron means `lambda` per shot.
+    pub fn expected_codes(&self, lambda: &[f64]) -> Vec<f64> {
+        let (c, v0) = (self.codes_per_photoelectron(), self.offset_codes());
+        self.smear(lambda, 1).iter().map(|y| v0 + c * y).collect()
+    }
+
+    /// The first four cumulants of one shot's code of each bin (module docs): the
+    /// compound Poisson–Gamma charge (`κ_j = c^j·E[g^j]/G^j·Σ h^j λ`), the Gaussian noise
+    /// and the uniform rounding error (κ2 = 1/12, κ4 = −1/120).
+    pub fn shot_cumulants(&self, lambda: &[f64]) -> Vec<[f64; 4]> {
+        let c = self.codes_per_photoelectron();
+        let moments = self.gain_moments();
+        let s: Vec<Vec<f64>> = (1..=4).map(|p| self.smear(lambda, p)).collect();
+        let noise = self.noise_codes().powi(2);
+        (0..lambda.len())
+            .map(|b| {
+                let k = |p: usize| c.powi(p as i32) * moments[p - 1] * s[p - 1][b];
+                [
+                    self.offset_codes() + k(1),
+                    k(2) + noise + 1.0 / 12.0,
+                    k(3),
+                    k(4) - 1.0 / 120.0,
+                ]
+            })
+            .collect()
+    }
+
+    /// Raw moments `E[g^p]/G^p`, p = 1..4, of the Gamma gain (all 1 when F = 1).
+    fn gain_moments(&self) -> [f64; 4] {
+        let f = self.excess_noise_factor - 1.0;
+        // Gamma(k, 1/k): E[x^p] = Π_{i<p} (k+i)/k = Π (1 + i·(F−1))
+        let mut m = [1.0; 4];
+        for p in 1..4 {
+            m[p] = m[p - 1] * (1.0 + p as f64 * f);
+        }
+        m
+    }
+
+    /// The charge of `n` photoelectrons in units of G: Gamma(n·k, 1/k), or n when F = 1.
+    fn charge<R: Rng + ?Sized>(&self, rng: &mut R, n: f64) -> f64 {
+        let f = self.excess_noise_factor - 1.0;
+        if n <= 0.0 {
+            return 0.0;
+        }
+        if f <= 0.0 {
+            return n;
+        }
+        match Gamma::new(n / f, f) {
+            Ok(g) => g.sample(rng),
+            Err(_) => n,
+        }
+    }
+
+    /// Records one shot whose photoelectrons per bin are `photons`, adding each bin's
+    /// code into `acc`.
+    pub fn record_shot<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        photons: &ShotCounts,
+        scratch: &mut AnalogScratch,
+        acc: &mut [u64],
+    ) {
+        let bins = acc.len();
+        scratch.charge.resize(bins, 0.0);
+        let y = &mut scratch.charge;
+        for (b, n) in photons.nonzero() {
+            let q = self.charge(rng, f64::from(n));
+            for (t, h) in y[b..].iter_mut().zip(&self.kernel) {
+                *t += h * q;
+            }
+        }
+        let (c, v0, sigma) = (
+            self.codes_per_photoelectron(),
+            self.offset_codes(),
+            self.noise_codes(),
+        );
+        let full = self.full_scale_code() as f64;
+        for (a, t) in acc.iter_mut().zip(y.iter_mut()) {
+            let noise = if sigma > 0.0 {
+                sigma * normal(rng)
+            } else {
+                0.0
+            };
+            let v = v0 + c * *t + noise;
+            *a += v.round().clamp(0.0, full) as u64;
+            *t = 0.0;
+        }
+    }
+
+    /// Records a whole profile of `shots` shots from the summed photoelectrons of each
+    /// bin `photoelectrons` (aggregate path, module docs), adding the code sums into `acc`.
+    pub fn record_profile<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        photoelectrons: &[u64],
+        shots: u64,
+        acc: &mut [u64],
+    ) {
+        let m = shots as f64;
+        let q: Vec<f64> = photoelectrons
+            .iter()
+            .map(|&n| self.charge(rng, n as f64))
+            .collect();
+        let y = self.smear(&q, 1);
+        let (c, v0) = (self.codes_per_photoelectron(), self.offset_codes());
+        let sd = (m * (self.noise_codes().powi(2) + 1.0 / 12.0)).sqrt();
+        let full = m * self.full_scale_code() as f64;
+        for (a, t) in acc.iter_mut().zip(&y) {
+            let v = m * v0 + c * t + sd * normal(rng);
+            *a += v.round().clamp(0.0, full) as u64;
+        }
+    }
+
+    /// Whether each bin's record is linear in its photoelectrons (the file's
+    /// `linear_range`): the mean code above the offset is at least the rms of one shot's
+    /// electronic noise and rounding (below, a shot's code is mostly noise), and the mean
+    /// stays four standard deviations inside the ADC's ends (no clipping).
+    pub fn linear_bins(&self, lambda: &[f64]) -> Vec<bool> {
+        let floor = (self.noise_codes().powi(2) + 1.0 / 12.0).sqrt();
+        let full = self.full_scale_code() as f64;
+        self.shot_cumulants(lambda)
+            .iter()
+            .map(|k| {
+                let sd = k[1].max(0.0).sqrt();
+                k[0] - self.offset_codes() >= floor
+                    && k[0] - 4.0 * sd >= -0.5
+                    && k[0] + 4.0 * sd <= full + 0.5
+            })
+            .collect()
+    }
+
+    /// The warning for bins whose mean code per shot comes within four standard
+    /// deviations of either end of the ADC range (where clipping leaves the law), naming
+    /// the first such bin; `None` when no bin does.
+    pub fn clipping_warning(&self, lambda: &[f64], altitude_m: &[f64]) -> Option<String> {
+        let full = self.full_scale_code() as f64;
+        let cumulants = self.shot_cumulants(lambda);
+        let (bin, k) = cumulants.iter().enumerate().find(|(_, k)| {
+            let sd = k[1].max(0.0).sqrt();
+            k[0] - 4.0 * sd < -0.5 || k[0] + 4.0 * sd > full + 0.5
+        })?;
+        Some(format!(
+            "lidarsim: warning: analog bin {bin} ({:.2} km) has a mean of {:.1} codes per shot \
+             (sd {:.1}) within 4 sd of the ADC's ends (0, {full}): its codes clip, and \
+             expected_counts (which has no clipping) overstates or understates them; change \
+             instrument.detector.adc_range_v, offset_v or gain",
+            altitude_m.get(bin).copied().unwrap_or(f64::NAN) / 1e3,
+            k[0],
+            k[1].max(0.0).sqrt()
+        ))
+    }
+}
+
+/// Accumulates one profile of `shots` shots recorded in analog into `acc`: the photons
+/// of each shot drawn by `photons` (the shot path, with the photon-counting draw's own
+/// streams `stream_rng(seed, profile, block)`), their gains and the noise from
+/// `stream_rng(seed ^ ANALOG_STREAM, profile, block)`; blocks of [`SHOT_BLOCK`] shots
+/// summed in integers, so the codes do not depend on the thread count.
+pub fn recorded_profile(
+    photons: &ShotSampler,
+    analog: &Analog,
+    seed: u64,
+    profile: u64,
+    shots: u64,
+    acc: &mut [u64],
+) {
+    let bins = acc.len();
+    add_block_sums(acc, shots.div_ceil(SHOT_BLOCK), |b| {
+        let mut part = vec![0u64; bins];
+        let mut scratch = AnalogScratch::default();
+        let n = SHOT_BLOCK.min(shots - b * SHOT_BLOCK);
+        let mut electronics = stream_rng(seed ^ ANALOG_STREAM, profile, b);
+        photons.for_each_shot(&mut stream_rng(seed, profile, b), n, |shot| {
+            analog.record_shot(&mut electronics, shot, &mut scratch, &mut part)
+        });
+        part
+    });
+}
+
+/// The generator of an aggregate analog profile's gains and noise.
+pub fn aggregate_rng(seed: u64, profile: u64) -> rand_pcg::Pcg64Mcg {
+    stream_rng(seed ^ ANALOG_STREAM, profile, AGGREGATE_STREAM)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_impulse_response_sums_to_one_and_matches_the_rc_step() {
+        let h = impulse_response(16e-9, 50e-9);
+        assert!((h.iter().sum::<f64>() - 1.0).abs() < 1e-15);
+        // first bin: 1 − (τ/Δt)(1 − e^{−Δt/τ})
+        let (r, a) = (16.0 / 50.0, (-50.0f64 / 16.0).exp());
+        assert!((h[0] - (1.0 - r * (1.0 - a))).abs() < 1e-15);
+        assert!((h[2] / h[1] - a).abs() < 1e-12);
+        assert_eq!(impulse_response(0.0, 50e-9), vec![1.0]);
+    }
+
+    #[test]
+    fn gain_moments_are_those_of_a_unit_mean_gamma() {
+        let d = DetectorConfig {
+            excess_noise_factor: Some(1.5),
+            ..serde_default()
+        };
+        let a = Analog::from_config(&d, 5e-8);
+        // k = 2: E[x²] = (k+1)/k = 1.5, E[x³] = 1.5·2 = 3, E[x⁴] = 3·2.5 = 7.5
+        assert_eq!(a.gain_moments(), [1.0, 1.5, 3.0, 7.5]);
+    }
+
+    fn serde_default() -> DetectorConfig {
+        toml::from_str("").expect("every key has a default")
+    }
+}

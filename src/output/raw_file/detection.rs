@@ -1,0 +1,106 @@
+//! The analog chain's variables (docs/file-format.md, "Analog and photon-counting
+//! channels"), written when a channel records analog: the ADC's conversion, the chain's
+//! parameters (NaN for photon-counting channels), the gluing constant and which bins each
+//! record is linear in.
+
+use super::content::var;
+use super::{AttrValue, Dims, Variable};
+use crate::detector::Analog;
+use crate::scenario::{ExpectedProfile, Lidar};
+
+/// The variables of a run with an analog channel; none without.
+pub fn analog_variables(lidar: &Lidar, expected: &[ExpectedProfile]) -> Vec<Variable> {
+    if lidar.channels.iter().all(|c| c.instrument.analog.is_none()) {
+        return Vec::new();
+    }
+    let per = |f: fn(&Analog) -> f64| {
+        lidar
+            .channels
+            .iter()
+            .map(|c| c.instrument.analog.as_ref().map_or(f64::NAN, f))
+            .collect::<Vec<f64>>()
+    };
+    let nan_fill = |v: Variable| Variable {
+        attributes: vec![("_FillValue".into(), AttrValue::F64(f64::NAN))],
+        ..v
+    };
+    let scalars: [(&str, &str, &str, fn(&Analog) -> f64); 10] = [
+        (
+            "adc_volts_per_count",
+            "voltage of one ADC code (LSB = adc_range / 2^adc_bits): volts = counts / n_shots x this, per shot",
+            "V",
+            Analog::volts_per_code,
+        ),
+        ("adc_bits", "ADC resolution", "1", |a| f64::from(a.adc_bits)),
+        ("adc_range", "ADC input range (full scale)", "V", |a| {
+            a.adc_range_v
+        }),
+        (
+            "analog_offset",
+            "baseline offset added before the ADC",
+            "V",
+            |a| a.offset_v,
+        ),
+        (
+            "electronic_noise",
+            "rms Gaussian electronic noise of one sample (one bin, one shot)",
+            "V",
+            |a| a.electronic_noise_v,
+        ),
+        ("pmt_gain", "mean gain G of the photomultiplier", "1", |a| {
+            a.gain
+        }),
+        (
+            "excess_noise_factor",
+            "excess noise factor F = 1 + Var(g)/G^2 of the gain (Gamma-distributed)",
+            "1",
+            |a| a.excess_noise_factor,
+        ),
+        (
+            "load_resistance",
+            "load resistance the anode current flows through",
+            "ohm",
+            |a| a.load_resistance_ohm,
+        ),
+        (
+            "analog_bandwidth",
+            "-3 dB bandwidth of the first-order low-pass (0 = none)",
+            "Hz",
+            |a| a.bandwidth_hz,
+        ),
+        (
+            "analog_counts_per_photoelectron",
+            "gluing constant: mean ADC codes per photoelectron per shot, so that expected_counts = analog_offset/adc_volts_per_count + this x low-passed (expected_signal + expected_background + expected_dark)",
+            "count",
+            Analog::codes_per_photoelectron,
+        ),
+    ];
+    let mut vars: Vec<Variable> = scalars
+        .into_iter()
+        .map(|(name, long_name, units, f)| {
+            nan_fill(var(name, Dims::Channel, long_name, units, &[], per(f)))
+        })
+        .collect();
+    let linear: Vec<f64> = lidar
+        .channels
+        .iter()
+        .zip(expected)
+        .flat_map(|(c, e)| {
+            crate::detector::linear_bins(
+                c.instrument.analog.as_ref(),
+                &e.total_per_shot(),
+                &e.recorded,
+            )
+        })
+        .map(|l| if l { 1.0 } else { 0.0 })
+        .collect();
+    vars.push(var(
+        "linear_range",
+        Dims::ChannelBin,
+        "1 where the channel's record is linear in the photons (photon counting: dead time loses at most 1 %; analog: mean above one shot's noise rms and 4 sd inside the ADC range), else 0; a both pair glues where both are 1",
+        "1",
+        &[],
+        linear,
+    ));
+    vars
+}
