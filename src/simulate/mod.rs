@@ -1172,6 +1172,14 @@ fn raw_file_spec(
         })
         .fold(0.0f64, f64::max)
         * shots as f64;
+    // an analog record's codes reach at most the ADC's full scale every shot
+    let analog_max = lidar
+        .channels
+        .iter()
+        .filter_map(|c| c.instrument.analog.as_ref())
+        .map(|a| a.full_scale_code() as f64 * shots as f64)
+        .fold(0.0f64, f64::max);
+    let max_mean = max_mean.max(analog_max);
     let column_models: Vec<&[ExpectedProfile]> = match scene {
         Some(sc) => sc.expected.iter().map(Vec::as_slice).collect(),
         None => vec![expected],

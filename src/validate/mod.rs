@@ -70,9 +70,10 @@ pub struct BinModel {
     pub rest: f64,
     /// Cumulants κ1..κ4 of the accumulated count.
     pub cumulants: [f64; 4],
-    /// Whether the counts pass a dead-time detector: mean and variance are tested
-    /// against the recorded law, the S/N (Eq. 4 is for an ideal detector) is not.
-    pub dead_time: bool,
+    /// Whether the counts pass a detector stage (dead time, analog chain): mean and
+    /// variance are tested against the recorded law, the S/N (Eq. 4 is for an ideal
+    /// photon counter) is not.
+    pub recorded: bool,
 }
 
 impl BinModel {
@@ -90,7 +91,7 @@ impl BinModel {
                 shots * (k1 + 3.0 * v),
                 shots * (k1 + 7.0 * v),
             ],
-            dead_time: false,
+            recorded: false,
         }
     }
 
@@ -107,7 +108,7 @@ impl BinModel {
                 shots * variance,
                 shots * variance,
             ],
-            dead_time: true,
+            recorded: true,
         }
     }
 }
@@ -527,7 +528,7 @@ fn variance_stat(x: &MeanVar, m: &BinModel, nf: f64, enough: bool) -> Stat {
     let [k1, k2, k3, k4] = m.cumulants;
     let (_, _, mu4) = central_moments(k2, k3, k4);
     let var_s2 = mu4 / nf - k2 * k2 * (nf - 3.0) / (nf * (nf - 1.0));
-    let poisson = !m.dead_time && (k2 - k1).abs() <= 1e-12 * k1;
+    let poisson = !m.recorded && (k2 - k1).abs() <= 1e-12 * k1;
     let (g1, g2) = calibration::sample_variance_shape(k1, nf, poisson);
     let shape = calibration::outside_probability(g1, g2);
     Stat {
@@ -564,7 +565,7 @@ fn snr_stat(
     Stat {
         empirical,
         model,
-        z: (enough && !m.dead_time && model >= MIN_SNR && se > 0.0)
+        z: (enough && !m.recorded && model >= MIN_SNR && se > 0.0)
             .then(|| (empirical - model * bias) / se),
         shape: None,
     }
@@ -592,6 +593,37 @@ pub fn recorded_bin_models(
         .iter()
         .zip(mean.iter().zip(&var))
         .map(|(&s, (&m, &v))| BinModel::recorded(s, rest, m, v, shots as f64))
+        .collect()
+}
+
+/// The per-bin models of the ADC codes an analog chain records (`detector::analog`):
+/// the cumulants of one shot's code times the shots, the jitter's share of the variance
+/// (`c²·σ_f²·(h∗λ_sig)²`, the law of total variance over the shot's energy factor f)
+/// added to κ2.
+pub fn analog_bin_models(
+    e: &ExpectedProfile,
+    shots: u64,
+    analog: &crate::detector::Analog,
+    jitter: f64,
+) -> Vec<BinModel> {
+    let m = shots as f64;
+    let rest = e.background + e.dark;
+    let c = analog.codes_per_photoelectron();
+    let smeared_signal = analog.smear(&e.signal, 1);
+    analog
+        .shot_cumulants(&e.total_per_shot())
+        .iter()
+        .zip(&e.signal)
+        .zip(&smeared_signal)
+        .map(|((k, &s), &hs)| {
+            let jitter_var = (c * jitter * hs).powi(2);
+            BinModel {
+                signal: m * s,
+                rest: m * rest,
+                cumulants: [m * k[0], m * (k[1] + jitter_var), m * k[2], m * k[3]],
+                recorded: true,
+            }
+        })
         .collect()
 }
 
@@ -665,7 +697,8 @@ pub fn write_table(w: &mut dyn Write, r: &Report) -> std::io::Result<()> {
         w,
         "{}",
         if r.consistent {
-            "CONSISTENT: the simulated counts agree with the Poisson model and Eq. 4."
+            "CONSISTENT: the simulated counts agree with the model (Poisson and Eq. 4; the \
+             detector's law of docs/model.md §4b for dead time and analog records)."
         } else {
             "INCONSISTENT: at least one statistic departs from the model (false-alarm rate < 2e-3)."
         }

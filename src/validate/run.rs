@@ -11,8 +11,8 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 
 use super::{
-    BinSums, ChannelBins, MIN_REALIZATIONS, Report, SimulatorSource, accumulate, bin_models,
-    bin_reports, recorded_bin_models, scene, verdicts,
+    BinSums, ChannelBins, MIN_REALIZATIONS, Report, SimulatorSource, accumulate, analog_bin_models,
+    bin_models, bin_reports, recorded_bin_models, scene, verdicts,
 };
 use crate::config::Method;
 use crate::error::{Error, Result};
@@ -260,9 +260,10 @@ fn identical(
     let mut channels = Vec::new();
     for (c, e) in lidar.channels.iter().zip(&expected) {
         let offset = models.len();
-        models.extend(match &c.instrument.dead_time {
-            Some(d) => recorded_bin_models(e, shots, d, &laser),
-            None => bin_models(e, shots, laser.jitter),
+        models.extend(match (&c.instrument.dead_time, &c.instrument.analog) {
+            (Some(d), _) => recorded_bin_models(e, shots, d, &laser),
+            (None, Some(a)) => analog_bin_models(e, shots, a, laser.jitter),
+            (None, None) => bin_models(e, shots, laser.jitter),
         });
         altitudes.extend_from_slice(&e.altitude_m);
         channels.push(ChannelBins {

@@ -1,0 +1,373 @@
+//! Analog detection and analog + photon-counting pairs (issue 21 items 1–2; docs/model.md
+//! §4b "Analog detection", `src/detector/analog.rs`). The references are written here from
+//! the physics — a photoelectron's mean voltage `G·e·R/Δt`, the compound Poisson–Gamma
+//! variance `F·G²·N`, Gaussian noise, a rounding ADC — and from a first-order RC circuit
+//! integrated step by step, not from the code under test.
+
+mod common;
+
+use lidarsim::config::DetectorConfig;
+use lidarsim::detector::Analog;
+use lidarsim::detector::analog::AnalogScratch;
+use lidarsim::sampling::{ShotSampler, stream_rng};
+use lidarsim::simulate::ResolvedMethod;
+use lidarsim::validate::{self, SimulatorSource};
+
+use common::cli::scratch;
+use common::config_path;
+use common::h5::{channel_rows, floats, simulate, strings};
+
+const E_CHARGE: f64 = 1.602_176_634e-19;
+
+/// The detector of the tests' analog chain: G = 3e6, F = 1.3, 50 Ω, σ_e = 50 µV, offset
+/// 5 mV, 12 bits over 100 mV (LSB 24.4 µV, so σ_e ≈ 2 LSB), `extra` keys added.
+fn detector(extra: &str) -> DetectorConfig {
+    toml::from_str(&format!(
+        "mode = \"analog\"\ngain = 3e6\nexcess_noise_factor = 1.3\nelectronic_noise_v = 5e-5\n\
+         offset_v = 5e-3\nadc_bits = 12\nadc_range_v = 0.1\n{extra}"
+    ))
+    .unwrap()
+}
+
+/// Mean and variance per shot of each bin's code over `shots` shots of photoelectron
+/// means `lambda`, recorded by `analog` (fixed seed).
+fn shot_moments(analog: &Analog, lambda: &[f64], shots: u64, seed: u64) -> (Vec<f64>, Vec<f64>) {
+    let photons = ShotSampler::new(lambda);
+    let n = lambda.len();
+    let (mut sum, mut sum2) = (vec![0.0; n], vec![0.0; n]);
+    let mut acc = vec![0u64; n];
+    let mut scratch = AnalogScratch::default();
+    let mut electronics = stream_rng(seed, 1, 0);
+    photons.for_each_shot(&mut stream_rng(seed, 0, 0), shots, |shot| {
+        acc.iter_mut().for_each(|a| *a = 0);
+        analog.record_shot(&mut electronics, shot, &mut scratch, &mut acc);
+        for b in 0..n {
+            let c = acc[b] as f64;
+            sum[b] += c;
+            sum2[b] += c * c;
+        }
+    });
+    let m = shots as f64;
+    let mean: Vec<f64> = sum.iter().map(|s| s / m).collect();
+    let var = sum2
+        .iter()
+        .zip(&mean)
+        .map(|(s2, mu)| (s2 / m - mu * mu) * m / (m - 1.0))
+        .collect();
+    (mean, var)
+}
+
+/// The reference law of one shot, in codes: mean `(V₀ + u·λ)/LSB` and variance
+/// `(F·u²·λ + σ_e²)/LSB² + 1/12` with `u = G·e·R/Δt` (no bandwidth limit).
+fn reference(lambda: f64, f: f64, dt: f64) -> (f64, f64) {
+    let lsb = 0.1 / 4096.0;
+    let u = 3e6 * E_CHARGE * 50.0 / dt;
+    (
+        (5e-3 + u * lambda) / lsb,
+        (f * u * u * lambda + 5e-5 * 5e-5) / (lsb * lsb) + 1.0 / 12.0,
+    )
+}
+
+/// The analog variance is `F·G²·N + σ_e²` (in volts², plus the ADC's 1/12 LSB²) and the
+/// mean `V₀ + G·e·R·N/Δt`, within 1 % over 4e5 shots in each of six bins from 0 to 40
+/// photoelectrons per shot. The sample variance's relative sd is ≤ 0.23 % (excess
+/// kurtosis ≤ 0.1 here), so 1 % is ≥ 4.3 sd: a false alarm below 1e-4 over the six bins
+/// (fixed seed). An excess noise factor 10 % off moves the reference by ≥ 5 % where the
+/// gain's spread dominates: asserted to fall outside the same tolerance.
+#[test]
+fn the_shot_variance_is_f_g2_n_plus_the_electronic_noise() {
+    let dt = 5e-8;
+    let analog = Analog::from_config(&detector(""), dt);
+    let lambda = [0.0, 0.3, 2.0, 5.0, 15.0, 40.0];
+    let (mean, var) = shot_moments(&analog, &lambda, 400_000, 21);
+    let law = analog.shot_cumulants(&lambda);
+    for (b, &l) in lambda.iter().enumerate() {
+        let (m_ref, v_ref) = reference(l, 1.3, dt);
+        // the law the file and validate use is the reference's
+        assert!((law[b][0] / m_ref - 1.0).abs() < 1e-12, "bin {b}: law mean");
+        assert!(
+            (law[b][1] / v_ref - 1.0).abs() < 1e-12,
+            "bin {b}: law variance"
+        );
+        assert!(
+            (mean[b] / m_ref - 1.0).abs() < 2e-3,
+            "bin {b}: mean {} vs {m_ref}",
+            mean[b]
+        );
+        assert!(
+            (var[b] / v_ref - 1.0).abs() < 0.01,
+            "bin {b}: variance {} vs {v_ref}",
+            var[b]
+        );
+        if l >= 5.0 {
+            let (_, v_wrong) = reference(l, 1.3 * 1.1, dt);
+            assert!(
+                (var[b] / v_wrong - 1.0).abs() > 0.02,
+                "bin {b}: F +10 % unseen"
+            );
+        }
+    }
+}
+
+/// The low-pass's shares `h_j` against a first-order RC circuit integrated by small
+/// steps (`τ·dy/dt = x − y`, a unit charge spread over bin 0), averaged over each bin: to
+/// 1e-6. The recorder moves a bin's mean code into the later bins by those shares.
+#[test]
+fn the_bandwidth_smears_a_bin_as_an_rc_circuit_does() {
+    let (dt, bandwidth) = (2e-8, 1.5e7);
+    let tau = 1.0 / (2.0 * std::f64::consts::PI * bandwidth);
+    let steps = 20_000;
+    let h = dt / steps as f64;
+    let mut y = 0.0;
+    let mut shares = Vec::new();
+    for j in 0..8 {
+        let mut integral = 0.0;
+        for _ in 0..steps {
+            let x = if j == 0 { 1.0 / dt } else { 0.0 };
+            // exact step of the linear ODE with x constant over the step
+            let y_next = x + (y - x) * (-h / tau).exp();
+            integral += 0.5 * (y + y_next) * h;
+            y = y_next;
+        }
+        shares.push(integral);
+    }
+    let analog = Analog::from_config(&detector(&format!("bandwidth_hz = {bandwidth}")), dt);
+    for (j, s) in shares.iter().enumerate() {
+        assert!(
+            (analog.kernel()[j] - s).abs() < 1e-6,
+            "h_{j}: {} vs RC {s}",
+            analog.kernel()[j]
+        );
+    }
+    // a lone bin of 30 photoelectrons: the mean codes follow the shares
+    let mut lambda = vec![0.0; 10];
+    lambda[2] = 30.0;
+    let e = analog.expected_codes(&lambda);
+    let c = 3e6 * E_CHARGE * 50.0 / dt / (0.1 / 4096.0);
+    for j in 0..6 {
+        let want = 5e-3 / (0.1 / 4096.0) + c * 30.0 * shares[j];
+        assert!((e[2 + j] / want - 1.0).abs() < 1e-6, "bin {}", 2 + j);
+    }
+}
+
+/// The two-polarization ground lidar recording analog (no jitter, 250 shots a
+/// profile, a 15 km window).
+fn analog_lidar(extra: &[&str]) -> lidarsim::scenario::Lidar {
+    let mut ov = vec![
+        "instrument.pulse_energy_jitter=0",
+        "acquisition.accumulation_time_s=0.1",
+        "acquisition.top_altitude_km=15",
+    ];
+    ov.extend_from_slice(extra);
+    common::lidar("ground/ground_532_depol.toml", &ov)
+}
+
+/// Each channel's bins and models for `validate_channels`.
+fn channel_layout(
+    lidar: &lidarsim::scenario::Lidar,
+    models: impl Fn(usize, &lidarsim::scenario::ExpectedProfile) -> Vec<validate::BinModel>,
+) -> (
+    Vec<validate::BinModel>,
+    Vec<f64>,
+    Vec<validate::ChannelBins>,
+) {
+    let expected = lidar.expected().unwrap();
+    let (mut all, mut altitudes, mut channels) = (Vec::new(), Vec::new(), Vec::new());
+    for (k, (c, e)) in lidar.channels.iter().zip(&expected).enumerate() {
+        let offset = all.len();
+        all.extend(models(k, e));
+        altitudes.extend_from_slice(&e.altitude_m);
+        channels.push(validate::ChannelBins {
+            name: c.channel_name.clone(),
+            bins: offset..all.len(),
+            background: Vec::new(),
+        });
+    }
+    (all, altitudes, channels)
+}
+
+/// `validate`'s law of analog codes (`validate::analog_bin_models`) holds on both paths
+/// (CONSISTENT: false alarm < 2e-3 per statistic, fixed seed), and rejects an excess
+/// noise factor 10 % off on the variance.
+#[test]
+fn validate_is_consistent_on_analog_codes_and_rejects_a_wrong_excess_noise_factor() {
+    let lidar = analog_lidar(&["instrument.detector={mode=\"analog\", gain=1e7}"]);
+    let expected = lidar.expected().unwrap();
+    let shots = lidar.first().shots_per_profile();
+    let energy = lidarsim::simulate::RunEnergy::jitter(0.0);
+    let analog = |k: usize| lidar.channels[k].instrument.analog.clone().unwrap();
+    for method in [ResolvedMethod::Aggregate, ResolvedMethod::Shot] {
+        let source = SimulatorSource::for_lidar(&lidar, &expected, method, energy, 7);
+        let (right, alt, channels) = channel_layout(&lidar, |k, e| {
+            validate::analog_bin_models(e, shots, &analog(k), 0.0)
+        });
+        let (_, checks) = validate::validate_channels(&source, &right, &alt, 300, &channels);
+        assert!(checks.iter().all(|c| c.pass), "{method:?}: {checks:#?}");
+        let (wrong, _, _) = channel_layout(&lidar, |k, e| {
+            let mut a = analog(k);
+            a.excess_noise_factor *= 1.1;
+            validate::analog_bin_models(e, shots, &a, 0.0)
+        });
+        let (_, checks) = validate::validate_channels(&source, &wrong, &alt, 300, &channels);
+        let variance = checks.iter().find(|c| c.statistic == "variance").unwrap();
+        assert!(!variance.pass, "{method:?}: F +10 % passes: {variance:#?}");
+    }
+}
+
+/// A `both` pair: `<name>_an` and `<name>_pc`, partners, recording the same photons.
+/// Without bandwidth limit the analog expectation above its offset over the ideal
+/// photon-counting one is the gluing constant `analog_counts_per_photoelectron` to 1e-9
+/// in every bin; `linear_range` marks where each mode is linear and the pair has a
+/// common range; and the recorded pair, the photon counts corrected for their dead time,
+/// recovers the constant within 4 of its standard errors (a 1 % error in the constant is
+/// > 4 standard errors: asserted).
+#[test]
+fn a_both_pair_glues_with_the_files_constant() {
+    let dir = scratch("analog-glue");
+    let config = dir.join("both.toml");
+    let base = std::fs::read_to_string(config_path("ground/ground_532_depol.toml")).unwrap();
+    let detector = "detector = { dead_time_s = 3.5e-9, dead_time_model = \"nonparalyzable\" }";
+    assert!(base.contains(detector));
+    let text = base
+        .replacen(
+            detector,
+            "detector = { mode = \"both\", dead_time_s = 3.5e-9, gain = 1e7 }",
+            1,
+        )
+        .replacen("pulse_energy_jitter = 0.02", "pulse_energy_jitter = 0.0", 1)
+        .replacen("accumulation_time_s = 30.0", "accumulation_time_s = 2.0", 1);
+    std::fs::write(&config, text).unwrap();
+    let f = simulate(&dir, &config, "both.h5", "4");
+    let names = strings(&f, "channel");
+    assert_eq!(
+        names,
+        [
+            "532_parallel_an",
+            "532_parallel_pc",
+            "532_perpendicular_an",
+            "532_perpendicular_pc"
+        ]
+    );
+    assert_eq!(
+        strings(&f, "acquisition_mode"),
+        ["analog", "photon_counting", "analog", "photon_counting"]
+    );
+    assert_eq!(strings(&f, "detection_mode"), ["both"; 4]);
+    assert_eq!(strings(&f, "glue_partner")[0], "532_parallel_pc");
+    assert_eq!(strings(&f, "glue_partner")[1], "532_parallel_an");
+    let n_ch = names.len();
+    let row = |name: &str| channel_rows(&f, name, n_ch);
+    let (recorded, signal, background, dark, linear) = (
+        row("expected_counts"),
+        row("expected_signal"),
+        row("expected_background"),
+        row("expected_dark"),
+        row("linear_range"),
+    );
+    let lsb = floats(&f, "adc_volts_per_count")[0];
+    let offset = floats(&f, "analog_offset")[0] / lsb;
+    let glue = floats(&f, "analog_counts_per_photoelectron")[0];
+    // the constant from the physics: G·e·R/(Δt·LSB)
+    let want = 1e7 * E_CHARGE * 50.0 / 2e-7 / (0.1 / 4096.0);
+    assert!((glue / want - 1.0).abs() < 1e-12, "{glue} vs {want}");
+    assert!(floats(&f, "adc_volts_per_count")[1].is_nan());
+    let (an, pc) = (0, 1);
+    let photons: Vec<f64> = (0..signal[pc].len())
+        .map(|b| signal[pc][b] + background[pc][b] + dark[pc][b])
+        .collect();
+    let common: Vec<usize> = (0..photons.len())
+        .filter(|&b| linear[an][b] == 1.0 && linear[pc][b] == 1.0)
+        .collect();
+    assert!(
+        common.len() > 20,
+        "common linear range: {} bins",
+        common.len()
+    );
+    for b in 0..photons.len() {
+        let ratio = (recorded[an][b] - offset) / photons[b];
+        if photons[b] > 1e-3 {
+            assert!(
+                (ratio / glue - 1.0).abs() < 1e-9,
+                "bin {b}: {ratio} vs {glue}"
+            );
+        }
+        // the photon counter is linear where its dead time loses at most 1 %
+        let loss = 1.0 - recorded[pc][b] / photons[b];
+        if photons[b] > 0.0 {
+            assert_eq!(linear[pc][b] == 1.0, loss <= 0.01, "bin {b}: loss {loss}");
+        }
+    }
+    // the recorded pair: Σ(A − M·offset) / Σ PC corrected (non-paralyzable, stationary)
+    let counts = floats(&f, "counts");
+    let shots = floats(&f, "n_shots")[0];
+    let bins = photons.len();
+    let (tau, dt) = (3.5e-9, 2e-7);
+    let (mut a_sum, mut p_sum, mut a_var, mut p_var) = (0.0, 0.0, 0.0, 0.0);
+    for p in 0..4 {
+        let at = |k: usize, b: usize| counts[(p * n_ch + k) * bins + b];
+        for &b in &common {
+            let m = at(pc, b) / shots / dt;
+            a_sum += at(an, b) - shots * offset;
+            p_sum += shots * dt * m / (1.0 - m * tau);
+            // codes: c²·F·λ + σ² + 1/12 per shot (F = 1.2 by default); photons: Poisson
+            let (c, sigma) = (glue, 5e-5 / lsb);
+            a_var += shots * (c * c * 1.2 * photons[b] + sigma * sigma + 1.0 / 12.0);
+            p_var += shots * photons[b];
+        }
+    }
+    let estimate = a_sum / p_sum;
+    let se = estimate * (a_var / (a_sum * a_sum) + p_var / (p_sum * p_sum)).sqrt();
+    assert!(se < 0.0025 * glue, "se {se} too large to see a 1 % error");
+    assert!(
+        (estimate - glue).abs() < 4.0 * se,
+        "glued {estimate} vs {glue} (se {se})"
+    );
+}
+
+/// The analog keys are refused where they do not apply or outside their limits, in one
+/// line naming the key.
+#[test]
+fn analog_keys_are_checked() {
+    let base = std::fs::read_to_string(config_path("ground/ground_532_depol.toml")).unwrap();
+    let detector = "detector = { dead_time_s = 3.5e-9, dead_time_model = \"nonparalyzable\" }";
+    let with = |d: &str| base.replacen(detector, &format!("detector = {{ {d} }}"), 1);
+    for (d, key, words) in [
+        ("gain = 1e6", "instrument.detector.gain", "analog key"),
+        (
+            "mode = \"analog\", dead_time_s = 3e-9",
+            "instrument.detector.dead_time_s",
+            "both",
+        ),
+        (
+            "mode = \"analog\", adc_bits = 0",
+            "instrument.detector.adc_bits",
+            "[1, 24]",
+        ),
+        (
+            "mode = \"both\", excess_noise_factor = 0.9",
+            "instrument.detector.excess_noise_factor",
+            "[1, 10]",
+        ),
+        (
+            "mode = \"analog\", offset_v = 0.2",
+            "instrument.detector.offset_v",
+            "[0, 0.1]",
+        ),
+        (
+            "mode = \"analog\", gain = nan",
+            "instrument.detector.gain",
+            "finite",
+        ),
+    ] {
+        let e = common::refusal(&with(d), d);
+        assert!(e.contains(key) && e.contains(words), "{d}: {e}");
+    }
+    // a both channel's halves may not take another channel's name
+    let clash = with("mode = \"both\"").replacen(
+        "name = \"532_perpendicular\"",
+        "name = \"532_parallel_an\"\ndetector = { mode = \"photon_counting\" }",
+        1,
+    );
+    let e = common::refusal(&clash, "name clash");
+    assert!(e.contains("532_parallel_an") && e.contains("rename"), "{e}");
+}
