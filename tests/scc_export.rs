@@ -524,3 +524,45 @@ fn pretrigger_bins_hold_the_window_when_the_file_has_them() {
     assert!(e.contains("pretrigger_bins") && e.contains("pre.h5"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A `both` detector's pair exports as two SCC channels: `Acquisition_Mode` 0 (analog)
+/// with `DAQ_Range` the ADC range in mV, no dead time, and `Raw_Lidar_Data` the mean
+/// signal per shot in mV (`counts / shots · range / 2^bits`, as `atmospheric_lidar`'s
+/// Licel reader gives analog data, with lidarsim's LSB); then `Acquisition_Mode` 1
+/// (photon counting) with its dead time and raw counts.
+#[test]
+fn a_both_pair_exports_an_analog_and_a_photon_counting_channel() {
+    let _serial = serial();
+    let dir = scratch("both");
+    let raw = dir.join("both.h5");
+    simulate(
+        "ground/ground_532_overlap.toml",
+        &raw,
+        &[
+            "acquisition.start_time=\"2024-07-14T21:30:00Z\"",
+            "acquisition.accumulation_time_s=0.4",
+            "acquisition.top_altitude_km=6",
+            "instrument.detector={mode=\"both\", dead_time_s=4e-9, adc_range_v=0.02, adc_bits=14}",
+        ],
+        2,
+    );
+    let out = dir.join("both.nc");
+    export_scc(&raw, &out, &SccOptions::default()).unwrap();
+    let mut r = FileReader::open(&out).unwrap();
+    assert_eq!(r.read_var_i32("Acquisition_Mode").unwrap(), vec![0, 1]);
+    assert_eq!(r.read_var_f64("DAQ_Range").unwrap(), vec![20.0, 0.0]);
+    assert_eq!(r.read_var_f64("Dead_Time").unwrap(), vec![0.0, 4.0]);
+    let (shape, counts) = counts_of(&raw);
+    let shots = r.read_var_i32("Laser_Shots").unwrap()[0] as f64;
+    let data = r.read_var_f64("Raw_Lidar_Data").unwrap();
+    let (bins, mv_per_code) = (shape[2], 20.0 / 16384.0);
+    for p in 0..2 {
+        for b in 0..bins {
+            let (an, pc) = ((p * 2) * bins + b, (p * 2 + 1) * bins + b);
+            let want = counts[an] as f64 / shots * mv_per_code;
+            assert!((data[an] - want).abs() <= 1e-12 * want, "{p} {b}");
+            assert_eq!(data[pc], counts[pc] as f64);
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

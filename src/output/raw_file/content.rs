@@ -252,7 +252,21 @@ pub fn variables(
         ),
     ];
     vars.extend(truth::instrument_variables(lidar, e0));
-    vars.extend(super::detection::analog_variables(lidar, expected));
+    vars.extend(
+        super::detection::analog_variables(lidar, expected)
+            .into_iter()
+            .map(|v| Variable {
+                attributes: vec![("_FillValue".into(), AttrValue::F64(f64::NAN))],
+                ..var(
+                    v.name,
+                    if v.per_bin { ChannelBin } else { Channel },
+                    v.long_name,
+                    v.units,
+                    &[],
+                    v.data,
+                )
+            }),
+    );
     vars.extend(truth::column_variables(lidar, columns));
     if changing {
         // per profile, in the order the simulation gives their rows

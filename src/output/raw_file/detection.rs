@@ -3,13 +3,30 @@
 //! parameters (NaN for photon-counting channels), the gluing constant and which bins each
 //! record is linear in.
 
-use super::content::var;
-use super::{AttrValue, Dims, Variable};
+//! It imports nothing of the raw file's own modules (they import it): its variables are
+//! plain [`DetectionVariable`]s, made into the file's by `content`.
+
 use crate::detector::Analog;
 use crate::scenario::{ExpectedProfile, Lidar};
 
+/// One variable of this module: (channel), or (channel, bin) with `per_bin`; NaN-filled
+/// (`_FillValue` NaN) where a channel has no value.
+#[derive(Debug, Clone)]
+pub struct DetectionVariable {
+    /// Name in the file.
+    pub name: &'static str,
+    /// (channel, bin) rather than (channel).
+    pub per_bin: bool,
+    /// CF `long_name`.
+    pub long_name: &'static str,
+    /// CF `units`.
+    pub units: &'static str,
+    /// The values, channel-major.
+    pub data: Vec<f64>,
+}
+
 /// The variables of a run with an analog channel; none without.
-pub fn analog_variables(lidar: &Lidar, expected: &[ExpectedProfile]) -> Vec<Variable> {
+pub fn analog_variables(lidar: &Lidar, expected: &[ExpectedProfile]) -> Vec<DetectionVariable> {
     if lidar.channels.iter().all(|c| c.instrument.analog.is_none()) {
         return Vec::new();
     }
@@ -20,11 +37,7 @@ pub fn analog_variables(lidar: &Lidar, expected: &[ExpectedProfile]) -> Vec<Vari
             .map(|c| c.instrument.analog.as_ref().map_or(f64::NAN, f))
             .collect::<Vec<f64>>()
     };
-    let nan_fill = |v: Variable| Variable {
-        attributes: vec![("_FillValue".into(), AttrValue::F64(f64::NAN))],
-        ..v
-    };
-    let scalars: [(&str, &str, &str, fn(&Analog) -> f64); 10] = [
+    let scalars: [(&'static str, &'static str, &'static str, fn(&Analog) -> f64); 10] = [
         (
             "adc_volts_per_count",
             "voltage of one ADC code (LSB = adc_range / 2^adc_bits): volts = counts / n_shots x this, per shot",
@@ -75,10 +88,14 @@ pub fn analog_variables(lidar: &Lidar, expected: &[ExpectedProfile]) -> Vec<Vari
             Analog::codes_per_photoelectron,
         ),
     ];
-    let mut vars: Vec<Variable> = scalars
+    let mut vars: Vec<DetectionVariable> = scalars
         .into_iter()
-        .map(|(name, long_name, units, f)| {
-            nan_fill(var(name, Dims::Channel, long_name, units, &[], per(f)))
+        .map(|(name, long_name, units, f)| DetectionVariable {
+            name,
+            per_bin: false,
+            long_name,
+            units,
+            data: per(f),
         })
         .collect();
     let linear: Vec<f64> = lidar
@@ -94,13 +111,12 @@ pub fn analog_variables(lidar: &Lidar, expected: &[ExpectedProfile]) -> Vec<Vari
         })
         .map(|l| if l { 1.0 } else { 0.0 })
         .collect();
-    vars.push(var(
-        "linear_range",
-        Dims::ChannelBin,
-        "1 where the channel's record is linear in the photons (photon counting: dead time loses at most 1 %; analog: mean above one shot's noise rms and 4 sd inside the ADC range), else 0; a both pair glues where both are 1",
-        "1",
-        &[],
-        linear,
-    ));
+    vars.push(DetectionVariable {
+        name: "linear_range",
+        per_bin: true,
+        long_name: "1 where the channel's record is linear in the photons (photon counting: dead time loses at most 1 %; analog: mean above one shot's noise rms and 4 sd inside the ADC range), else 0; a both pair glues where both are 1",
+        units: "1",
+        data: linear,
+    });
     vars
 }

@@ -15,8 +15,11 @@ use crate::receiver::ChannelConfig;
 /// `Molecular_Calc` written: 4 = US Standard Atmosphere 1976 (SCC netCDF input format
 /// after its 2021 revision; 0 = automatic, 1 = radiosounding, 2 = model).
 pub const MOLECULAR_CALC_US_STANDARD: i32 = 4;
-/// `Acquisition_Mode` written: 1 = photon counting (0 = analog).
+/// `Acquisition_Mode` of a photon-counting channel (field notes: 0 analog, 1 photon
+/// counting, as `atmospheric_lidar` writes them).
 pub const ACQUISITION_PHOTON_COUNTING: i32 = 1;
+/// `Acquisition_Mode` of an analog channel.
+pub const ACQUISITION_ANALOG: i32 = 0;
 /// `Background_Mode` written: 1 = atmospheric background from the far range given by
 /// `Background_Low`/`Background_High` in m (as in the `atmospheric_lidar` examples).
 pub const BACKGROUND_MODE_FAR_RANGE: i32 = 1;
@@ -50,6 +53,14 @@ pub struct SccChannel {
     pub dead_time_type: i32,
     /// `Trigger_Delay`, ns.
     pub trigger_delay_ns: f64,
+    /// `Acquisition_Mode`: [`ACQUISITION_ANALOG`] or [`ACQUISITION_PHOTON_COUNTING`].
+    pub acquisition_mode: i32,
+    /// `DAQ_Range`: an analog channel's ADC input range, mV (0 for photon counting).
+    pub daq_range_mv: f64,
+    /// An analog channel's mV per ADC code: its `Raw_Lidar_Data` is the mean signal per
+    /// shot in mV, `counts / n_shots · this` (as `atmospheric_lidar`'s Licel reader
+    /// gives analog data); `None` for photon counting (raw counts).
+    pub analog_mv_per_code: Option<f64>,
 }
 
 /// Everything the SCC file holds.
@@ -247,7 +258,16 @@ fn channel(
     id: i32,
 ) -> Result<SccChannel> {
     let instrument = &cfg.config.instrument;
-    let (dead_time_ns, dead_time_type) = dead_time(instrument.detector.as_ref());
+    let analog = match (cfg.record, instrument.detector.as_ref()) {
+        (crate::receiver::Record::Analog, Some(d)) => {
+            Some(crate::detector::Analog::from_config(d, raw.bin_width_s))
+        }
+        _ => None,
+    };
+    let (dead_time_ns, dead_time_type) = match analog {
+        Some(_) => (0.0, 0),
+        None => dead_time(instrument.detector.as_ref()),
+    };
     let res = SPEED_OF_LIGHT_M_PER_S * raw.bin_width_s / 2.0;
     let first_bin_start_m = raw.range_m[0] - res / 2.0;
     let bins = c * raw.n_bins..(c + 1) * raw.n_bins;
@@ -271,6 +291,12 @@ fn channel(
         dead_time_ns,
         dead_time_type,
         trigger_delay_ns: 2.0 * first_bin_start_m / SPEED_OF_LIGHT_M_PER_S * 1e9,
+        acquisition_mode: match analog {
+            Some(_) => ACQUISITION_ANALOG,
+            None => ACQUISITION_PHOTON_COUNTING,
+        },
+        daq_range_mv: analog.as_ref().map_or(0.0, |a| a.adc_range_v * 1e3),
+        analog_mv_per_code: analog.as_ref().map(|a| a.volts_per_code() * 1e3),
     })
 }
 

@@ -5,8 +5,7 @@ use std::path::Path;
 use netcdf3::{DataSet, FileWriter, Version};
 
 use super::fields::{
-    ACQUISITION_PHOTON_COUNTING, BACKGROUND_MODE_FAR_RANGE, LR_INPUT, MOLECULAR_CALC_US_STANDARD,
-    SccChannel, SccContent,
+    BACKGROUND_MODE_FAR_RANGE, LR_INPUT, MOLECULAR_CALC_US_STANDARD, SccChannel, SccContent,
 };
 use crate::error::{Error, Result};
 
@@ -139,7 +138,10 @@ fn add_units(ds: &mut DataSet) -> std::result::Result<(), netcdf3::InvalidDataSe
         ("Raw_Data_Stop_Time", "s"),
         ("Pressure_at_Lidar_Station", "hPa"),
         ("Temperature_at_Lidar_Station", "degC"),
-        ("Raw_Lidar_Data", "counts"),
+        (
+            "Raw_Lidar_Data",
+            "counts (photon counting, Acquisition_Mode 1); mV per shot (analog, Acquisition_Mode 0)",
+        ),
     ];
     for (var, u) in units {
         ds.add_var_attr_string(var, "units", u)?;
@@ -165,9 +167,17 @@ fn write_data(w: &mut W, c: &SccContent) -> WResult {
     w.write_var_i32("Laser_Shots", &c.laser_shots)?;
     let per_record = n_ch * c.n_bins;
     for p in 0..c.n_profiles {
+        // photon counts as counted; an analog channel's codes as mV per shot
+        let shots = f64::from(c.laser_shots[p * n_ch].max(1));
         let row: Vec<f64> = c.counts[p * per_record..(p + 1) * per_record]
-            .iter()
-            .map(|&n| n as f64)
+            .chunks(c.n_bins)
+            .zip(&c.channels)
+            .flat_map(|(bins, ch)| {
+                bins.iter().map(move |&n| match ch.analog_mv_per_code {
+                    Some(mv) => n as f64 / shots * mv,
+                    None => n as f64,
+                })
+            })
             .collect();
         w.write_record_f64("Raw_Lidar_Data", p, &row)?;
     }
@@ -195,10 +205,13 @@ fn write_channel_vars(w: &mut W, c: &SccContent) -> WResult {
         &per_channel(c, |ch| ch.dead_time_type),
     )?;
     w.write_var_f64("Dead_Time", &per_channel(c, |ch| ch.dead_time_ns))?;
-    w.write_var_i32("Acquisition_Mode", &vec![ACQUISITION_PHOTON_COUNTING; n])?;
+    w.write_var_i32(
+        "Acquisition_Mode",
+        &per_channel(c, |ch| ch.acquisition_mode),
+    )?;
     w.write_var_f64("Trigger_Delay", &per_channel(c, |ch| ch.trigger_delay_ns))?;
     w.write_var_i32("LR_Input", &vec![LR_INPUT; n])?;
-    w.write_var_f64("DAQ_Range", &vec![0.0; n])?;
+    w.write_var_f64("DAQ_Range", &per_channel(c, |ch| ch.daq_range_mv))?;
     w.write_var_i32("First_Signal_Rangebin", &vec![0; n])?;
     w.write_var_i32("id_timescale", &vec![0; n])
 }
