@@ -178,6 +178,32 @@ pub struct DetectorConfig {
     /// ADC input range (full scale), V (analog).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub adc_range_v: Option<f64>,
+    /// Signal-induced noise of the photomultiplier; absent = none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub signal_induced_noise: Option<SignalInducedNoiseConfig>,
+}
+
+/// Signal-induced noise: spurious counts after a strong return, decaying with the delay
+/// (`src/detector/induced.rs`, docs/model.md §4b).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(tag = "model", rename_all = "snake_case", deny_unknown_fields)]
+pub enum SignalInducedNoiseConfig {
+    /// Rate ∝ `e^{−t/τ}`.
+    Exponential {
+        /// Expected induced counts per signal photoelectron (all delays).
+        fraction: f64,
+        /// Decay time τ, s.
+        time_constant_s: f64,
+    },
+    /// Rate ∝ `(1 + t/τ)^{−p}`.
+    PowerLaw {
+        /// Expected induced counts per signal photoelectron (all delays).
+        fraction: f64,
+        /// Time scale τ, s.
+        time_constant_s: f64,
+        /// Exponent p > 1.
+        exponent: f64,
+    },
 }
 
 /// What a channel's detector records (docs/model.md §4b).

@@ -146,6 +146,9 @@ pub struct ExpectedProfile {
     /// Expected recorded counts per shot per bin after the detector (dead time); the
     /// total `λ_i` for an ideal detector.
     pub recorded: Vec<f64>,
+    /// Expected signal-induced counts per shot per bin (`src/detector/induced.rs`); empty
+    /// when the detector has none.
+    pub induced: Vec<f64>,
     /// Signal-free bins used to estimate the background (0 = none available).
     pub background_bins: usize,
     /// Their indices: bins of the window lying wholly above the atmosphere, nearest the
@@ -161,10 +164,26 @@ impl ExpectedProfile {
 
     /// Expected total counts per shot in each bin, `λ_i = λ_sig,i + λ_bkg + λ_dc` (Eq. 1).
     pub fn total_per_shot(&self) -> Vec<f64> {
-        self.signal
+        self.photon_signal()
             .iter()
             .map(|s| s + self.background + self.dark)
             .collect()
+    }
+
+    /// What of the photons per shot scales with the pulse energy: the backscattered
+    /// signal, plus the signal-induced counts where the detector has them
+    /// ([`induced`](Self::induced)). The samplers draw this as the signal.
+    pub fn photon_signal(&self) -> std::borrow::Cow<'_, [f64]> {
+        if self.induced.is_empty() {
+            return std::borrow::Cow::Borrowed(&self.signal);
+        }
+        std::borrow::Cow::Owned(
+            self.signal
+                .iter()
+                .zip(&self.induced)
+                .map(|(s, i)| s + i)
+                .collect(),
+        )
     }
 
     /// Eq. 4 S/N of each bin after `shots` shots.
@@ -413,10 +432,14 @@ impl Scenario {
             e.attenuated_backscatter
                 .push(if weight > 0.0 { integral / weight } else { 0.0 });
         }
+        let detector = self.loaded.config.instrument.detector.as_ref();
+        if let Some(sin) = detector.and_then(|d| d.signal_induced_noise.as_ref()) {
+            e.induced = sin.induced_counts(&e.signal, self.instrument.bin_width_s);
+        }
         e.recorded = match &self.instrument.dead_time {
             Some(d) if self.instrument.pulse_energy_jitter > 0.0 => {
                 let laser = crate::laser::PulseEnergy::from_config(&self.loaded.config.instrument);
-                d.recorded_moments(&e.signal, e.background + e.dark, &laser)
+                d.recorded_moments(&e.photon_signal(), e.background + e.dark, &laser)
                     .0
             }
             Some(d) => d.recorded_means(&e.total_per_shot()),

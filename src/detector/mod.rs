@@ -6,6 +6,7 @@
 
 pub mod analog;
 pub mod dead_time;
+pub mod induced;
 pub mod modulated;
 
 pub use analog::Analog;
@@ -29,6 +30,37 @@ pub fn validate(config: &ScenarioConfig, c: &Checker) -> Result<()> {
             MAX_DEAD_TIME_S,
         )?;
         validate_analog(d, c)?;
+        if let Some(sin) = &d.signal_induced_noise {
+            validate_induced(sin, c)?;
+        }
+    }
+    Ok(())
+}
+
+/// `signal_induced_noise`: a fraction in [0, 0.1], a time constant in (0, 10 ms], a
+/// power law's exponent in (1, 10].
+fn validate_induced(sin: &crate::config::SignalInducedNoiseConfig, c: &Checker) -> Result<()> {
+    use crate::config::SignalInducedNoiseConfig as Sin;
+    let key = |k: &str| format!("instrument.detector.signal_induced_noise.{k}");
+    let (Sin::Exponential {
+        fraction,
+        time_constant_s,
+    }
+    | Sin::PowerLaw {
+        fraction,
+        time_constant_s,
+        ..
+    }) = *sin;
+    c.range(&key("fraction"), fraction, 0.0, 0.1)?;
+    c.positive(&key("time_constant_s"), time_constant_s, 1e-2)?;
+    if let Sin::PowerLaw { exponent, .. } = *sin {
+        c.range(&key("exponent"), exponent, 1.0, 10.0)?;
+        if exponent <= 1.0 {
+            return Err(c.fail(
+                &key("exponent"),
+                "must be greater than 1 (the decay's integral is finite only then)",
+            ));
+        }
     }
     Ok(())
 }

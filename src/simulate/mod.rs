@@ -460,7 +460,7 @@ pub fn stream_samplers(
     if components {
         vec![
             (
-                StreamSampler::with_energy(method, &e.signal, &zeros, energy),
+                StreamSampler::with_energy(method, &e.photon_signal(), &zeros, energy),
                 component_seed(seed, 0),
             ),
             (
@@ -474,7 +474,7 @@ pub fn stream_samplers(
         ]
     } else {
         let rest = vec![e.background + e.dark; n];
-        let sampler = StreamSampler::with_energy(method, &e.signal, &rest, energy)
+        let sampler = StreamSampler::with_energy(method, &e.photon_signal(), &rest, energy)
             .through_detector(instrument.dead_time)
             .through_analog(instrument.analog.as_ref());
         vec![(sampler, seed)]
@@ -915,6 +915,17 @@ pub fn changing_scene(
         return Err(Error::Unsupported(
             "--components is not available for a scene that changes along the track yet".into(),
         ));
+    }
+    let induced = |c: &&crate::scenario::Scenario| {
+        let d = c.loaded.config.instrument.detector.as_ref();
+        d.is_some_and(|d| d.signal_induced_noise.is_some())
+    };
+    if let Some(c) = lidar.channels.iter().find(induced) {
+        return Err(Error::Unsupported(format!(
+            "channel {} has signal-induced noise, which this version does not draw in a scene \
+             that changes along the track (or with the sun) yet",
+            c.channel_name
+        )));
     }
     if let Some(c) = lidar
         .channels

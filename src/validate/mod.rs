@@ -297,7 +297,10 @@ impl SimulatorSource {
     ) -> Self {
         let rest = vec![e.background + e.dark; e.n_bins()];
         SimulatorSource {
-            channels: vec![(StreamSampler::new(method, &e.signal, &rest, jitter), seed)],
+            channels: vec![(
+                StreamSampler::new(method, &e.photon_signal(), &rest, jitter),
+                seed,
+            )],
             shots,
         }
     }
@@ -327,7 +330,7 @@ impl SimulatorSource {
             .enumerate()
             .map(|(k, (c, e))| {
                 let rest = vec![e.background + e.dark; e.n_bins()];
-                let sampler = StreamSampler::with_energy(method, &e.signal, &rest, energy)
+                let sampler = StreamSampler::with_energy(method, &e.photon_signal(), &rest, energy)
                     .through_detector(c.instrument.dead_time)
                     .through_analog(c.instrument.analog.as_ref());
                 (
@@ -573,7 +576,7 @@ fn snr_stat(
 
 /// The per-bin models of a scenario's expectations.
 pub fn bin_models(e: &ExpectedProfile, shots: u64, jitter: f64) -> Vec<BinModel> {
-    e.signal
+    e.photon_signal()
         .iter()
         .map(|&s| BinModel::new(s, e.background + e.dark, shots as f64, jitter))
         .collect()
@@ -588,8 +591,8 @@ pub fn recorded_bin_models(
     energy: &PulseEnergy,
 ) -> Vec<BinModel> {
     let rest = e.background + e.dark;
-    let (mean, var) = dead.recorded_moments(&e.signal, rest, energy);
-    e.signal
+    let (mean, var) = dead.recorded_moments(&e.photon_signal(), rest, energy);
+    e.photon_signal()
         .iter()
         .zip(mean.iter().zip(&var))
         .map(|(&s, (&m, &v))| BinModel::recorded(s, rest, m, v, shots as f64))
@@ -609,11 +612,11 @@ pub fn analog_bin_models(
     let m = shots as f64;
     let rest = e.background + e.dark;
     let c = analog.codes_per_photoelectron();
-    let smeared_signal = analog.smear(&e.signal, 1);
+    let smeared_signal = analog.smear(&e.photon_signal(), 1);
     analog
         .shot_cumulants(&e.total_per_shot())
         .iter()
-        .zip(&e.signal)
+        .zip(e.photon_signal().iter())
         .zip(&smeared_signal)
         .map(|((k, &s), &hs)| {
             let jitter_var = (c * jitter * hs).powi(2);

@@ -253,7 +253,7 @@ pub fn variables(
     ];
     vars.extend(truth::instrument_variables(lidar, e0));
     vars.extend(
-        super::detection::analog_variables(lidar, expected)
+        super::detection::detection_variables(lidar, expected)
             .into_iter()
             .map(|v| Variable {
                 attributes: vec![("_FillValue".into(), AttrValue::F64(f64::NAN))],

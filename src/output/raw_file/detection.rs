@@ -25,6 +25,31 @@ pub struct DetectionVariable {
     pub data: Vec<f64>,
 }
 
+/// The detector's variables: those of the analog chain ([`analog_variables`]) and the
+/// expected signal-induced counts, each only when some channel has it.
+pub fn detection_variables(lidar: &Lidar, expected: &[ExpectedProfile]) -> Vec<DetectionVariable> {
+    let mut vars = analog_variables(lidar, expected);
+    if expected.iter().any(|e| !e.induced.is_empty()) {
+        vars.push(DetectionVariable {
+            name: "expected_induced",
+            per_bin: true,
+            long_name: "expected signal-induced counts per shot (included in expected_counts; 0 for a channel without): the expected signal convolved with the detector's decay law",
+            units: "count",
+            data: expected
+                .iter()
+                .flat_map(|e| {
+                    if e.induced.is_empty() {
+                        vec![0.0; e.n_bins()]
+                    } else {
+                        e.induced.clone()
+                    }
+                })
+                .collect(),
+        });
+    }
+    vars
+}
+
 /// The variables of a run with an analog channel; none without.
 pub fn analog_variables(lidar: &Lidar, expected: &[ExpectedProfile]) -> Vec<DetectionVariable> {
     if lidar.channels.iter().all(|c| c.instrument.analog.is_none()) {
