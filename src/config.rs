@@ -181,6 +181,32 @@ pub struct DetectorConfig {
     /// Signal-induced noise of the photomultiplier; absent = none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub signal_induced_noise: Option<SignalInducedNoiseConfig>,
+    /// Afterpulsing of the photon counter; absent = none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub afterpulsing: Option<AfterpulsingConfig>,
+}
+
+/// Afterpulsing of a photon counter (`src/detector/afterpulse.rs`, docs/model.md §4b):
+/// a probability per recorded count and a delay law, a sum of exponentials.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct AfterpulsingConfig {
+    /// Probability p of an afterpulse per recorded count.
+    pub probability: f64,
+    /// Mean delays τ_i of the exponential components, s.
+    pub time_constants_s: Vec<f64>,
+    /// Relative weights a_i of the components (normalized); absent = equal.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weights: Option<Vec<f64>>,
+}
+
+impl AfterpulsingConfig {
+    /// The components' weights as given, or equal ones.
+    pub fn weights(&self) -> Vec<f64> {
+        self.weights
+            .clone()
+            .unwrap_or_else(|| vec![1.0; self.time_constants_s.len()])
+    }
 }
 
 /// Signal-induced noise: spurious counts after a strong return, decaying with the delay

@@ -34,6 +34,9 @@ pub struct Instrument {
     /// The analog chain of a channel that records analog codes; `None` for a photon
     /// counter.
     pub analog: Option<crate::detector::Analog>,
+    /// The photon counter's afterpulsing (set with the window's bins by the scenario);
+    /// `None` without, and for an analog record.
+    pub afterpulsing: Option<crate::detector::afterpulse::Afterpulsing>,
 }
 
 /// The sky radiance the instrument sees, photons m⁻² s⁻¹ sr⁻¹ nm⁻¹: the fixed
@@ -118,6 +121,7 @@ impl Instrument {
                     bin_width_s: i.bin_width_s,
                 }),
             analog: None,
+            afterpulsing: None,
         }
     }
 
@@ -131,6 +135,21 @@ impl Instrument {
         if let (crate::receiver::Record::Analog, Some(d)) = (record, detector) {
             self.dead_time = None;
             self.analog = Some(crate::detector::Analog::from_config(d, self.bin_width_s));
+        }
+        self
+    }
+
+    /// The instrument with its photon counter's afterpulsing on a window of `bins` bins
+    /// (none for an analog record).
+    pub fn with_afterpulsing(
+        mut self,
+        detector: Option<&crate::config::DetectorConfig>,
+        bins: usize,
+    ) -> Self {
+        if self.analog.is_none() {
+            self.afterpulsing = detector.and_then(|d| d.afterpulsing.as_ref()).map(|a| {
+                crate::detector::afterpulse::Afterpulsing::from_config(a, self.bin_width_s, bins)
+            });
         }
         self
     }

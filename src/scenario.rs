@@ -149,6 +149,9 @@ pub struct ExpectedProfile {
     /// Expected signal-induced counts per shot per bin (`src/detector/induced.rs`); empty
     /// when the detector has none.
     pub induced: Vec<f64>,
+    /// Expected afterpulses per shot per bin (`src/detector/afterpulse.rs`), included in
+    /// `recorded`; empty when the detector has none.
+    pub afterpulse: Vec<f64>,
     /// Signal-free bins used to estimate the background (0 = none available).
     pub background_bins: usize,
     /// Their indices: bins of the window lying wholly above the atmosphere, nearest the
@@ -245,7 +248,8 @@ impl Scenario {
         let mut atmosphere = Atmosphere::from_config(&loaded)?;
         let channel = &loaded.channels[0];
         let instrument = Instrument::from_config(cfg, atmosphere.detected_line())
-            .recording(channel.record, channel.detector());
+            .recording(channel.record, channel.detector())
+            .with_afterpulsing(channel.detector(), geometry.n_bins);
         // at least four slabs per bin, so that the piecewise representation resolves every bin
         let lowest = cfg.acquisition.bottom_altitude_km * 1e3;
         atmosphere.grid_m = atmosphere
@@ -449,6 +453,13 @@ impl Scenario {
                 None => e.total_per_shot(),
             },
         };
+        if let Some(ap) = &self.instrument.afterpulsing {
+            e.afterpulse = ap.expected(&e.recorded);
+            e.recorded
+                .iter_mut()
+                .zip(&e.afterpulse)
+                .for_each(|(r, a)| *r += a);
+        }
         e.background_bin_indices = self.background_bin_indices();
         e.background_bins = e.background_bin_indices.len();
         Ok(e)

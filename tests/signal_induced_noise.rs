@@ -50,14 +50,16 @@ fn reference(signal: &[f64], a: f64, dt: f64, cdf: impl Fn(f64) -> f64) -> Vec<f
 /// induced counts are in `expected_counts` (total = signal + background + dark + them).
 #[test]
 fn the_induced_counts_are_the_signal_convolved_with_the_decay_law() {
-    let cases: [(&str, Box<dyn Fn(f64) -> f64>); 2] = [
+    let exponential = |t: f64| 1.0 - (-t / 3e-6).exp();
+    let power_law = |t: f64| 1.0 - (1.0 + t / 5e-7).powf(-0.7);
+    let cases: [(&str, &dyn Fn(f64) -> f64); 2] = [
         (
             "{model=\"exponential\", fraction=2e-3, time_constant_s=3e-6}",
-            Box::new(|t: f64| 1.0 - (-t / 3e-6).exp()),
+            &exponential,
         ),
         (
             "{model=\"power_law\", fraction=2e-3, time_constant_s=5e-7, exponent=1.7}",
-            Box::new(|t: f64| 1.0 - (1.0 + t / 5e-7).powf(-0.7)),
+            &power_law,
         ),
     ];
     for (sin, cdf) in cases {

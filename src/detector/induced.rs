@@ -27,9 +27,6 @@
 
 use crate::config::SignalInducedNoiseConfig;
 
-/// Relative tail below which the exponential law's shares are no longer computed.
-const TAIL: f64 = 1e-15;
-
 impl SignalInducedNoiseConfig {
     /// Expected induced counts per signal photoelectron over all delays.
     pub fn fraction(&self) -> f64 {
@@ -68,33 +65,22 @@ impl SignalInducedNoiseConfig {
     /// of `bin_width_s` (module docs).
     pub fn shares(&self, bin_width_s: f64, bins: usize) -> Vec<f64> {
         let dt = bin_width_s;
-        let j_at = |k: usize| self.integrated_survival(k as f64 * dt);
-        let mut w = Vec::with_capacity(bins);
-        if bins == 0 {
-            return w;
-        }
-        w.push(1.0 - j_at(1) / dt);
-        for j in 1..bins {
-            let x = match *self {
-                // the closed form avoids the second difference's cancellation far out
-                SignalInducedNoiseConfig::Exponential {
-                    time_constant_s: tau,
-                    ..
-                } => {
-                    let r = dt / tau;
-                    let s = 2.0 * (0.5 * r).sinh();
-                    (tau / dt) * (-(j as f64) * r).exp() * s * s
+        match *self {
+            SignalInducedNoiseConfig::Exponential {
+                time_constant_s, ..
+            } => super::delay::exponential_shares(time_constant_s, dt, bins),
+            SignalInducedNoiseConfig::PowerLaw { .. } => {
+                let j_at = |k: usize| self.integrated_survival(k as f64 * dt);
+                let mut w = Vec::with_capacity(bins);
+                if bins > 0 {
+                    w.push(1.0 - j_at(1) / dt);
                 }
-                SignalInducedNoiseConfig::PowerLaw { .. } => {
-                    (2.0 * j_at(j) - j_at(j - 1) - j_at(j + 1)) / dt
+                for j in 1..bins {
+                    w.push(((2.0 * j_at(j) - j_at(j - 1) - j_at(j + 1)) / dt).max(0.0));
                 }
-            };
-            if x < TAIL * w[0].max(TAIL) && matches!(self, Self::Exponential { .. }) {
-                break;
+                w
             }
-            w.push(x.max(0.0));
         }
-        w
     }
 
     /// Expected induced counts per shot of each bin for the expected signal `signal`

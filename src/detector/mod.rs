@@ -4,8 +4,10 @@
 //! through its dead time ([`dead_time`]); an analog channel records ADC codes
 //! ([`analog`]).
 
+pub mod afterpulse;
 pub mod analog;
 pub mod dead_time;
+pub mod delay;
 pub mod induced;
 pub mod modulated;
 
@@ -33,6 +35,60 @@ pub fn validate(config: &ScenarioConfig, c: &Checker) -> Result<()> {
         if let Some(sin) = &d.signal_induced_noise {
             validate_induced(sin, c)?;
         }
+        if let Some(ap) = &d.afterpulsing {
+            validate_afterpulsing(ap, d.mode, c)?;
+        }
+    }
+    Ok(())
+}
+
+/// Most exponential components of an afterpulse delay law.
+pub const MAX_AFTERPULSE_COMPONENTS: usize = 8;
+
+/// `afterpulsing`: a probability in [0, 0.5], 1 to [`MAX_AFTERPULSE_COMPONENTS`] time
+/// constants in (0, 1 ms], as many weights ≥ 0 with a positive sum; a photon counter's.
+fn validate_afterpulsing(
+    ap: &crate::config::AfterpulsingConfig,
+    mode: DetectionMode,
+    c: &Checker,
+) -> Result<()> {
+    let key = |k: &str| format!("instrument.detector.afterpulsing.{k}");
+    if mode == DetectionMode::Analog {
+        return Err(c.fail(
+            &key("probability"),
+            "afterpulsing is a photon counter's and this detector records analog only; use \
+             mode = \"both\" for a photon-counting record that afterpulses",
+        ));
+    }
+    c.range(&key("probability"), ap.probability, 0.0, 0.5)?;
+    let n = ap.time_constants_s.len();
+    if n == 0 || n > MAX_AFTERPULSE_COMPONENTS {
+        return Err(c.fail(
+            &key("time_constants_s"),
+            format!("lists {n} delays; give 1 to {MAX_AFTERPULSE_COMPONENTS}"),
+        ));
+    }
+    for (i, &t) in ap.time_constants_s.iter().enumerate() {
+        c.positive(&format!("{}[{i}]", key("time_constants_s")), t, 1e-3)?;
+    }
+    let w = ap.weights();
+    if w.len() != n {
+        return Err(c.fail(
+            &key("weights"),
+            format!(
+                "lists {} weights for {n} time constants; give one each",
+                w.len()
+            ),
+        ));
+    }
+    for (i, &x) in w.iter().enumerate() {
+        c.range(&format!("{}[{i}]", key("weights")), x, 0.0, 1e6)?;
+    }
+    if w.iter().sum::<f64>() <= 0.0 {
+        return Err(c.fail(
+            &key("weights"),
+            "sum to 0; give at least one positive weight",
+        ));
     }
     Ok(())
 }

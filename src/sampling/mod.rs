@@ -56,7 +56,7 @@
 //!   closure, without allocating per shot.
 
 mod aggregate;
-mod alias;
+pub(crate) mod alias;
 pub mod approx;
 pub mod jitter;
 mod pmf_alias;

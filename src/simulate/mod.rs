@@ -16,6 +16,7 @@ use rayon::prelude::*;
 pub mod scene;
 
 use crate::config::Method;
+use crate::detector::afterpulse::{AFTERPULSE_STREAM, Afterpulsing};
 use crate::detector::{Analog, DeadTime, DetectedShots, analog, dead_time};
 use crate::error::{Error, Result};
 use crate::laser::PulseEnergy;
@@ -321,6 +322,10 @@ pub enum StreamSampler {
     /// A profile's photoelectrons drawn by the inner (aggregate) sampler, recorded by an
     /// analog chain as a whole (`Analog::record_profile`).
     AnalogAggregate(Box<StreamSampler>, Box<Analog>),
+    /// The inner sampler's recorded counts with their afterpulses
+    /// (`Afterpulsing::add_profile`, from `stream_rng(seed ^ AFTERPULSE_STREAM, profile,
+    /// AGGREGATE_STREAM)`).
+    Afterpulsed(Box<StreamSampler>, Box<Afterpulsing>),
 }
 
 impl StreamSampler {
@@ -385,6 +390,14 @@ impl StreamSampler {
         }
     }
 
+    /// The same sampler with the photon counter's afterpulses added to its record.
+    pub fn through_afterpulsing(self, afterpulsing: Option<&Afterpulsing>) -> Self {
+        match afterpulsing {
+            Some(a) => StreamSampler::Afterpulsed(Box::new(self), Box::new(a.clone())),
+            None => self,
+        }
+    }
+
     /// The same sampler recorded by an analog chain: the same photons (the same draws
     /// from the same seed), each shot's (`Shot`, `Modulated`) or the profile's sums (the
     /// aggregate samplers) recorded as ADC codes.
@@ -440,6 +453,17 @@ impl StreamSampler {
                 photons.profile_counts(seed, profile, shots, &mut n);
                 a.record_profile(&mut analog::aggregate_rng(seed, profile), &n, shots, acc)
             }
+            StreamSampler::Afterpulsed(inner, a) => {
+                let mut recorded = vec![0u64; acc.len()];
+                inner.profile_counts(seed, profile, shots, &mut recorded);
+                let mut rng = sampling::stream_rng(
+                    seed ^ AFTERPULSE_STREAM,
+                    profile,
+                    sampling::AGGREGATE_STREAM,
+                );
+                a.add_profile(&mut rng, &recorded, acc);
+                acc.iter_mut().zip(&recorded).for_each(|(x, r)| *x += r);
+            }
         }
     }
 }
@@ -476,7 +500,8 @@ pub fn stream_samplers(
         let rest = vec![e.background + e.dark; n];
         let sampler = StreamSampler::with_energy(method, &e.photon_signal(), &rest, energy)
             .through_detector(instrument.dead_time)
-            .through_analog(instrument.analog.as_ref());
+            .through_analog(instrument.analog.as_ref())
+            .through_afterpulsing(instrument.afterpulsing.as_ref());
         vec![(sampler, seed)]
     }
 }
@@ -492,6 +517,18 @@ pub fn check_detector(lidar: &Lidar, components: bool) -> Result<()> {
         return Err(Error::Unsupported(
             "--components is not available with dead time: a recorded count is not a sum of \
              signal, background and dark counts"
+                .into(),
+        ));
+    }
+    if components
+        && lidar
+            .channels
+            .iter()
+            .any(|c| c.instrument.afterpulsing.is_some())
+    {
+        return Err(Error::Unsupported(
+            "--components is not available with afterpulsing: an afterpulse is neither \
+             signal, background nor dark"
                 .into(),
         ));
     }
@@ -918,12 +955,12 @@ pub fn changing_scene(
     }
     let induced = |c: &&crate::scenario::Scenario| {
         let d = c.loaded.config.instrument.detector.as_ref();
-        d.is_some_and(|d| d.signal_induced_noise.is_some())
+        d.is_some_and(|d| d.signal_induced_noise.is_some() || d.afterpulsing.is_some())
     };
     if let Some(c) = lidar.channels.iter().find(induced) {
         return Err(Error::Unsupported(format!(
-            "channel {} has signal-induced noise, which this version does not draw in a scene \
-             that changes along the track (or with the sun) yet",
+            "channel {} has signal-induced noise or afterpulsing, which this version does not \
+             draw in a scene that changes along the track (or with the sun) yet",
             c.channel_name
         )));
     }

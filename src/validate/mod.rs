@@ -332,7 +332,8 @@ impl SimulatorSource {
                 let rest = vec![e.background + e.dark; e.n_bins()];
                 let sampler = StreamSampler::with_energy(method, &e.photon_signal(), &rest, energy)
                     .through_detector(c.instrument.dead_time)
-                    .through_analog(c.instrument.analog.as_ref());
+                    .through_analog(c.instrument.analog.as_ref())
+                    .through_afterpulsing(c.instrument.afterpulsing.as_ref());
                 (
                     sampler,
                     simulate::channel_seed(seed, lidar.photon_source(k)),
@@ -626,6 +627,33 @@ pub fn analog_bin_models(
                 cumulants: [m * k[0], m * (k[1] + jitter_var), m * k[2], m * k[3]],
                 recorded: true,
             }
+        })
+        .collect()
+}
+
+/// `models` of a photon counter's record with its afterpulses added
+/// (`Afterpulsing::expected` and `variance` on the models' per-shot mean and variance).
+pub fn afterpulsed_bin_models(
+    models: &[BinModel],
+    afterpulsing: &crate::detector::afterpulse::Afterpulsing,
+    shots: u64,
+) -> Vec<BinModel> {
+    let m = shots as f64;
+    let mean: Vec<f64> = models.iter().map(|b| b.cumulants[0] / m).collect();
+    let var: Vec<f64> = models.iter().map(|b| b.cumulants[1] / m).collect();
+    let extra = afterpulsing.expected(&mean);
+    let total_var = afterpulsing.variance(&mean, &var);
+    models
+        .iter()
+        .enumerate()
+        .map(|(b, x)| {
+            BinModel::recorded(
+                x.signal / m,
+                x.rest / m,
+                mean[b] + extra[b],
+                total_var[b],
+                m,
+            )
         })
         .collect()
 }

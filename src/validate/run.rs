@@ -11,8 +11,9 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 
 use super::{
-    BinSums, ChannelBins, MIN_REALIZATIONS, Report, SimulatorSource, accumulate, analog_bin_models,
-    bin_models, bin_reports, recorded_bin_models, scene, verdicts,
+    BinSums, ChannelBins, MIN_REALIZATIONS, Report, SimulatorSource, accumulate,
+    afterpulsed_bin_models, analog_bin_models, bin_models, bin_reports, recorded_bin_models, scene,
+    verdicts,
 };
 use crate::config::Method;
 use crate::error::{Error, Result};
@@ -260,10 +261,14 @@ fn identical(
     let mut channels = Vec::new();
     for (c, e) in lidar.channels.iter().zip(&expected) {
         let offset = models.len();
-        models.extend(match (&c.instrument.dead_time, &c.instrument.analog) {
+        let recorded = match (&c.instrument.dead_time, &c.instrument.analog) {
             (Some(d), _) => recorded_bin_models(e, shots, d, &laser),
             (None, Some(a)) => analog_bin_models(e, shots, a, laser.jitter),
             (None, None) => bin_models(e, shots, laser.jitter),
+        };
+        models.extend(match &c.instrument.afterpulsing {
+            Some(ap) => afterpulsed_bin_models(&recorded, ap, shots),
+            None => recorded,
         });
         altitudes.extend_from_slice(&e.altitude_m);
         channels.push(ChannelBins {

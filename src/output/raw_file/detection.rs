@@ -47,8 +47,66 @@ pub fn detection_variables(lidar: &Lidar, expected: &[ExpectedProfile]) -> Vec<D
                 .collect(),
         });
     }
+    if lidar
+        .channels
+        .iter()
+        .any(|c| c.instrument.afterpulsing.is_some())
+    {
+        vars.extend(afterpulse_variables(lidar, expected));
+    }
     vars
 }
+
+/// `expected_afterpulse` and `afterpulse_calibration` (channel, bin); 0 for a channel
+/// without afterpulsing.
+fn afterpulse_variables(lidar: &Lidar, expected: &[ExpectedProfile]) -> Vec<DetectionVariable> {
+    let ran: Vec<f64> = expected
+        .iter()
+        .flat_map(|e| {
+            if e.afterpulse.is_empty() {
+                vec![0.0; e.n_bins()]
+            } else {
+                e.afterpulse.clone()
+            }
+        })
+        .collect();
+    let calibration: Vec<f64> = lidar
+        .channels
+        .iter()
+        .zip(expected)
+        .flat_map(|(c, e)| match &c.instrument.afterpulsing {
+            Some(ap) => {
+                // a closed telescope: dark counts only, through the dead time
+                let dark = vec![e.dark; e.n_bins()];
+                let recorded = match &c.instrument.dead_time {
+                    Some(d) => d.recorded_means(&dark),
+                    None => dark,
+                };
+                ap.expected(&recorded)
+            }
+            None => vec![0.0; e.n_bins()],
+        })
+        .collect();
+    vec![
+        DetectionVariable {
+            name: "expected_afterpulse",
+            per_bin: true,
+            long_name: "expected afterpulses per shot (included in expected_counts): the recorded counts' afterpulses, p times the delay law's share of each earlier bin",
+            units: "count",
+            data: ran,
+        },
+        DetectionVariable {
+            name: "afterpulse_calibration",
+            per_bin: true,
+            long_name: "expected afterpulses per shot of a closed-telescope (dark) run, as an MPL afterpulse calibration measures them: the dark counts' afterpulses",
+            units: "count",
+            data: calibration,
+        },
+    ]
+}
+
+/// One (channel) value of the analog chain: name, long name, units and how to read it.
+type ChainValue = (&'static str, &'static str, &'static str, fn(&Analog) -> f64);
 
 /// The variables of a run with an analog channel; none without.
 pub fn analog_variables(lidar: &Lidar, expected: &[ExpectedProfile]) -> Vec<DetectionVariable> {
@@ -62,7 +120,7 @@ pub fn analog_variables(lidar: &Lidar, expected: &[ExpectedProfile]) -> Vec<Dete
             .map(|c| c.instrument.analog.as_ref().map_or(f64::NAN, f))
             .collect::<Vec<f64>>()
     };
-    let scalars: [(&'static str, &'static str, &'static str, fn(&Analog) -> f64); 10] = [
+    let scalars: [ChainValue; 10] = [
         (
             "adc_volts_per_count",
             "voltage of one ADC code (LSB = adc_range / 2^adc_bits): volts = counts / n_shots x this, per shot",

@@ -1,0 +1,193 @@
+//! Afterpulsing (issue 21 item 3; docs/model.md §4b, `src/detector/afterpulse.rs`): the
+//! expected afterpulses against a quadrature of the delay law written here, the
+//! closed-telescope calibration profile, and `validate` with and without the term.
+
+mod common;
+
+use common::cli::scratch;
+use common::h5::{channel_rows, simulate};
+use lidarsim::simulate::ResolvedMethod;
+use lidarsim::validate::{self, SimulatorSource};
+
+const AFTERPULSING: &str =
+    "afterpulsing={probability=0.01, time_constants_s=[1e-7, 2e-6], weights=[0.6, 0.4]}";
+
+/// The delay law's CDF: 0.6·(1 − e^{−t/100 ns}) + 0.4·(1 − e^{−t/2 µs}).
+fn cdf(t: f64) -> f64 {
+    if t <= 0.0 {
+        return 0.0;
+    }
+    0.6 * (1.0 - (-t / 1e-7).exp()) + 0.4 * (1.0 - (-t / 2e-6).exp())
+}
+
+/// `Σ_b' m_b'·p·(1/Δt)∫_{bin b'} [G(t_b+1 − u) − G(t_b − u)] du`, midpoint rule over
+/// 400 source positions per bin.
+fn reference(recorded: &[f64], p: f64, dt: f64) -> Vec<f64> {
+    let steps = 400;
+    let mut out = vec![0.0; recorded.len()];
+    for (src, &m) in recorded.iter().enumerate() {
+        for k in 0..steps {
+            let u = (src as f64 + (k as f64 + 0.5) / steps as f64) * dt;
+            for (b, o) in out.iter_mut().enumerate().skip(src) {
+                let (lo, hi) = (b as f64 * dt, (b + 1) as f64 * dt);
+                *o += p * m / steps as f64 * (cdf(hi - u) - cdf(lo - u));
+            }
+        }
+    }
+    out
+}
+
+/// The ground lidar's parallel channel, 250 shots a profile, no jitter, with the
+/// detector `detector` (a TOML inline table's keys).
+fn lidar_with(detector: &str) -> lidarsim::scenario::Lidar {
+    let d = format!("instrument.detector={{{detector}}}");
+    common::lidar(
+        "ground/ground_532_depol.toml",
+        &[
+            "instrument.pulse_energy_jitter=0",
+            "acquisition.accumulation_time_s=0.1",
+            "acquisition.top_altitude_km=12",
+            "instrument.channels=[{name=\"532_parallel\", polarization=\"parallel\"}]",
+            &d,
+        ],
+    )
+}
+
+/// The expected afterpulses are the recorded means spread by the delay law (to 1e-5
+/// of the largest; the quadrature's own error is ~1e-6), and are in `expected_counts`.
+#[test]
+fn expected_afterpulses_follow_the_delay_law() {
+    let lidar = lidar_with(&format!("dead_time_s=3.5e-9, {AFTERPULSING}"));
+    let e = &lidar.expected().unwrap()[0];
+    let dead = lidar.channels[0].instrument.dead_time.unwrap();
+    let recorded = dead.recorded_means(&e.total_per_shot());
+    let want = reference(&recorded, 0.01, dead.bin_width_s);
+    let top = want.iter().fold(0.0f64, |m, &x| m.max(x));
+    assert!(top > 1e-3, "{top}");
+    for b in 0..want.len() {
+        assert!(
+            (e.afterpulse[b] - want[b]).abs() < 1e-5 * top,
+            "bin {b}: {} vs {}",
+            e.afterpulse[b],
+            want[b]
+        );
+        let sum = recorded[b] + want[b];
+        assert!((e.recorded[b] - sum).abs() < 1e-5 * top, "bin {b}");
+    }
+}
+
+/// The file's closed-telescope profile: a dark rate of 200 s⁻¹ through no dead time,
+/// `p·λ_dc·Σ_{j≤b} w_j`: the dark counts' afterpulses, rising from the window's start
+/// (nothing before it) to `p·λ_dc`. And `expected_afterpulse` as above.
+#[test]
+fn the_file_carries_the_afterpulse_calibration_profile() {
+    let dir = scratch("afterpulse-file");
+    let config = dir.join("ap.toml");
+    let base =
+        std::fs::read_to_string(common::config_path("ground/ground_532_depol.toml")).unwrap();
+    let detector = "detector = { dead_time_s = 3.5e-9, dead_time_model = \"nonparalyzable\" }";
+    let text = base
+        .replacen(detector, &format!("detector = {{ {AFTERPULSING} }}"), 1)
+        .replacen("accumulation_time_s = 30.0", "accumulation_time_s = 0.1", 1);
+    std::fs::write(&config, text).unwrap();
+    let f = simulate(&dir, &config, "ap.h5", "1");
+    let calibration = channel_rows(&f, "afterpulse_calibration", 2);
+    let dark = 200.0 * 2e-7;
+    let want = reference(&vec![dark; calibration[0].len()], 0.01, 2e-7);
+    for (b, (got, w)) in calibration[0].iter().zip(&want).enumerate() {
+        assert!(
+            (got - w).abs() < 1e-5 * 0.01 * dark,
+            "bin {b}: {got} vs {w}"
+        );
+    }
+    let last = *calibration[0].last().unwrap();
+    assert!((last / (0.01 * dark) - 1.0).abs() < 1e-3, "{last}");
+    let ap = channel_rows(&f, "expected_afterpulse", 2);
+    assert!(ap[0].iter().any(|&x| x > 0.0));
+}
+
+/// `validate`'s law with afterpulses is CONSISTENT (false alarm < 2e-3 per statistic,
+/// fixed seed) through dead time (shot path) and for an ideal counter (aggregate path);
+/// the models without the afterpulse term are rejected on the mean.
+#[test]
+fn validate_sees_the_afterpulses_and_rejects_their_absence() {
+    let energy = lidarsim::simulate::RunEnergy::jitter(0.0);
+    for (detector, method, realizations) in [
+        (
+            format!("dead_time_s=3.5e-9, {AFTERPULSING}"),
+            ResolvedMethod::Shot,
+            300,
+        ),
+        (AFTERPULSING.to_string(), ResolvedMethod::Aggregate, 1000),
+    ] {
+        let lidar = lidar_with(&detector);
+        let expected = lidar.expected().unwrap();
+        let e = &expected[0];
+        let shots = lidar.first().shots_per_profile();
+        let c = &lidar.channels[0].instrument;
+        let laser =
+            lidarsim::laser::PulseEnergy::from_config(&lidar.first().loaded.config.instrument);
+        let recorded = match &c.dead_time {
+            Some(d) => validate::recorded_bin_models(e, shots, d, &laser),
+            None => validate::bin_models(e, shots, 0.0),
+        };
+        let right =
+            validate::afterpulsed_bin_models(&recorded, c.afterpulsing.as_ref().unwrap(), shots);
+        let source = SimulatorSource::for_lidar(&lidar, &expected, method, energy, 11);
+        let bg = &e.background_bin_indices;
+        let (_, checks) =
+            validate::validate_source(&source, &right, &e.altitude_m, realizations, bg);
+        assert!(checks.iter().all(|c| c.pass), "{method:?}: {checks:#?}");
+        let (_, checks) =
+            validate::validate_source(&source, &recorded, &e.altitude_m, realizations, bg);
+        assert!(
+            !checks[0].pass,
+            "{method:?}: no afterpulses passes: {:#?}",
+            checks[0]
+        );
+    }
+}
+
+/// The keys' limits, in one line naming the key.
+#[test]
+fn afterpulsing_keys_are_checked() {
+    let base =
+        std::fs::read_to_string(common::config_path("ground/ground_532_depol.toml")).unwrap();
+    let detector = "detector = { dead_time_s = 3.5e-9, dead_time_model = \"nonparalyzable\" }";
+    for (ap, key) in [
+        (
+            "{ probability = 0.7, time_constants_s = [1e-7] }",
+            "afterpulsing.probability",
+        ),
+        (
+            "{ probability = 0.01, time_constants_s = [] }",
+            "afterpulsing.time_constants_s",
+        ),
+        (
+            "{ probability = 0.01, time_constants_s = [1e-7, -1e-6] }",
+            "afterpulsing.time_constants_s[1]",
+        ),
+        (
+            "{ probability = 0.01, time_constants_s = [1e-7], weights = [1, 2] }",
+            "afterpulsing.weights",
+        ),
+    ] {
+        let text = base.replacen(
+            detector,
+            &format!("detector = {{ afterpulsing = {ap} }}"),
+            1,
+        );
+        let e = common::refusal(&text, ap);
+        assert!(
+            e.contains(&format!("instrument.detector.{key}")),
+            "{ap}: {e}"
+        );
+    }
+    let analog = base.replacen(
+        detector,
+        "detector = { mode = \"analog\", afterpulsing = { probability = 0.01, time_constants_s = [1e-7] } }",
+        1,
+    );
+    let e = common::refusal(&analog, "analog afterpulsing");
+    assert!(e.contains("both"), "{e}");
+}
