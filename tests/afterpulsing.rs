@@ -191,3 +191,24 @@ fn afterpulsing_keys_are_checked() {
     let e = common::refusal(&analog, "analog afterpulsing");
     assert!(e.contains("both"), "{e}");
 }
+
+/// The MPL-like preset (SPCM dead time and afterpulsing, jitter, daytime, pre-trigger
+/// bins): `validate` CONSISTENT (false alarm < 2e-3 per statistic, fixed seed) on
+/// 500-shot profiles.
+#[test]
+fn the_mpl_preset_validates() {
+    let dir = scratch("mpl-preset");
+    let config = common::config_path("ground/mpl_like.toml");
+    let args = [
+        "validate",
+        config.to_str().unwrap(),
+        "--realizations",
+        "200",
+        "--set",
+        "acquisition.accumulation_time_s=0.2",
+    ];
+    let o = common::cli::lidarsim(&dir, &args, &[]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{out}");
+    assert!(out.contains("CONSISTENT"), "{out}");
+}

@@ -30,6 +30,8 @@ fn every_config_key_is_documented() {
         "paper/scenario1.toml",
         "ground/ground_532_overlap.toml",
         "ground/ground_532_depol.toml",
+        "ground/mpl_like.toml",
+        "ground/pollyxt_like_glued.toml",
         "instruments/caliop_532.toml",
         "instruments/caliop_3ch.toml",
         "instruments/caliop_orbit.toml",

@@ -346,10 +346,23 @@ impl Analog {
             .collect()
     }
 
-    /// The warning for bins whose mean code per shot comes within four standard
-    /// deviations of either end of the ADC range (where clipping leaves the law), naming
-    /// the first such bin; `None` when no bin does.
+    /// The warning for a chain whose law the codes leave: electronic noise below one
+    /// code (the rounding's bias is then up to `e^{−2π²σ²}/π` codes a shot), or bins whose
+    /// mean code per shot comes within four standard deviations of either end of the ADC
+    /// range (clipping), naming the first such bin; `None` when neither.
     pub fn clipping_warning(&self, lambda: &[f64], altitude_m: &[f64]) -> Option<String> {
+        let sigma = self.noise_codes();
+        if sigma < 1.0 {
+            let bias =
+                (-2.0 * std::f64::consts::PI.powi(2) * sigma * sigma).exp() / std::f64::consts::PI;
+            return Some(format!(
+                "lidarsim: warning: the analog electronic noise is {sigma:.2} ADC codes, below \
+                 one: rounding may bias a shot's code by up to {bias:.2e} codes, which \
+                 expected_counts leaves out; raise instrument.detector.electronic_noise_v to \
+                 at least {:.3e} V (one code) or narrow adc_range_v",
+                self.volts_per_code()
+            ));
+        }
         let full = self.full_scale_code() as f64;
         let cumulants = self.shot_cumulants(lambda);
         let (bin, k) = cumulants.iter().enumerate().find(|(_, k)| {
