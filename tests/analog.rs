@@ -238,6 +238,14 @@ fn a_both_pair_glues_with_the_files_constant() {
         .replacen("accumulation_time_s = 30.0", "accumulation_time_s = 2.0", 1);
     std::fs::write(&config, text).unwrap();
     let f = simulate(&dir, &config, "both.h5", "4");
+    // validate --file cannot rebuild the analog law from a file: refused in one line
+    let o = common::cli::lidarsim(&dir, &["validate", "--file", "both.h5"], &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("analog") && err.trim_end().lines().count() == 1,
+        "{err}"
+    );
     let names = strings(&f, "channel");
     assert_eq!(
         names,

@@ -180,6 +180,34 @@ fn not_judged(channels: &Channels, judged: &[usize], n: usize) -> Vec<String> {
         .collect()
 }
 
+/// Refuses a file whose counts follow a law this check does not rebuild from the file:
+/// analog codes (`acquisition_mode`), afterpulses (`expected_afterpulse`); their laws are
+/// checked by `lidarsim validate CONFIG`.
+fn refuse_other_laws(path: &Path, f: &hdf5::File, h: &RawHeader) -> Result<()> {
+    let refuse = |channel: &str, what: &str| {
+        Err(Error::Unsupported(format!(
+            "{}: channel {channel} {what}, whose law validate --file does not rebuild from a \
+             file (this version): validate the run's config instead (lidarsim validate \
+             CONFIG; the file's `config` attribute holds it)",
+            path.display()
+        )))
+    };
+    if f.link_exists("acquisition_mode") {
+        let modes = crate::output::raw_file::read::read_text(path, f, "acquisition_mode")?;
+        if let Some(k) = modes.iter().position(|m| m == "analog") {
+            return refuse(&h.channels[k], "records analog ADC codes");
+        }
+    }
+    if f.link_exists("expected_afterpulse") {
+        let ap = read_all(path, f, "expected_afterpulse")?;
+        let n = ap.len() / h.channels.len().max(1);
+        if let Some(i) = ap.iter().position(|&x| x != 0.0) {
+            return refuse(&h.channels[i / n.max(1)], "afterpulses");
+        }
+    }
+    Ok(())
+}
+
 /// The channels' names, reference energy and detectors, refused where impossible.
 fn channels(path: &Path, f: &hdf5::File, h: &RawHeader) -> Result<Channels> {
     let bad = |why: String| Error::output(path, why);
@@ -201,6 +229,7 @@ fn channels(path: &Path, f: &hdf5::File, h: &RawHeader) -> Result<Channels> {
             "`nominal_pulse_energy` of the first channel is 0".into()
         ));
     }
+    refuse_other_laws(path, f, h)?;
     let dead = if tau.iter().any(|&t| t > 0.0) {
         let models = crate::output::raw_file::read::read_text(path, f, "dead_time_model")?;
         if models.len() != tau.len() {
