@@ -186,31 +186,44 @@ fn channel_layout(
     (all, altitudes, channels)
 }
 
-/// `validate`'s law of analog codes (`validate::analog_bin_models`) holds on both paths
-/// (CONSISTENT: false alarm < 2e-3 per statistic, fixed seed), and rejects an excess
-/// noise factor 10 % off on the variance.
+/// `validate`'s law of analog codes (`validate::analog_bin_models`) holds on both paths,
+/// for analog channels and for `both` pairs without dead time (the photon-counting half
+/// Poisson) — CONSISTENT: false alarm < 2e-3 per statistic, fixed seed — and an excess
+/// noise factor 10 % off is rejected on the variance.
 #[test]
 fn validate_is_consistent_on_analog_codes_and_rejects_a_wrong_excess_noise_factor() {
-    let lidar = analog_lidar(&["instrument.detector={mode=\"analog\", gain=1e7}"]);
-    let expected = lidar.expected().unwrap();
-    let shots = lidar.first().shots_per_profile();
-    let energy = lidarsim::simulate::RunEnergy::jitter(0.0);
-    let analog = |k: usize| lidar.channels[k].instrument.analog.clone().unwrap();
-    for method in [ResolvedMethod::Aggregate, ResolvedMethod::Shot] {
-        let source = SimulatorSource::for_lidar(&lidar, &expected, method, energy, 7);
-        let (right, alt, channels) = channel_layout(&lidar, |k, e| {
-            validate::analog_bin_models(e, shots, &analog(k), 0.0)
-        });
-        let (_, checks) = validate::validate_channels(&source, &right, &alt, 300, &channels);
-        assert!(checks.iter().all(|c| c.pass), "{method:?}: {checks:#?}");
-        let (wrong, _, _) = channel_layout(&lidar, |k, e| {
-            let mut a = analog(k);
-            a.excess_noise_factor *= 1.1;
-            validate::analog_bin_models(e, shots, &a, 0.0)
-        });
-        let (_, checks) = validate::validate_channels(&source, &wrong, &alt, 300, &channels);
-        let variance = checks.iter().find(|c| c.statistic == "variance").unwrap();
-        assert!(!variance.pass, "{method:?}: F +10 % passes: {variance:#?}");
+    for detector in ["mode=\"analog\", gain=1e7", "mode=\"both\", gain=1e7"] {
+        let d = format!("instrument.detector={{{detector}}}");
+        let lidar = analog_lidar(&[&d]);
+        let expected = lidar.expected().unwrap();
+        let shots = lidar.first().shots_per_profile();
+        let energy = lidarsim::simulate::RunEnergy::jitter(0.0);
+        let analog = |k: usize| lidar.channels[k].instrument.analog.clone();
+        let models = |f: f64| {
+            channel_layout(&lidar, |k, e| match analog(k) {
+                Some(mut a) => {
+                    a.excess_noise_factor *= f;
+                    validate::analog_bin_models(e, shots, &a, 0.0)
+                }
+                None => validate::bin_models(e, shots, 0.0),
+            })
+        };
+        for method in [ResolvedMethod::Aggregate, ResolvedMethod::Shot] {
+            let source = SimulatorSource::for_lidar(&lidar, &expected, method, energy, 7);
+            let (right, alt, channels) = models(1.0);
+            let (_, checks) = validate::validate_channels(&source, &right, &alt, 300, &channels);
+            assert!(
+                checks.iter().all(|c| c.pass),
+                "{detector} {method:?}: {checks:#?}"
+            );
+            let (wrong, _, _) = models(1.1);
+            let (_, checks) = validate::validate_channels(&source, &wrong, &alt, 300, &channels);
+            let variance = checks.iter().find(|c| c.statistic == "variance").unwrap();
+            assert!(
+                !variance.pass,
+                "{detector} {method:?}: F +10 % passes: {variance:#?}"
+            );
+        }
     }
 }
 
