@@ -199,16 +199,5 @@ fn afterpulsing_keys_are_checked() {
 fn the_mpl_preset_validates() {
     let dir = scratch("mpl-preset");
     let config = common::config_path("ground/mpl_like.toml");
-    let args = [
-        "validate",
-        config.to_str().unwrap(),
-        "--realizations",
-        "200",
-        "--set",
-        "acquisition.accumulation_time_s=0.2",
-    ];
-    let o = common::cli::lidarsim(&dir, &args, &[]);
-    let out = String::from_utf8_lossy(&o.stdout);
-    assert_eq!(o.status.code(), Some(0), "{out}");
-    assert!(out.contains("CONSISTENT"), "{out}");
+    common::h5::validate_preset_consistent(&dir, &config, "acquisition.accumulation_time_s=0.2");
 }

@@ -400,17 +400,7 @@ fn analog_keys_are_checked() {
 fn the_glued_pollyxt_preset_validates_and_each_pair_has_a_common_linear_range() {
     let dir = scratch("glued-preset");
     let config = config_path("ground/pollyxt_like_glued.toml");
-    let args = [
-        "validate",
-        config.to_str().unwrap(),
-        "--realizations",
-        "200",
-        "--set",
-        "acquisition.accumulation_time_s=5",
-    ];
-    let o = common::cli::lidarsim(&dir, &args, &[]);
-    let out = String::from_utf8_lossy(&o.stdout);
-    assert_eq!(o.status.code(), Some(0), "{out}");
+    common::h5::validate_preset_consistent(&dir, &config, "acquisition.accumulation_time_s=5");
     let f = simulate(&dir, &config, "glued.h5", "1");
     let names = strings(&f, "channel");
     let linear = channel_rows(&f, "linear_range", names.len());

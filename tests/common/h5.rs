@@ -45,6 +45,24 @@ pub fn simulate(dir: &Path, config: &Path, out: &str, profiles: &str) -> hdf5::F
     hdf5::File::open(dir.join(out)).unwrap()
 }
 
+/// `lidarsim validate CONFIG --realizations 200 --set ACCUMULATION` is CONSISTENT (exit
+/// 0; its statistics' false-alarm rate is `validate`'s own; fixed seed): a preset on
+/// short profiles, `accumulation` the `acquisition.accumulation_time_s=…` override.
+pub fn validate_preset_consistent(dir: &Path, config: &Path, accumulation: &str) {
+    let args = [
+        "validate",
+        config.to_str().unwrap(),
+        "--realizations",
+        "200",
+        "--set",
+        accumulation,
+    ];
+    let o = lidarsim(dir, &args, &[]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{out}");
+    assert!(out.contains("CONSISTENT"), "{out}");
+}
+
 /// `lidarsim validate CONFIG --method M` is CONSISTENT (exit 0) for the aggregate and the
 /// shot path (its statistics' false-alarm rate is `validate`'s own; fixed seed).
 pub fn validate_consistent_both_ways(dir: &Path, config: &Path) {
