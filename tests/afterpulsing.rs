@@ -10,9 +10,10 @@ use lidarsim::simulate::ResolvedMethod;
 use lidarsim::validate::{self, SimulatorSource};
 
 const AFTERPULSING: &str =
-    "afterpulsing={probability=0.01, time_constants_s=[1e-7, 2e-6], weights=[0.6, 0.4]}";
+    "afterpulsing={probability=0.01, time_constants_s=[1e-7, 2e-6], weights=[3.0, 2.0]}";
 
-/// The delay law's CDF: 0.6·(1 − e^{−t/100 ns}) + 0.4·(1 − e^{−t/2 µs}).
+/// The delay law's CDF: 0.6·(1 − e^{−t/100 ns}) + 0.4·(1 − e^{−t/2 µs}) (the weights 3 and 2
+/// normalized).
 fn cdf(t: f64) -> f64 {
     if t <= 0.0 {
         return 0.0;
