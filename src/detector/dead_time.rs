@@ -32,6 +32,8 @@
 
 use rand::Rng;
 
+use super::counting;
+
 use crate::sampling::{SHOT_BLOCK, ShotCounts, ShotSampler, add_block_sums, stream_rng};
 
 /// Cost of recording one photon through the arrival-time path, ns, for the duration
@@ -175,6 +177,9 @@ impl DeadTime {
         scratch: &mut Scratch,
         acc: &mut [u64],
     ) {
+        if self.by_counts() {
+            return self.record_by_counts(rng, photons, scratch, acc);
+        }
         let counts = photons.counts();
         let independent_runs = self.tau_s <= self.bin_width_s;
         let empty = |b: usize| counts.get(b).is_none_or(|&c| c == 0);
@@ -208,6 +213,78 @@ impl DeadTime {
             );
             start = end;
         }
+    }
+
+    /// Whether [`record_shot`](Self::record_shot) draws each bin's recorded count from
+    /// its counting distribution ([`counting`]) rather than sweeping arrival times: a
+    /// non-paralyzable detector on bins at least 2τ wide.
+    pub fn by_counts(&self) -> bool {
+        self.model == DeadTimeModel::Nonparalyzable && self.bin_width_s >= 2.0 * self.tau_s
+    }
+
+    /// [`record_shot`](Self::record_shot) by counting distributions: each run of adjacent
+    /// hit bins in time order, the dead time left by a bin carried into the next (an
+    /// empty bin, at least τ wide, ends it); a bin of more than [`counting::MAX_PHOTONS`]
+    /// photons by its arrival times.
+    fn record_by_counts<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        photons: &ShotCounts,
+        scratch: &mut Scratch,
+        acc: &mut [u64],
+    ) {
+        let (tau, dt) = (self.tau_s, self.bin_width_s);
+        let Scratch { times, family, .. } = scratch;
+        if !family.as_ref().is_some_and(|f| f.is_for(tau, dt)) {
+            *family = Some(counting::family(tau, dt));
+        }
+        let family = family.as_deref().expect("set above");
+        let counts = photons.counts();
+        let hit = |i: usize| counts.get(i).is_some_and(|&c| c > 0);
+        for &b in photons.hit_bins() {
+            let mut i = b as usize;
+            if i > 0 && hit(i - 1) {
+                continue; // not the first bin of its run
+            }
+            let mut r = 0.0;
+            loop {
+                let n = counts[i];
+                let next = hit(i + 1);
+                let (k, left) = if n == 1 && r == 0.0 && !next {
+                    (1, 0.0) // a lone photon on a live detector
+                } else if n <= counting::MAX_PHOTONS {
+                    family.record_bin(rng, n, r, next)
+                } else {
+                    self.sweep_bin(rng, n, r, times)
+                };
+                acc[i] += u64::from(k);
+                if !next {
+                    break;
+                }
+                r = left;
+                i += 1;
+            }
+        }
+    }
+
+    /// One bin of `n` photons by its arrival times, entered dead for `r`
+    /// (non-paralyzable): the recorded count and the dead time left at its end.
+    fn sweep_bin<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        n: u32,
+        r: f64,
+        times: &mut Vec<f64>,
+    ) -> (u32, f64) {
+        sorted_uniform_times(rng, n, 0.0, self.bin_width_s, times);
+        let (mut k, mut live_at) = (0u32, r);
+        for &t in times.iter() {
+            if t >= live_at {
+                k += 1;
+                live_at = t + self.tau_s;
+            }
+        }
+        (k, (live_at - self.bin_width_s).max(0.0))
     }
 
     /// Draws the arrival times of the photons of `bins` (sorted, in time order), bin by
@@ -277,6 +354,8 @@ fn sorted_uniform_times<R: Rng + ?Sized>(
 pub struct Scratch {
     times: Vec<f64>,
     hit: Vec<u32>,
+    /// The counting tables of the last (τ, Δt) recorded.
+    family: Option<std::sync::Arc<counting::Family>>,
 }
 
 /// Accumulates one profile of `shots` shots through the detector into `acc`: the

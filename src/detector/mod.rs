@@ -2,6 +2,7 @@
 //! detector → output). Absent for an ideal linear detector: a scene without dead time
 //! has no detector stage and keeps every exact fast path.
 
+pub mod counting;
 pub mod dead_time;
 pub mod modulated;
 
