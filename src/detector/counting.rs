@@ -180,7 +180,7 @@ impl Family {
     /// Records one bin of `n` photons (1 ≤ n ≤ [`MAX_PHOTONS`]) entered dead for
     /// `r ∈ [0, τ)`: the recorded count and the dead time left at its end (0 when
     /// `need_residual` is false and it is not needed to count).
-    #[inline]
+    #[inline(always)]
     pub fn record_bin<R: Rng + ?Sized>(
         &self,
         rng: &mut R,
@@ -200,12 +200,16 @@ impl Family {
             }
             None => 0,
         };
+        // without boundary photons, the count is the body's; and entered live, ρ ≤ τ = e
+        // leaves nothing over
+        if nb == 0 && (r == 0.0 || !need_residual) {
+            if n == 1 {
+                return (1, 0.0); // a lone body photon on a live detector
+            }
+            return (self.body(n).draw(rng).0, 0.0);
+        }
         let law = self.body(n - nb);
         let (k, cell) = law.draw(rng);
-        // without boundary photons and entered live, ρ ≤ τ = e: nothing is left over
-        if nb == 0 && (r == 0.0 || !need_residual) {
-            return (k, 0.0);
-        }
         let rho = match cell {
             Some(c) => self.rho(rng, c, k),
             None => 0.0,
@@ -373,6 +377,442 @@ impl Cell {
             0.0
         };
         c
+    }
+}
+
+/// Bytes of a [`RateLaw`] (for the run's table budget).
+pub fn rate_law_bytes(law: &RateLaw) -> usize {
+    16 * law.alias.columns() + std::mem::size_of::<RateLaw>()
+}
+
+/// A [`RateLaw`]'s body drawn, with the uniforms of the rest of the bin.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Drawn {
+    k: u32,
+    /// ρ + E and ρ − τ (see [`RateLaw::finish`]).
+    a: f64,
+    b: f64,
+}
+
+/// The recorded count of a non-paralyzable detector in a bin of constant true rate n,
+/// drawn from Müller's counting law without the bin's photons (the law of the bin given
+/// its rate, not given its photon count as [`Family`]): for bins of a fixed mean, where
+/// drawing the photons first would cost more than the count itself.
+///
+/// The same body and extension as [`Family::record_bin`]: the body `[r, r + L)` begun
+/// live, whose (R, ρ) follow
+///
+/// ```text
+/// P(R = k, ρ = 0)  = Pois(k; n(L − kτ))
+/// P(R = k, ρ > 0)  = Q(k; n(L − (k−1)τ)) − Q(k; n(L − kτ)),   Q(k; μ) = P(Pois(μ) ≥ k)
+/// ρ | R = k, ρ > 0  has density ∝ a^{k−1}·e^{−na} at a = L − kτ + ρ (Γ(k, n)'s)
+/// ```
+///
+/// (Müller 1973: the k-th record is at `(k−1)τ + Γ(k, n)`), by an alias table over the
+/// pairs and rejection from the uniform within the cell, squeezed by the density's least
+/// value on it (log-concave: at an end); then the extension of length `e = τ − r`, where
+/// the detector, live from ρ on, records its first photon, at `ρ + E`, E ~ Exp(n), if
+/// `E < e − ρ`. At low rates one `u64` against `⌊P(E < τ)·2^64⌋` decides most bins (E
+/// itself then drawn below τ by inversion); from [`DENSE_FROM`] on, E is drawn in every
+/// bin by a ziggurat ([`exp1`]) and the outcome selected without branches. Exact; the
+/// photons of the bin are not drawn (their count given the recorded path is
+/// `R + Poisson(n·(time dead within the bin))`, exactly, where wanted).
+#[derive(Debug, Clone)]
+pub struct RateLaw {
+    tau: f64,
+    n: f64,
+    /// 1/n.
+    mean_gap: f64,
+    /// L = Δt − τ.
+    body: f64,
+    alias: AliasTable,
+    k0: u32,
+    /// `⌊P(Exp(n) < τ)·2^64⌋` and P(Exp(n) < τ).
+    ext_thr: u64,
+    ext_p: f64,
+    /// P(Exp(n) < τ) > [`DENSE_FROM`]: the extension's photon drawn in every bin.
+    pub dense: bool,
+}
+
+/// The squeeze of an entry in its id's top 16 bits: `q/SQUEEZE_ONE`.
+const SQUEEZE_ONE: f64 = 65535.0;
+
+/// Share of bins whose extension may record above which [`RateLaw`] draws without
+/// branches on the outcome (n ≳ 15 MHz at τ = 3.5 ns).
+const DENSE_FROM: f64 = 0.05;
+
+impl RateLaw {
+    /// The law of a bin of `dt` (≥ 2τ) at the true rate `n` (s⁻¹, > 0).
+    pub fn new(n: f64, tau: f64, dt: f64) -> RateLaw {
+        assert!(
+            n > 0.0 && tau > 0.0 && dt >= 2.0 * tau,
+            "n {n}, τ {tau}, Δt {dt}"
+        );
+        let body = dt - tau;
+        let k_top = (body / tau).floor() as u32 + 1;
+        let mu = |k: u32| n * (body - f64::from(k) * tau).max(0.0);
+        let masses = |k: u32| -> (f64, f64) {
+            if k == 0 {
+                return ((-n * body).exp(), 0.0);
+            }
+            let atom = if f64::from(k) * tau <= body {
+                pois_pmf(k, mu(k))
+            } else {
+                0.0
+            };
+            let (ge_hi, lt_hi) = pois_tails(k, mu(k - 1));
+            let (ge_lo, lt_lo) = pois_tails(k, mu(k));
+            let cell = if ge_hi < 0.5 {
+                ge_hi - ge_lo
+            } else {
+                lt_lo - lt_hi
+            };
+            (atom, cell.max(0.0))
+        };
+        // the median of R by bisection on P(R ≥ k) = Q(k; n(L − (k−1)τ))
+        let (mut lo, mut hi) = (0u32, k_top);
+        while lo < hi {
+            let mid = lo + (hi - lo).div_ceil(2);
+            if pois_tails(mid, mu(mid - 1)).0 >= 0.5 {
+                lo = mid;
+            } else {
+                hi = mid - 1;
+            }
+        }
+        let (k0, entries) = around(lo, k_top, masses);
+        let mut weights = Vec::with_capacity(2 * entries.len());
+        let mut ids = Vec::with_capacity(2 * entries.len());
+        let mut law = RateLaw {
+            tau,
+            n,
+            mean_gap: 1.0 / n,
+            body,
+            alias: AliasTable::new(&[1.0], &[0]),
+            k0,
+            ext_thr: 0,
+            ext_p: 0.0,
+            dense: false,
+        };
+        // an entry's id carries its squeeze, the least of the cell's density over its
+        // largest, rounded down to 16 bits (still a lower bound: the test stays exact),
+        // so that no second table is read; the atom's is 1 (always accepted)
+        assert!(entries.len() < 1 << 15, "a law of {} counts", entries.len());
+        for (i, &(atom, cell)) in entries.iter().enumerate() {
+            let c = law.cell(k0 + i as u32);
+            let lf_min = c.log_density(c.rho_lo).min(c.log_density(tau));
+            let squeeze = if lf_min.is_finite() {
+                (lf_min - c.lf_max).exp()
+            } else {
+                0.0
+            };
+            let q = (squeeze * SQUEEZE_ONE).floor().clamp(0.0, SQUEEZE_ONE) as u32;
+            weights.extend([atom, cell]);
+            ids.extend([
+                2 * i as u32 | (SQUEEZE_ONE as u32) << 16,
+                (2 * i as u32 + 1) | q << 16,
+            ]);
+        }
+        law.alias = AliasTable::new(&weights, &ids);
+        law.ext_p = -(-n * tau).exp_m1();
+        law.ext_thr = (law.ext_p * TWO_POW_64) as u64;
+        law.dense = law.ext_p > DENSE_FROM;
+        law
+    }
+
+    /// The cell of R = k: ρ ∈ (ρ_lo, τ], its log-density and its largest value.
+    fn cell(&self, k: u32) -> Cell2 {
+        let kf = f64::from(k);
+        let a0 = self.body - kf * self.tau;
+        let rho_lo = (-a0).max(0.0);
+        let km1 = (kf - 1.0).max(0.0);
+        let mut c = Cell2 {
+            rho_lo,
+            a0,
+            km1,
+            n: self.n,
+            lf_max: 0.0,
+        };
+        // log-concave: the largest value at the mode, clamped to the cell
+        let mode = (km1 / self.n - a0).clamp(rho_lo, self.tau);
+        c.lf_max = c.log_density(mode);
+        c
+    }
+
+    /// The first step of [`record`](Self::record) for a dense law: everything of the bin
+    /// that does not depend on the dead time `r` carried into it, drawn apart so that a
+    /// shot draws every dense bin's before the chain from bin to bin (their table loads
+    /// then overlap): R and ρ of the body (ρ = 0 for the atom, a cell of no width, so
+    /// that nothing branches on the pair drawn), and E ~ Exp(n), the time from ρ to the
+    /// extension's first photon.
+    #[inline(always)]
+    pub fn draw_body<R: Rng + ?Sized>(&self, rng: &mut R) -> Drawn {
+        let id = self.alias.bin_for(rng.next_u64());
+        let e = id & 0xffff;
+        let k = self.k0 + (e >> 1) as u32;
+        let cont = (e & 1) as f64;
+        let rho_lo = cont * (f64::from(k) * self.tau - self.body).max(0.0);
+        let mut rho = rho_lo + cont * (self.tau - rho_lo) * (1.0 - unit_f64(rng.next_u64()));
+        let w = unit_f64(rng.next_u64());
+        let squeeze = (id >> 16) as f64 * (1.0 / SQUEEZE_ONE);
+        if w >= squeeze {
+            rho = self.rho_exactly(rng, k, squeeze, rho, w);
+        }
+        let x = exp1(rng.next_u64(), rng) * self.mean_gap;
+        Drawn {
+            k,
+            a: rho + x,
+            b: rho - self.tau,
+        }
+    }
+
+    /// The second step: the bin entered dead for `r ∈ [0, τ)` records R + 1 if the
+    /// extension's first photon comes before its end, `ρ + E < τ − r`, leaving
+    /// `r + ρ + E`, else R, leaving `max(0, r + ρ − τ)`. No branch (taken about half the
+    /// time at high rates): this is the chain from bin to bin.
+    #[inline(always)]
+    pub fn finish(&self, d: &Drawn, r: f64) -> (u32, f64) {
+        let hit = r + d.a < self.tau;
+        let (left_hit, left_miss) = (r + d.a, (r + d.b).max(0.0));
+        let mask = 0u64.wrapping_sub(u64::from(hit));
+        let left = f64::from_bits((left_hit.to_bits() & mask) | (left_miss.to_bits() & !mask));
+        (d.k + u32::from(hit), left)
+    }
+
+    /// Records the bin entered dead for `r ∈ [0, τ)`: the recorded count and the dead
+    /// time left at its end (one `u64` and a compare in most bins of a sparse law).
+    #[inline(always)]
+    pub fn record<R: Rng + ?Sized>(&self, rng: &mut R, r: f64) -> (u32, f64) {
+        if self.dense {
+            let d = self.draw_body(rng);
+            return self.finish(&d, r);
+        }
+        let id = self.alias.bin_for(rng.next_u64());
+        let k = self.k0 + ((id & 0xffff) >> 1) as u32;
+        let rho = if id & 1 == 1 {
+            self.rho(rng, k, (id >> 16) as f64 / SQUEEZE_ONE)
+        } else {
+            0.0
+        };
+        let ext = self.tau - r;
+        if rho >= ext {
+            return (k, rho - ext);
+        }
+        if rng.next_u64() >= self.ext_thr {
+            return (k, 0.0);
+        }
+        let x = self.exp_below_tau(rng);
+        if x < ext - rho {
+            (k + 1, rho + x + r)
+        } else {
+            (k, 0.0)
+        }
+    }
+
+    /// ρ in the cell of R = k (of squeeze `squeeze`) by rejection from the uniform.
+    #[cold]
+    fn rho<R: Rng + ?Sized>(&self, rng: &mut R, k: u32, squeeze: f64) -> f64 {
+        let rho_lo = (f64::from(k) * self.tau - self.body).max(0.0);
+        let rho = rho_lo + (self.tau - rho_lo) * (1.0 - unit_f64(rng.next_u64()));
+        let w = unit_f64(rng.next_u64());
+        if w < squeeze {
+            return rho;
+        }
+        self.rho_exactly(rng, k, squeeze, rho, w)
+    }
+
+    /// The rejection step in the cell of R = k for the proposal `rho` and its uniform `w`
+    /// when the squeeze did not decide, then on.
+    #[cold]
+    fn rho_exactly<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        k: u32,
+        squeeze: f64,
+        rho: f64,
+        w: f64,
+    ) -> f64 {
+        let c = self.cell(k);
+        let (mut rho, mut w) = (rho, w);
+        loop {
+            if w.ln() < c.log_density(rho) - c.lf_max {
+                return rho;
+            }
+            rho = c.rho_lo + (self.tau - c.rho_lo) * (1.0 - unit_f64(rng.next_u64()));
+            w = unit_f64(rng.next_u64());
+            if w < squeeze {
+                return rho;
+            }
+        }
+    }
+
+    /// Exp(n) conditioned below τ.
+    #[cold]
+    fn exp_below_tau<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
+        let v = unit_f64(rng.next_u64());
+        (-(-v * self.ext_p).ln_1p() / self.n).min(self.tau)
+    }
+}
+
+/// A cell of a [`RateLaw`] for its rejection step.
+struct Cell2 {
+    rho_lo: f64,
+    /// `L − kτ`.
+    a0: f64,
+    /// `k − 1`.
+    km1: f64,
+    n: f64,
+    lf_max: f64,
+}
+
+impl Cell2 {
+    /// `(k−1)·ln a − n·a` at `a = L − kτ + ρ`, with `0·ln 0 = 0`.
+    fn log_density(&self, rho: f64) -> f64 {
+        let a = self.a0 + rho;
+        if self.km1 == 0.0 {
+            -self.n * a
+        } else {
+            self.km1 * a.ln() - self.n * a
+        }
+    }
+}
+
+/// Layers of the exponential ziggurat.
+const ZIG_LAYERS: usize = 256;
+/// Its base layer's right end r and each layer's area v (Marsaglia & Tsang 2000, for
+/// 256 layers: `v = e^{−r}(r + 1)`).
+const ZIG_R: f64 = 7.697_117_470_131_05;
+
+/// The exponential ziggurat's tables: the layers' right ends `x_0 = v/e^{−r}`, `x_1 = r`,
+/// `x_{i+1} = −ln(v/x_i + e^{−x_i})`, `x_256 = 0`, and `f_i = e^{−x_i}`.
+fn ziggurat() -> &'static ([f64; ZIG_LAYERS + 1], [f64; ZIG_LAYERS + 1]) {
+    static TABLES: OnceLock<([f64; ZIG_LAYERS + 1], [f64; ZIG_LAYERS + 1])> = OnceLock::new();
+    TABLES.get_or_init(|| {
+        let v = (-ZIG_R).exp() * (ZIG_R + 1.0);
+        let mut x = [0.0; ZIG_LAYERS + 1];
+        x[0] = v / (-ZIG_R).exp();
+        x[1] = ZIG_R;
+        for i in 1..ZIG_LAYERS - 1 {
+            x[i + 1] = -(v / x[i] + (-x[i]).exp()).ln();
+        }
+        x[ZIG_LAYERS] = 0.0;
+        let f = x.map(|xi| (-xi).exp());
+        (x, f)
+    })
+}
+
+/// A standard exponential by the ziggurat (Marsaglia & Tsang 2000, "The ziggurat method
+/// for generating random variables", J. Stat. Softw. 5(8)), its first try from the
+/// uniform `u64` `bits` (low 8 bits the layer, top 53 the abscissa): accepted at once
+/// ~99 % of the time; otherwise the wedge test, or the tail `r + Exp(1)`, from `rng`.
+#[inline(always)]
+fn exp1<R: Rng + ?Sized>(bits: u64, rng: &mut R) -> f64 {
+    let (x, _) = ziggurat();
+    let i = (bits & 0xff) as usize;
+    let u = x[i] * unit_f64(bits);
+    if u < x[i + 1] {
+        return u;
+    }
+    exp1_slow(i, u, rng)
+}
+
+/// The ziggurat's wedge and tail for layer `i` and abscissa `u`, then on.
+#[cold]
+fn exp1_slow<R: Rng + ?Sized>(i: usize, u: f64, rng: &mut R) -> f64 {
+    let (x, f) = ziggurat();
+    let (mut i, mut u) = (i, u);
+    loop {
+        if i == 0 {
+            // the tail beyond r: memoryless
+            return ZIG_R - (1.0 - unit_f64(rng.next_u64())).ln();
+        }
+        if f[i] + (f[i + 1] - f[i]) * unit_f64(rng.next_u64()) < (-u).exp() {
+            return u;
+        }
+        let bits = rng.next_u64();
+        i = (bits & 0xff) as usize;
+        u = x[i] * unit_f64(bits);
+        if u < x[i + 1] {
+            return u;
+        }
+    }
+}
+
+/// The entries of a law around its median `median` (R from 0 to `k_top`), each side
+/// stopped once a mass (atom + cell) falls below [`CUTOFF`] of the median's: the first R
+/// and the (atom, cell) masses.
+fn around(median: u32, k_top: u32, masses: impl Fn(u32) -> (f64, f64)) -> (u32, Vec<(f64, f64)>) {
+    let total = |(a, c): (f64, f64)| a + c;
+    let peak = total(masses(median));
+    let mut below = Vec::new();
+    let mut k = median;
+    while k > 0 {
+        k -= 1;
+        let x = masses(k);
+        if total(x) < CUTOFF * peak {
+            break;
+        }
+        below.push(x);
+    }
+    let k0 = median - below.len() as u32;
+    let mut entries: Vec<(f64, f64)> = below.into_iter().rev().collect();
+    entries.push(masses(median));
+    let mut k = median;
+    while k < k_top {
+        k += 1;
+        let x = masses(k);
+        if total(x) < CUTOFF * peak {
+            break;
+        }
+        entries.push(x);
+    }
+    (k0, entries)
+}
+
+/// `P(Pois(μ) = x)` by Loader's saddle-point form.
+pub(crate) fn pois_pmf(x: u32, mu: f64) -> f64 {
+    if mu <= 0.0 {
+        return if x == 0 { 1.0 } else { 0.0 };
+    }
+    if x == 0 {
+        return (-mu).exp();
+    }
+    let x = f64::from(x);
+    (-stirlerr(x) - bd0(x, mu)).exp() / (2.0 * std::f64::consts::PI * x).sqrt()
+}
+
+/// `(P(Pois(μ) ≥ k), P(Pois(μ) < k))`, the smaller summed from `k` outwards.
+pub(crate) fn pois_tails(k: u32, mu: f64) -> (f64, f64) {
+    if k == 0 {
+        return (1.0, 0.0);
+    }
+    if mu <= 0.0 {
+        return (0.0, 1.0);
+    }
+    if f64::from(k) > mu {
+        let mut term = pois_pmf(k, mu);
+        let (mut sum, mut j) = (0.0, k);
+        loop {
+            sum += term;
+            if term < sum * 1e-18 || term == 0.0 {
+                break;
+            }
+            j += 1;
+            term *= mu / f64::from(j);
+        }
+        (sum, 1.0 - sum)
+    } else {
+        let mut j = k - 1;
+        let mut term = pois_pmf(j, mu);
+        let mut sum = 0.0;
+        loop {
+            sum += term;
+            if j == 0 || term < sum * 1e-18 {
+                break;
+            }
+            term *= f64::from(j) / mu;
+            j -= 1;
+        }
+        (1.0 - sum, sum)
     }
 }
 

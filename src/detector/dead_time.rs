@@ -32,7 +32,7 @@
 
 use rand::Rng;
 
-use super::counting;
+use super::counting::{self, Drawn, RateLaw};
 
 use crate::sampling::{SHOT_BLOCK, ShotCounts, ShotSampler, add_block_sums, stream_rng};
 
@@ -222,10 +222,7 @@ impl DeadTime {
         self.model == DeadTimeModel::Nonparalyzable && self.bin_width_s >= 2.0 * self.tau_s
     }
 
-    /// [`record_shot`](Self::record_shot) by counting distributions: each run of adjacent
-    /// hit bins in time order, the dead time left by a bin carried into the next (an
-    /// empty bin, at least τ wide, ends it); a bin of more than [`counting::MAX_PHOTONS`]
-    /// photons by its arrival times.
+    /// [`record_shot`](Self::record_shot) by counting distributions.
     fn record_by_counts<R: Rng + ?Sized>(
         &self,
         rng: &mut R,
@@ -233,26 +230,95 @@ impl DeadTime {
         scratch: &mut Scratch,
         acc: &mut [u64],
     ) {
+        self.record_runs(rng, photons, &[], &[], &[], scratch, acc);
+    }
+
+    /// Records one shot by counting distributions: the bins with a law in `laws` (by
+    /// index; `laws` may be empty) from [`RateLaw`] (their photons not drawn), the other
+    /// hit bins given their photons ([`counting::Family`]). Each run of adjacent such
+    /// bins in time order, the dead time left by a bin carried into the next (an empty
+    /// bin, at least τ wide, ends it); `starts` are the first bins of the runs of law
+    /// bins and `ends[a]` the end of the run starting at `a`. A lone photon (one in its bin, none next to it) is recorded without a draw;
+    /// a bin of more than [`counting::MAX_PHOTONS`] photons by its arrival times.
+    fn record_runs<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        photons: &ShotCounts,
+        laws: &[Option<RateLaw>],
+        starts: &[u32],
+        ends: &[u32],
+        scratch: &mut Scratch,
+        acc: &mut [u64],
+    ) {
         let (tau, dt) = (self.tau_s, self.bin_width_s);
-        let Scratch { times, family, .. } = scratch;
+        let Scratch {
+            times,
+            hit: runs,
+            family,
+            drawn,
+        } = scratch;
         if !family.as_ref().is_some_and(|f| f.is_for(tau, dt)) {
             *family = Some(counting::family(tau, dt));
         }
         let family = family.as_deref().expect("set above");
         let counts = photons.counts();
-        let hit = |i: usize| counts.get(i).is_some_and(|&c| c > 0);
-        for &b in photons.hit_bins() {
-            let mut i = b as usize;
-            if i > 0 && hit(i - 1) {
-                continue; // not the first bin of its run
+        let has_law = |i: usize| laws.get(i).is_some_and(Option::is_some);
+        let active = |i: usize| counts.get(i).is_some_and(|&c| c > 0) || has_law(i);
+        // lone photons at once (without branches on their outcome), the first bins of
+        // the other runs kept
+        let hits = photons.hit_bins();
+        runs.clear();
+        runs.resize(hits.len(), 0);
+        let mut len = 0;
+        for &b in hits {
+            let i = b as usize;
+            let prev = i > 0 && active(i - 1);
+            let lone = (counts[i] == 1) & !prev & !active(i + 1);
+            acc[i] += u64::from(lone);
+            runs[len] = b;
+            len += usize::from(!lone & !prev);
+        }
+        // every dense law bin's body first, in bin order (their table loads overlap)
+        if !laws.is_empty() {
+            drawn.resize(laws.len(), Drawn::default());
+            for (d, law) in drawn.iter_mut().zip(laws) {
+                if let Some(law) = law.as_ref().filter(|l| l.dense) {
+                    *d = law.draw_body(rng);
+                }
             }
-            let mut r = 0.0;
+        }
+        let first_law_bins = starts
+            .iter()
+            .filter(|&&a| a == 0 || !active(a as usize - 1));
+        for &start in runs[..len].iter().chain(first_law_bins) {
+            let (mut i, mut r) = (start as usize, 0.0);
             loop {
+                if has_law(i) {
+                    // a run of law bins (i is its first), in one loop
+                    let end = ends[i] as usize;
+                    for ((law, d), a) in laws[i..end]
+                        .iter()
+                        .zip(&drawn[i..end])
+                        .zip(&mut acc[i..end])
+                    {
+                        let Some(law) = law else { continue };
+                        let (k, left) = if law.dense {
+                            law.finish(d, r)
+                        } else {
+                            law.record(rng, r)
+                        };
+                        *a += u64::from(k);
+                        r = left;
+                    }
+                    if !active(end) {
+                        break;
+                    }
+                    i = end;
+                    continue;
+                }
+                let next = active(i + 1);
                 let n = counts[i];
-                let next = hit(i + 1);
-                let (k, left) = if n == 1 && r == 0.0 && !next {
-                    (1, 0.0) // a lone photon on a live detector
-                } else if n <= counting::MAX_PHOTONS {
+                let (k, left) = if n <= counting::MAX_PHOTONS {
                     family.record_bin(rng, n, r, next)
                 } else {
                     self.sweep_bin(rng, n, r, times)
@@ -356,6 +422,8 @@ pub struct Scratch {
     hit: Vec<u32>,
     /// The counting tables of the last (τ, Δt) recorded.
     family: Option<std::sync::Arc<counting::Family>>,
+    /// Per law bin, its body drawn.
+    drawn: Vec<Drawn>,
 }
 
 /// Accumulates one profile of `shots` shots through the detector into `acc`: the
@@ -383,6 +451,134 @@ pub fn recorded_profile(
         });
         part
     });
+}
+
+/// Fewest expected photons per shot for a bin to be drawn from its counting law
+/// ([`RateLaw`], its photons not drawn) rather than given its photons: measured
+/// (`benches/dead_time_rates.rs`), the photon path costs more from about here on.
+pub const LAW_FROM_PHOTONS: f64 = 0.5;
+
+/// Most bytes of [`RateLaw`] tables one run keeps; bins past it are recorded given
+/// their photons.
+pub const LAW_BUDGET_BYTES: usize = 32 << 20;
+
+/// Shots of fixed means recorded through a dead-time detector: what `simulate --method
+/// shot` draws for a channel with dead time and without jitter.
+///
+/// A non-paralyzable detector ([`DeadTime::by_counts`]) draws each bin of at least
+/// [`LAW_FROM_PHOTONS`] photons per shot from its counting law ([`RateLaw`], built once
+/// for the run) without drawing its photons, and the other bins' photons by a
+/// [`ShotSampler`] over them, recorded given those photons; otherwise
+/// ([`recorded_profile`]) every photon is drawn and recorded.
+#[derive(Debug, Clone)]
+pub struct DeadTimedShots {
+    photons: ShotSampler,
+    dead: DeadTime,
+    split: std::sync::OnceLock<Split>,
+}
+
+/// The bins drawn by their law and the sampler of the others.
+#[derive(Debug, Clone)]
+struct Split {
+    others: ShotSampler,
+    laws: Vec<Option<RateLaw>>,
+    /// The first bins of the runs of law bins.
+    starts: Vec<u32>,
+    /// At the first bin of each such run, the bin past its end.
+    ends: Vec<u32>,
+}
+
+impl DeadTimedShots {
+    /// The shots of `photons` through `dead`.
+    pub fn new(photons: ShotSampler, dead: DeadTime) -> Self {
+        DeadTimedShots {
+            photons,
+            dead,
+            split: std::sync::OnceLock::new(),
+        }
+    }
+
+    /// The sampler of every bin's photons.
+    pub fn photons(&self) -> &ShotSampler {
+        &self.photons
+    }
+
+    /// The detector.
+    pub fn dead(&self) -> &DeadTime {
+        &self.dead
+    }
+
+    fn split(&self) -> &Split {
+        self.split.get_or_init(|| {
+            let (tau, dt) = (self.dead.tau_s, self.dead.bin_width_s);
+            let means = self.photons.means();
+            let mut spent = 0usize;
+            let laws: Vec<Option<RateLaw>> = means
+                .iter()
+                .map(|&l| {
+                    (l >= LAW_FROM_PHOTONS && spent < LAW_BUDGET_BYTES).then(|| {
+                        let law = RateLaw::new(l / dt, tau, dt);
+                        spent += counting::rate_law_bytes(&law);
+                        law
+                    })
+                })
+                .collect();
+            let others: Vec<f64> = means
+                .iter()
+                .zip(&laws)
+                .map(|(&l, law)| if law.is_some() { 0.0 } else { l })
+                .collect();
+            let starts: Vec<u32> = (0..laws.len())
+                .filter(|&i| laws[i].is_some() && (i == 0 || laws[i - 1].is_none()))
+                .map(|i| i as u32)
+                .collect();
+            let mut ends = vec![0u32; laws.len()];
+            for &a in &starts {
+                let mut e = a as usize;
+                while e < laws.len() && laws[e].is_some() {
+                    e += 1;
+                }
+                ends[a as usize] = e as u32;
+            }
+            Split {
+                others: ShotSampler::new(&others),
+                laws,
+                starts,
+                ends,
+            }
+        })
+    }
+
+    /// Accumulates one profile of `shots` shots into `acc`, by blocks of [`SHOT_BLOCK`]
+    /// shots from `stream_rng(seed, profile, block)` (photons) and its arrival stream
+    /// (the detector's draws), summed in integers: independent of the thread count.
+    pub fn profile(&self, seed: u64, profile: u64, shots: u64, acc: &mut [u64]) {
+        if !self.dead.by_counts() {
+            return recorded_profile(&self.photons, &self.dead, seed, profile, shots, acc);
+        }
+        let split = self.split();
+        let bins = acc.len();
+        add_block_sums(acc, shots.div_ceil(SHOT_BLOCK), |b| {
+            let mut part = vec![0u64; bins];
+            let mut scratch = Scratch::default();
+            let n = SHOT_BLOCK.min(shots - b * SHOT_BLOCK);
+            let mut arrivals = stream_rng(seed ^ ARRIVAL_STREAM, profile, b);
+            split
+                .others
+                .for_each_shot(&mut stream_rng(seed, profile, b), n, |shot| {
+                    self.dead.record_runs(
+                        &mut arrivals,
+                        shot,
+                        &split.laws,
+                        &split.starts,
+                        &split.ends,
+                        &mut scratch,
+                        &mut part,
+                    )
+                });
+            part
+        });
+    }
 }
 
 /// A uniform in [0, 1) from the top 53 bits of `x`.

@@ -123,6 +123,11 @@ impl AliasTable {
         }
     }
 
+    /// Number of columns (16 bytes each).
+    pub(crate) fn columns(&self) -> usize {
+        self.cols.len()
+    }
+
     /// The bin for the uniform `u64` `x`.
     #[inline(always)]
     pub(crate) fn bin_for(&self, x: u64) -> usize {

@@ -315,7 +315,7 @@ pub enum StreamSampler {
     /// Aggregate with the normal approximation at and above a mean threshold.
     AggregateNormal(Vec<f64>, f64),
     /// Every shot drawn and recorded through the detector's dead time.
-    DeadTimed(Box<ShotSampler>, DeadTime),
+    DeadTimed(Box<dead_time::DeadTimedShots>),
 }
 
 impl StreamSampler {
@@ -372,7 +372,9 @@ impl StreamSampler {
     /// ensures the method is `shot`).
     pub fn through_detector(self, dead: Option<DeadTime>) -> Self {
         match (self, dead) {
-            (StreamSampler::Shot(s), Some(d)) => StreamSampler::DeadTimed(s, d),
+            (StreamSampler::Shot(s), Some(d)) => {
+                StreamSampler::DeadTimed(Box::new(dead_time::DeadTimedShots::new(*s, d)))
+            }
             (StreamSampler::Modulated(m), Some(d)) => {
                 StreamSampler::Modulated(Box::new(m.through_detector(Some(d))))
             }
@@ -408,9 +410,7 @@ impl StreamSampler {
             StreamSampler::AggregateNormal(l, threshold) => {
                 approx::aggregate_approx_profile(l, seed, profile, shots, *threshold, acc)
             }
-            StreamSampler::DeadTimed(s, d) => {
-                dead_time::recorded_profile(s, d, seed, profile, shots, acc)
-            }
+            StreamSampler::DeadTimed(s) => s.profile(seed, profile, shots, acc),
         }
     }
 }
