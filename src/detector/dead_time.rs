@@ -549,6 +549,38 @@ impl DeadTimedShots {
         })
     }
 
+    /// Draws `shots` shots from `stream_rng(seed, profile, 0)` and its arrival stream and
+    /// hands each one's recorded counts to `f` (per-shot consumers: tests, onboard sums).
+    pub fn for_each_shot(&self, seed: u64, profile: u64, shots: u64, mut f: impl FnMut(&[u64])) {
+        let bins = self.photons.bins();
+        let mut acc = vec![0u64; bins];
+        let mut scratch = Scratch::default();
+        let mut arrivals = stream_rng(seed ^ ARRIVAL_STREAM, profile, 0);
+        let mut rng = stream_rng(seed, profile, 0);
+        if !self.dead.by_counts() {
+            return self.photons.for_each_shot(&mut rng, shots, |shot| {
+                acc.iter_mut().for_each(|a| *a = 0);
+                self.dead
+                    .record_shot(&mut arrivals, shot, &mut scratch, &mut acc);
+                f(&acc);
+            });
+        }
+        let split = self.split();
+        split.others.for_each_shot(&mut rng, shots, |shot| {
+            acc.iter_mut().for_each(|a| *a = 0);
+            self.dead.record_runs(
+                &mut arrivals,
+                shot,
+                &split.laws,
+                &split.starts,
+                &split.ends,
+                &mut scratch,
+                &mut acc,
+            );
+            f(&acc);
+        });
+    }
+
     /// Accumulates one profile of `shots` shots into `acc`, by blocks of [`SHOT_BLOCK`]
     /// shots from `stream_rng(seed, profile, block)` (photons) and its arrival stream
     /// (the detector's draws), summed in integers: independent of the thread count.
