@@ -412,8 +412,9 @@ pub struct Drawn {
 /// pairs and rejection from the uniform within the cell, squeezed by the density's least
 /// value on it (log-concave: at an end); then the extension of length `e = τ − r`, where
 /// the detector, live from ρ on, records its first photon, at `ρ + E`, E ~ Exp(n), if
-/// `E < e − ρ`. At low rates one `u64` against `⌊P(E < τ)·2^64⌋` decides most bins (E
-/// itself then drawn below τ by inversion); from [`DENSE_FROM`] on, E is drawn in every
+/// `E < e − ρ`. At low rates whether E < τ is part of the table's entry (one `u64` per
+/// bin decides the body and that; E itself then drawn below τ by inversion); from
+/// [`DENSE_FROM`] on, E is drawn in every
 /// bin by a ziggurat ([`exp1`]) and the outcome selected without branches. Exact; the
 /// photons of the bin are not drawn (their count given the recorded path is
 /// `R + Poisson(n·(time dead within the bin))`, exactly, where wanted).
@@ -427,19 +428,24 @@ pub struct RateLaw {
     body: f64,
     alias: AliasTable,
     k0: u32,
-    /// `⌊P(Exp(n) < τ)·2^64⌋` and P(Exp(n) < τ).
-    ext_thr: u64,
+    /// P(Exp(n) < τ).
     ext_p: f64,
     /// P(Exp(n) < τ) > [`DENSE_FROM`]: the extension's photon drawn in every bin.
     pub dense: bool,
+}
+
+/// Whether a [`RateLaw`] of rate `n` and dead time `tau` is dense.
+pub fn is_dense(n: f64, tau: f64) -> bool {
+    -(-n * tau).exp_m1() > DENSE_FROM
 }
 
 /// The squeeze of an entry in its id's top 16 bits: `q/SQUEEZE_ONE`.
 const SQUEEZE_ONE: f64 = 65535.0;
 
 /// Share of bins whose extension may record above which [`RateLaw`] draws without
-/// branches on the outcome (n ≳ 15 MHz at τ = 3.5 ns).
-const DENSE_FROM: f64 = 0.05;
+/// branches on the outcome (n ≳ 64 MHz at τ = 3.5 ns; measured crossover,
+/// `benches/dead_time_rates.rs`).
+const DENSE_FROM: f64 = 0.2;
 
 impl RateLaw {
     /// The law of a bin of `dt` (≥ 2τ) at the true rate `n` (s⁻¹, > 0).
@@ -489,14 +495,23 @@ impl RateLaw {
             body,
             alias: AliasTable::new(&[1.0], &[0]),
             k0,
-            ext_thr: 0,
             ext_p: 0.0,
             dense: false,
         };
         // an entry's id carries its squeeze, the least of the cell's density over its
         // largest, rounded down to 16 bits (still a lower bound: the test stays exact),
-        // so that no second table is read; the atom's is 1 (always accepted)
-        assert!(entries.len() < 1 << 15, "a law of {} counts", entries.len());
+        // so that no second table is read; the atom's is 1 (always accepted). A sparse
+        // law's entries also carry whether the extension may record (E < τ, independent
+        // of the body): one u64 per bin decides both.
+        let ext_p = -(-n * tau).exp_m1();
+        law.ext_p = ext_p;
+        law.dense = is_dense(n, tau);
+        let shares: &[f64] = if law.dense {
+            &[1.0]
+        } else {
+            &[1.0 - ext_p, ext_p]
+        };
+        assert!(entries.len() < 1 << 13, "a law of {} counts", entries.len());
         for (i, &(atom, cell)) in entries.iter().enumerate() {
             let c = law.cell(k0 + i as u32);
             let lf_min = c.log_density(c.rho_lo).min(c.log_density(tau));
@@ -506,17 +521,27 @@ impl RateLaw {
                 0.0
             };
             let q = (squeeze * SQUEEZE_ONE).floor().clamp(0.0, SQUEEZE_ONE) as u32;
-            weights.extend([atom, cell]);
-            ids.extend([
-                2 * i as u32 | (SQUEEZE_ONE as u32) << 16,
-                (2 * i as u32 + 1) | q << 16,
-            ]);
+            for (e, &share) in shares.iter().enumerate() {
+                let base = (i as u32) << law.shift() | (e as u32) << 1;
+                weights.extend([atom * share, cell * share]);
+                ids.extend([base | (SQUEEZE_ONE as u32) << 16, (base | 1) | q << 16]);
+            }
         }
         law.alias = AliasTable::new(&weights, &ids);
-        law.ext_p = -(-n * tau).exp_m1();
-        law.ext_thr = (law.ext_p * TWO_POW_64) as u64;
-        law.dense = law.ext_p > DENSE_FROM;
         law
+    }
+
+    /// Bits of an entry's id below its count's index: ρ > 0, and for a sparse law
+    /// whether the extension may record.
+    #[inline(always)]
+    fn shift(&self) -> u32 {
+        if self.dense { 1 } else { 2 }
+    }
+
+    /// The count R of an entry's id.
+    #[inline(always)]
+    fn k_of(&self, id: usize) -> u32 {
+        self.k0 + ((id & 0xffff) >> self.shift()) as u32
     }
 
     /// The cell of R = k: ρ ∈ (ρ_lo, τ], its log-density and its largest value.
@@ -547,9 +572,8 @@ impl RateLaw {
     #[inline(always)]
     pub fn draw_body<R: Rng + ?Sized>(&self, rng: &mut R) -> Drawn {
         let id = self.alias.bin_for(rng.next_u64());
-        let e = id & 0xffff;
-        let k = self.k0 + (e >> 1) as u32;
-        let cont = (e & 1) as f64;
+        let k = self.k0 + ((id & 0xffff) >> 1) as u32;
+        let cont = (id & 1) as f64;
         let rho_lo = cont * (f64::from(k) * self.tau - self.body).max(0.0);
         let mut rho = rho_lo + cont * (self.tau - rho_lo) * (1.0 - unit_f64(rng.next_u64()));
         let w = unit_f64(rng.next_u64());
@@ -587,7 +611,7 @@ impl RateLaw {
             return self.finish(&d, r);
         }
         let id = self.alias.bin_for(rng.next_u64());
-        let k = self.k0 + ((id & 0xffff) >> 1) as u32;
+        let k = self.k_of(id);
         let rho = if id & 1 == 1 {
             self.rho(rng, k, (id >> 16) as f64 / SQUEEZE_ONE)
         } else {
@@ -597,8 +621,8 @@ impl RateLaw {
         if rho >= ext {
             return (k, rho - ext);
         }
-        if rng.next_u64() >= self.ext_thr {
-            return (k, 0.0);
+        if id & 2 == 0 {
+            return (k, 0.0); // E ≥ τ: the extension records nothing
         }
         let x = self.exp_below_tau(rng);
         if x < ext - rho {
@@ -1075,7 +1099,7 @@ mod tests {
             let mut mean = 0.0;
             for (id, pe) in law.alias.halves() {
                 total += pe;
-                mean += pe * f64::from(law.k0 + ((id & 0xffff) >> 1));
+                mean += pe * f64::from(law.k_of(id as usize));
             }
             let mut want = 0.0;
             let mut k = 1u32;

@@ -36,13 +36,25 @@ use super::counting::{self, Drawn, RateLaw};
 
 use crate::sampling::{SHOT_BLOCK, ShotCounts, ShotSampler, add_block_sums, stream_rng};
 
-/// Cost of recording one photon through the arrival-time path, ns, for the duration
-/// estimate a run announces: measured at 13–21 ns (one thread; 2,631 and 26,309 true
+/// Cost of recording one photon through the arrival-time path (the paralyzable
+/// detector, bins narrower than 2τ), ns, for the duration estimate a run announces
+/// ([`DeadTime::ns_per_shot`]): measured at 13–21 ns (one thread; 2,631 and 26,309 true
 /// photons per shot: `configs/ground/ground_532_depol.toml` with
 /// `--set instrument.pulse_energy_j=4e-4` and `4e-3`, `--profiles 1 --threads 1`, the
 /// drawing time over shots × photons, on a machine shared with another build). Lone
 /// photons cost less (recorded without drawing a time): the estimate errs long.
 pub const NS_PER_PHOTON: f64 = 20.0;
+
+/// Cost of one photon recorded given its bin's photons by the counting tables
+/// ([`counting::Family`]), and of one bin drawn from its counting law ([`RateLaw`],
+/// below and above 64 MHz at τ = 3.5 ns), ns, for the same estimate: measured by
+/// `benches/dead_time_rates.rs` (one thread; 0.2 photons per bin: 3.3 ns a bin; 2–20
+/// photons: 4.5–7 ns a bin; 100–600: 19–22 ns), the ideal detector's share included.
+pub const NS_PER_GIVEN_PHOTON: f64 = 16.0;
+/// See [`NS_PER_GIVEN_PHOTON`].
+pub const NS_PER_LAW_BIN: f64 = 7.0;
+/// See [`NS_PER_GIVEN_PHOTON`].
+pub const NS_PER_DENSE_LAW_BIN: f64 = 22.0;
 
 /// Seed offset of the arrival-time streams.
 pub const ARRIVAL_STREAM: u64 = 0xA441_7A1E_0000_0001;
@@ -66,6 +78,27 @@ pub struct DeadTime {
 }
 
 impl DeadTime {
+    /// Estimated cost of recording one shot of true means `lambda` per bin, ns (for the
+    /// duration a run announces): per photon on the arrival-time path, per bin or photon
+    /// by the counting distributions ([`NS_PER_GIVEN_PHOTON`]).
+    pub fn ns_per_shot(&self, lambda: &[f64]) -> f64 {
+        if !self.by_counts() {
+            return lambda.iter().sum::<f64>() * NS_PER_PHOTON;
+        }
+        lambda
+            .iter()
+            .map(|&l| {
+                if l < LAW_FROM_PHOTONS {
+                    l * NS_PER_GIVEN_PHOTON
+                } else if counting::is_dense(l / self.bin_width_s, self.tau_s) {
+                    NS_PER_DENSE_LAW_BIN
+                } else {
+                    NS_PER_LAW_BIN
+                }
+            })
+            .sum()
+    }
+
     /// Stationary recorded rate for a true rate `n` (s⁻¹): `n/(1+nτ)` or `n·e^{−nτ}`.
     pub fn stationary_rate(&self, n: f64) -> f64 {
         match self.model {
@@ -230,7 +263,7 @@ impl DeadTime {
         scratch: &mut Scratch,
         acc: &mut [u64],
     ) {
-        self.record_runs(rng, photons, &[], &[], &[], scratch, acc);
+        self.record_runs(rng, photons, &[], &[], &[], &[], scratch, acc);
     }
 
     /// Records one shot by counting distributions: the bins with a law in `laws` (by
@@ -238,7 +271,8 @@ impl DeadTime {
     /// hit bins given their photons ([`counting::Family`]). Each run of adjacent such
     /// bins in time order, the dead time left by a bin carried into the next (an empty
     /// bin, at least τ wide, ends it); `starts` are the first bins of the runs of law
-    /// bins and `ends[a]` the end of the run starting at `a`. A lone photon (one in its bin, none next to it) is recorded without a draw;
+    /// bins, `ends[a]` the end of the run starting at `a`, `dense` the bins of dense
+    /// laws. A lone photon (one in its bin, none next to it) is recorded without a draw;
     /// a bin of more than [`counting::MAX_PHOTONS`] photons by its arrival times.
     fn record_runs<R: Rng + ?Sized>(
         &self,
@@ -247,6 +281,7 @@ impl DeadTime {
         laws: &[Option<RateLaw>],
         starts: &[u32],
         ends: &[u32],
+        dense: &[u32],
         scratch: &mut Scratch,
         acc: &mut [u64],
     ) {
@@ -279,11 +314,11 @@ impl DeadTime {
             len += usize::from(!lone & !prev);
         }
         // every dense law bin's body first, in bin order (their table loads overlap)
-        if !laws.is_empty() {
-            drawn.resize(laws.len(), Drawn::default());
-            for (d, law) in drawn.iter_mut().zip(laws) {
-                if let Some(law) = law.as_ref().filter(|l| l.dense) {
-                    *d = law.draw_body(rng);
+        drawn.resize(laws.len(), Drawn::default());
+        {
+            for &i in dense {
+                if let Some(law) = &laws[i as usize] {
+                    drawn[i as usize] = law.draw_body(rng);
                 }
             }
         }
@@ -486,6 +521,8 @@ struct Split {
     starts: Vec<u32>,
     /// At the first bin of each such run, the bin past its end.
     ends: Vec<u32>,
+    /// The bins of dense laws ([`RateLaw::dense`]).
+    dense: Vec<u32>,
 }
 
 impl DeadTimedShots {
@@ -540,11 +577,16 @@ impl DeadTimedShots {
                 }
                 ends[a as usize] = e as u32;
             }
+            let dense = (0..laws.len() as u32)
+                .filter(|&i| laws[i as usize].as_ref().is_some_and(|l| l.dense))
+                .collect();
             Split {
                 others: ShotSampler::new(&others),
-                laws,
+                // without law bins, none to look up
+                laws: if starts.is_empty() { Vec::new() } else { laws },
                 starts,
                 ends,
+                dense,
             }
         })
     }
@@ -574,6 +616,7 @@ impl DeadTimedShots {
                 &split.laws,
                 &split.starts,
                 &split.ends,
+                &split.dense,
                 &mut scratch,
                 &mut acc,
             );
@@ -604,6 +647,7 @@ impl DeadTimedShots {
                         &split.laws,
                         &split.starts,
                         &split.ends,
+                        &split.dense,
                         &mut scratch,
                         &mut part,
                     )

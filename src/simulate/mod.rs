@@ -682,19 +682,19 @@ pub fn run(
         }
         None => (0..profiles, spec),
     };
-    // true photons per shot through the dead-time path (its cost follows them)
-    let dead_time_photons: f64 = lidar
+    // the dead-time detector's cost per shot (ns), from its channels' means
+    let dead_time_ns: f64 = lidar
         .channels
         .iter()
         .zip(&expected)
-        .filter(|(c, _)| c.instrument.dead_time.is_some() && method == ResolvedMethod::Shot)
-        .map(|(_, e)| e.total_per_shot().iter().sum::<f64>())
+        .filter(|_| method == ResolvedMethod::Shot)
+        .filter_map(|(c, e)| Some(c.instrument.dead_time?.ns_per_shot(&e.total_per_shot())))
         .sum();
     let sizes = RunSizes {
         shots,
         profiles: rows.len(),
         components,
-        dead_time_photons,
+        dead_time_ns,
     };
     check_sizes(&totals, method, &sizes, opts)?;
     let mut writer = RawFileWriter::create(outputs.temp_path(raw)?, &opts.output, &spec)?;
@@ -1201,9 +1201,9 @@ struct RunSizes {
     profiles: usize,
     /// Component-resolved counts.
     components: bool,
-    /// True photons per shot recorded through the dead-time arrival path (summed over
-    /// its channels' bins; 0 without dead time or in the aggregate path).
-    dead_time_photons: f64,
+    /// The dead-time detector's cost per shot, ns (`DeadTime::ns_per_shot` summed over
+    /// its channels; 0 without dead time or in the aggregate path).
+    dead_time_ns: f64,
 }
 
 /// Refuses a run whose memory or file cannot fit, and announces a long one
@@ -1219,7 +1219,7 @@ fn check_sizes(
         shots,
         profiles,
         components,
-        dead_time_photons,
+        dead_time_ns,
     } = *sizes;
     let streams = if components { 4 } else { 1 };
     let bins = totals.len() as f64;
@@ -1236,7 +1236,7 @@ fn check_sizes(
     let draw_ns_per_profile = match method {
         ResolvedMethod::Shot => ShotSampler::new(totals).strategy().est_ns_per_shot * shots as f64,
         _ => bins * cost::AGGREGATE_LARGE_NS,
-    } + dead_time_photons * shots as f64 * dead_time::NS_PER_PHOTON;
+    } + dead_time_ns * shots as f64;
     let ns = profiles as f64
         * (draw_ns_per_profile * streams.min(3) as f64 / threads as f64
             + bins * streams as f64 * FILE_NS_PER_COUNT);
