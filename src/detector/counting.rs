@@ -61,12 +61,18 @@
 //!
 //! # Cost
 //!
-//! Measured by `benches/dead_time_rates.sh` (table in `validation/reports/dead_time_cost.md`):
-//! per hit bin with no carried dead time and no boundary photon (most bins below
-//! ~10 MHz) one `u64` and, where M > 1, one alias draw; at 300 MHz in 2 µs bins a few
-//! `u64` per bin. Tables are built on first use per M (per process, shared by threads
-//! and runs: their content depends only on τ, Δt and M): ~10–100 µs and 2–30 KiB each.
-//! Bins of more than [`MAX_PHOTONS`] photons go through the arrival-time sweep.
+//! Measured by `benches/dead_time_rates.rs` (table in
+//! `validation/reports/dead_time_cost.md`, one thread, 200 bins of 2 µs, τ = 3.5 ns): given
+//! the photons, 3.3 ns a bin at 0.2 photons per bin (16 ns a photon, the shot path's
+//! included: 6.7× the ideal detector, whose sparse path places a photon in ~2 ns); by
+//! [`RateLaw`], 4.3–7 ns a bin from 0.6 to 20 photons (1.7–3.3×) and 11–22 ns from 60
+//! to 600 (3.8–6.6×: the body's count, its residual ρ and the extension's photon are
+//! three or four `u64` and a table load, where the ideal detector draws one). Per hit
+//! bin with no carried dead time and no boundary photon one `u64` and, where M > 1, one
+//! alias draw. [`Family`] tables are built on first use per M (per process, shared by
+//! threads and runs: their content depends only on τ, Δt and M): ~10–100 µs and
+//! 2–30 KiB each; a [`RateLaw`] per bin and run, ~0.1–0.5 ms and up to ~10 KiB. Bins of
+//! more than [`MAX_PHOTONS`] photons go through the arrival-time sweep.
 
 use std::sync::{Arc, Mutex, OnceLock};
 

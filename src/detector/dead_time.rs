@@ -2,13 +2,25 @@
 //! for τ. Non-paralyzable: photons in the dead period are lost and do not extend it.
 //! Paralyzable: every arriving photon, recorded or not, restarts it.
 //!
-//! **Sampler** ([`DeadTime::record_shot`]). A shot's photons are drawn per bin by the
-//! shot path (Poisson, exactly as without dead time); each photon gets an arrival time
-//! uniform within its bin (the rate is taken constant within a bin, as in the model
-//! below), the shot's arrivals are swept in time order, and a photon is recorded when
-//! the detector is live. Dead time crosses bin edges; the detector is live at the start
-//! of the window. Cost O(photons · log photons) per shot, nothing when τ = 0 (the
-//! scene then has no detector stage at all).
+//! **Sampler** ([`DeadTime::record_shot`], [`DeadTimedShots`]). The rate is taken
+//! constant within a bin (as in the model below), dead time crosses bin edges, and the
+//! detector is live at the start of the window. Three exact paths:
+//!
+//! * a non-paralyzable detector on bins at least 2τ wide ([`DeadTime::by_counts`]) draws
+//!   each hit bin's recorded count from its counting distribution given the bin's photons
+//!   (drawn by the shot path, exactly as without dead time), carrying the dead time
+//!   left by a bin into the next ([`counting::Family`]): O(1) per hit bin, a lone photon
+//!   without a draw;
+//! * [`DeadTimedShots`] (fixed means, what `simulate`'s shot path runs) draws the bins
+//!   of at least [`LAW_FROM_PHOTONS`] photons per shot from the counting law at their
+//!   rate, without their photons ([`RateLaw`], tables built once per run), and the
+//!   others as above;
+//! * otherwise (paralyzable, narrow bins) each photon gets an arrival time uniform
+//!   within its bin, the shot's arrivals are swept in time order, and a photon is
+//!   recorded when the detector is live: O(photons · log photons) per shot.
+//!
+//! Nothing is drawn when τ = 0 (the scene then has no detector stage at all). Costs:
+//! `benches/dead_time_rates.rs`, `validation/reports/dead_time_cost.md`.
 //!
 //! **Model** ([`DeadTime::recorded_means`]). With the rate n(t) piecewise constant per
 //! bin, the mean recorded rate solves (Müller 1973, NIM 112, 47; docs/model.md §4b)
