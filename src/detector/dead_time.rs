@@ -275,29 +275,31 @@ impl DeadTime {
         scratch: &mut Scratch,
         acc: &mut [u64],
     ) {
-        self.record_runs(rng, photons, &[], &[], &[], &[], scratch, acc);
+        self.record_runs(rng, photons, &NO_LAWS, scratch, acc);
     }
 
-    /// Records one shot by counting distributions: the bins with a law in `laws` (by
-    /// index; `laws` may be empty) from [`RateLaw`] (their photons not drawn), the other
+    /// Records one shot by counting distributions: the bins with a law in `bins` (by
+    /// index; may be none) from [`RateLaw`] (their photons not drawn), the other
     /// hit bins given their photons ([`counting::Family`]). Each run of adjacent such
     /// bins in time order, the dead time left by a bin carried into the next (an empty
-    /// bin, at least τ wide, ends it); `starts` are the first bins of the runs of law
-    /// bins, `ends[a]` the end of the run starting at `a`, `dense` the bins of dense
-    /// laws. A lone photon (one in its bin, none next to it) is recorded without a draw;
+    /// bin, at least τ wide, ends it); the dense law bins' first draws all first, in bin
+    /// order. A lone photon (one in its bin, none next to it) is recorded without a draw;
     /// a bin of more than [`counting::MAX_PHOTONS`] photons by its arrival times.
     fn record_runs<R: Rng + ?Sized>(
         &self,
         rng: &mut R,
         photons: &ShotCounts,
-        laws: &[Option<RateLaw>],
-        starts: &[u32],
-        ends: &[u32],
-        dense: &[u32],
+        bins: &LawBins,
         scratch: &mut Scratch,
         acc: &mut [u64],
     ) {
         let (tau, dt) = (self.tau_s, self.bin_width_s);
+        let LawBins {
+            laws,
+            starts,
+            ends,
+            dense,
+        } = bins;
         let Scratch {
             times,
             hit: runs,
@@ -528,6 +530,13 @@ pub struct DeadTimedShots {
 #[derive(Debug, Clone)]
 struct Split {
     others: ShotSampler,
+    laws: LawBins,
+}
+
+/// The bins drawn from their counting law.
+#[derive(Debug, Clone)]
+struct LawBins {
+    /// Per bin, its law if it has one (empty: none has).
     laws: Vec<Option<RateLaw>>,
     /// The first bins of the runs of law bins.
     starts: Vec<u32>,
@@ -536,6 +545,14 @@ struct Split {
     /// The bins of dense laws ([`RateLaw::dense`]).
     dense: Vec<u32>,
 }
+
+/// No bin drawn from its law.
+static NO_LAWS: LawBins = LawBins {
+    laws: Vec::new(),
+    starts: Vec::new(),
+    ends: Vec::new(),
+    dense: Vec::new(),
+};
 
 impl DeadTimedShots {
     /// The shots of `photons` through `dead`.
@@ -594,11 +611,13 @@ impl DeadTimedShots {
                 .collect();
             Split {
                 others: ShotSampler::new(&others),
-                // without law bins, none to look up
-                laws: if starts.is_empty() { Vec::new() } else { laws },
-                starts,
-                ends,
-                dense,
+                laws: LawBins {
+                    // without law bins, none to look up
+                    laws: if starts.is_empty() { Vec::new() } else { laws },
+                    starts,
+                    ends,
+                    dense,
+                },
             }
         })
     }
@@ -622,16 +641,8 @@ impl DeadTimedShots {
         let split = self.split();
         split.others.for_each_shot(&mut rng, shots, |shot| {
             acc.iter_mut().for_each(|a| *a = 0);
-            self.dead.record_runs(
-                &mut arrivals,
-                shot,
-                &split.laws,
-                &split.starts,
-                &split.ends,
-                &split.dense,
-                &mut scratch,
-                &mut acc,
-            );
+            self.dead
+                .record_runs(&mut arrivals, shot, &split.laws, &mut scratch, &mut acc);
             f(&acc);
         });
     }
@@ -653,16 +664,8 @@ impl DeadTimedShots {
             split
                 .others
                 .for_each_shot(&mut stream_rng(seed, profile, b), n, |shot| {
-                    self.dead.record_runs(
-                        &mut arrivals,
-                        shot,
-                        &split.laws,
-                        &split.starts,
-                        &split.ends,
-                        &split.dense,
-                        &mut scratch,
-                        &mut part,
-                    )
+                    self.dead
+                        .record_runs(&mut arrivals, shot, &split.laws, &mut scratch, &mut part)
                 });
             part
         });
