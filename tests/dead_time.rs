@@ -594,3 +594,31 @@ fn the_counting_paths_follow_the_arrival_sweep() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// The counting paths give the same counts whatever the thread count: three blocks of
+/// shots, rates from 0.02 to 600 photons per bin (both paths), drawn on one thread and
+/// on three. Deterministic.
+#[test]
+fn the_counting_paths_do_not_depend_on_the_thread_count() {
+    let lambda = [0.02, 0.3, 0.3, 2.0, 600.0, 600.0, 0.0, 40.0, 0.1, 1.0];
+    let dead = DeadTime {
+        tau_s: TAU,
+        model: DeadTimeModel::Nonparalyzable,
+        bin_width_s: DT,
+    };
+    let shots = 3 * lidarsim::sampling::SHOT_BLOCK - 7;
+    let run = |threads: usize| {
+        let recorded =
+            lidarsim::detector::dead_time::DeadTimedShots::new(ShotSampler::new(&lambda), dead);
+        let mut acc = vec![0u64; lambda.len()];
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| recorded.profile(5, 2, shots, &mut acc));
+        acc
+    };
+    let one = run(1);
+    assert_eq!(one, run(3));
+    assert!(one[4] > 0 && one[0] > 0, "{one:?}");
+}
