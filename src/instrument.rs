@@ -37,6 +37,9 @@ pub struct Instrument {
     /// The photon counter's afterpulsing (set with the window's bins by the scenario);
     /// `None` without, and for an analog record.
     pub afterpulsing: Option<crate::detector::afterpulse::Afterpulsing>,
+    /// One half of a `both` pair: its photons are drawn as the other half's, shot for
+    /// shot (no dead-time bin drawn from its counting law alone).
+    pub glued: bool,
 }
 
 /// The sky radiance the instrument sees, photons m⁻² s⁻¹ sr⁻¹ nm⁻¹: the fixed
@@ -122,6 +125,7 @@ impl Instrument {
                 }),
             analog: None,
             afterpulsing: None,
+            glued: false,
         }
     }
 
@@ -132,6 +136,7 @@ impl Instrument {
         record: crate::receiver::Record,
         detector: Option<&crate::config::DetectorConfig>,
     ) -> Self {
+        self.glued = detector.is_some_and(|d| d.mode == crate::config::DetectionMode::Both);
         if let (crate::receiver::Record::Analog, Some(d)) = (record, detector) {
             self.dead_time = None;
             self.analog = Some(crate::detector::Analog::from_config(d, self.bin_width_s));

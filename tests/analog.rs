@@ -418,3 +418,61 @@ fn the_glued_pollyxt_preset_validates_and_each_pair_has_a_common_linear_range() 
         assert!(common >= 50, "{pair}: {common} common bins");
     }
 }
+
+/// A `both` pair records the same photons, shot for shot, whatever the dead-time path:
+/// with a noiseless chain (F = 1, no electronic noise, 164 codes a photoelectron) each
+/// single-shot profile's analog codes give its photons exactly, `N = round((A − V₀/LSB)/c)`,
+/// and the photon counter, which loses photons to its dead time but invents none,
+/// records at most N in every bin (independent draws would break this in most
+/// profiles at these rates) and most of them in all. Without jitter, so that the
+/// photon counter's shots go through the fast dead-time sampler, whose bins of half a
+/// photon or more a shot would otherwise come from their counting law, not from photons.
+#[test]
+fn a_both_pair_records_the_same_photons_shot_for_shot() {
+    let dir = scratch("both-same-photons");
+    let config = config_path("ground/ground_532_depol.toml");
+    let out = "same.h5";
+    let args = [
+        "simulate",
+        config.to_str().unwrap(),
+        "-o",
+        out,
+        "--profiles",
+        "200",
+        "--method",
+        "shot",
+        "--set",
+        "acquisition.accumulation_time_s=0.0004",
+        "--set",
+        "instrument.pulse_energy_jitter=0",
+        "--set",
+        "instrument.detector={mode=\"both\", dead_time_s=3.5e-9, gain=1e8, excess_noise_factor=1.0, electronic_noise_v=0.0}",
+    ];
+    common::cli::ok(common::cli::lidarsim(&dir, &args, &[]));
+    let f = hdf5::File::open(dir.join(out)).unwrap();
+    let counts = floats(&f, "counts");
+    let names = strings(&f, "channel");
+    let lsb = floats(&f, "adc_volts_per_count")[0];
+    let offset = floats(&f, "analog_offset")[0] / lsb;
+    let c = floats(&f, "analog_counts_per_photoelectron")[0];
+    assert!(c > 100.0, "{c}");
+    let (n_ch, bins) = (names.len(), counts.len() / 200 / names.len());
+    let (mut photons, mut recorded) = (0.0, 0.0);
+    for p in 0..200 {
+        let at = |k: usize, b: usize| counts[(p * n_ch + k) * bins + b];
+        for b in 0..bins {
+            let n = ((at(0, b) - offset) / c).round();
+            assert!(
+                at(1, b) <= n,
+                "profile {p} bin {b}: {} counted of {n}",
+                at(1, b)
+            );
+            photons += n;
+            recorded += at(1, b);
+        }
+    }
+    assert!(
+        photons > 1000.0 && recorded > 0.8 * photons,
+        "{recorded} of {photons}"
+    );
+}

@@ -2,13 +2,25 @@
 //! for τ. Non-paralyzable: photons in the dead period are lost and do not extend it.
 //! Paralyzable: every arriving photon, recorded or not, restarts it.
 //!
-//! **Sampler** ([`DeadTime::record_shot`]). A shot's photons are drawn per bin by the
-//! shot path (Poisson, exactly as without dead time); each photon gets an arrival time
-//! uniform within its bin (the rate is taken constant within a bin, as in the model
-//! below), the shot's arrivals are swept in time order, and a photon is recorded when
-//! the detector is live. Dead time crosses bin edges; the detector is live at the start
-//! of the window. Cost O(photons · log photons) per shot, nothing when τ = 0 (the
-//! scene then has no detector stage at all).
+//! **Sampler** ([`DeadTime::record_shot`], [`DeadTimedShots`]). The rate is taken
+//! constant within a bin (as in the model below), dead time crosses bin edges, and the
+//! detector is live at the start of the window. Three exact paths:
+//!
+//! * a non-paralyzable detector on bins at least 2τ wide ([`DeadTime::by_counts`]) draws
+//!   each hit bin's recorded count from its counting distribution given the bin's photons
+//!   (drawn by the shot path, exactly as without dead time), carrying the dead time
+//!   left by a bin into the next ([`counting::Family`]): O(1) per hit bin, a lone photon
+//!   without a draw;
+//! * [`DeadTimedShots`] (fixed means, what `simulate`'s shot path runs) draws the bins
+//!   of at least [`LAW_FROM_PHOTONS`] photons per shot from the counting law at their
+//!   rate, without their photons ([`RateLaw`], tables built once per run), and the
+//!   others as above;
+//! * otherwise (paralyzable, narrow bins) each photon gets an arrival time uniform
+//!   within its bin, the shot's arrivals are swept in time order, and a photon is
+//!   recorded when the detector is live: O(photons · log photons) per shot.
+//!
+//! Nothing is drawn when τ = 0 (the scene then has no detector stage at all). Costs:
+//! `benches/dead_time_rates.rs`, `validation/reports/dead_time_cost.md`.
 //!
 //! **Model** ([`DeadTime::recorded_means`]). With the rate n(t) piecewise constant per
 //! bin, the mean recorded rate solves (Müller 1973, NIM 112, 47; docs/model.md §4b)
@@ -32,15 +44,29 @@
 
 use rand::Rng;
 
+use super::counting::{self, Drawn, RateLaw};
+
 use crate::sampling::{SHOT_BLOCK, ShotCounts, ShotSampler, add_block_sums, stream_rng};
 
-/// Cost of recording one photon through the arrival-time path, ns, for the duration
-/// estimate a run announces: measured at 13–21 ns (one thread; 2,631 and 26,309 true
+/// Cost of recording one photon through the arrival-time path (the paralyzable
+/// detector, bins narrower than 2τ), ns, for the duration estimate a run announces
+/// ([`DeadTime::ns_per_shot`]): measured at 13–21 ns (one thread; 2,631 and 26,309 true
 /// photons per shot: `configs/ground/ground_532_depol.toml` with
 /// `--set instrument.pulse_energy_j=4e-4` and `4e-3`, `--profiles 1 --threads 1`, the
 /// drawing time over shots × photons, on a machine shared with another build). Lone
 /// photons cost less (recorded without drawing a time): the estimate errs long.
 pub const NS_PER_PHOTON: f64 = 20.0;
+
+/// Cost of one photon recorded given its bin's photons by the counting tables
+/// ([`counting::Family`]), and of one bin drawn from its counting law ([`RateLaw`],
+/// below and above 64 MHz at τ = 3.5 ns), ns, for the same estimate: measured by
+/// `benches/dead_time_rates.rs` (one thread; 0.2 photons per bin: 3.3 ns a bin; 2–20
+/// photons: 4.5–7 ns a bin; 100–600: 19–22 ns), the ideal detector's share included.
+pub const NS_PER_GIVEN_PHOTON: f64 = 16.0;
+/// See [`NS_PER_GIVEN_PHOTON`].
+pub const NS_PER_LAW_BIN: f64 = 7.0;
+/// See [`NS_PER_GIVEN_PHOTON`].
+pub const NS_PER_DENSE_LAW_BIN: f64 = 22.0;
 
 /// Seed offset of the arrival-time streams.
 pub const ARRIVAL_STREAM: u64 = 0xA441_7A1E_0000_0001;
@@ -64,6 +90,27 @@ pub struct DeadTime {
 }
 
 impl DeadTime {
+    /// Estimated cost of recording one shot of true means `lambda` per bin, ns (for the
+    /// duration a run announces): per photon on the arrival-time path, per bin or photon
+    /// by the counting distributions ([`NS_PER_GIVEN_PHOTON`]).
+    pub fn ns_per_shot(&self, lambda: &[f64]) -> f64 {
+        if !self.by_counts() {
+            return lambda.iter().sum::<f64>() * NS_PER_PHOTON;
+        }
+        lambda
+            .iter()
+            .map(|&l| {
+                if l < LAW_FROM_PHOTONS {
+                    l * NS_PER_GIVEN_PHOTON
+                } else if counting::is_dense(l / self.bin_width_s, self.tau_s) {
+                    NS_PER_DENSE_LAW_BIN
+                } else {
+                    NS_PER_LAW_BIN
+                }
+            })
+            .sum()
+    }
+
     /// Stationary recorded rate for a true rate `n` (s⁻¹): `n/(1+nτ)` or `n·e^{−nτ}`.
     pub fn stationary_rate(&self, n: f64) -> f64 {
         match self.model {
@@ -175,6 +222,9 @@ impl DeadTime {
         scratch: &mut Scratch,
         acc: &mut [u64],
     ) {
+        if self.by_counts() {
+            return self.record_by_counts(rng, photons, scratch, acc);
+        }
         let counts = photons.counts();
         let independent_runs = self.tau_s <= self.bin_width_s;
         let empty = |b: usize| counts.get(b).is_none_or(|&c| c == 0);
@@ -208,6 +258,148 @@ impl DeadTime {
             );
             start = end;
         }
+    }
+
+    /// Whether [`record_shot`](Self::record_shot) draws each bin's recorded count from
+    /// its counting distribution ([`counting`]) rather than sweeping arrival times: a
+    /// non-paralyzable detector on bins at least 2τ wide.
+    pub fn by_counts(&self) -> bool {
+        self.model == DeadTimeModel::Nonparalyzable && self.bin_width_s >= 2.0 * self.tau_s
+    }
+
+    /// [`record_shot`](Self::record_shot) by counting distributions.
+    fn record_by_counts<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        photons: &ShotCounts,
+        scratch: &mut Scratch,
+        acc: &mut [u64],
+    ) {
+        self.record_runs(rng, photons, &NO_LAWS, scratch, acc);
+    }
+
+    /// Records one shot by counting distributions: the bins with a law in `bins` (by
+    /// index; may be none) from [`RateLaw`] (their photons not drawn), the other
+    /// hit bins given their photons ([`counting::Family`]). Each run of adjacent such
+    /// bins in time order, the dead time left by a bin carried into the next (an empty
+    /// bin, at least τ wide, ends it); the dense law bins' first draws all first, in bin
+    /// order. A lone photon (one in its bin, none next to it) is recorded without a draw;
+    /// a bin of more than [`counting::MAX_PHOTONS`] photons by its arrival times.
+    fn record_runs<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        photons: &ShotCounts,
+        bins: &LawBins,
+        scratch: &mut Scratch,
+        acc: &mut [u64],
+    ) {
+        let (tau, dt) = (self.tau_s, self.bin_width_s);
+        let LawBins {
+            laws,
+            starts,
+            ends,
+            dense,
+        } = bins;
+        let Scratch {
+            times,
+            hit: runs,
+            family,
+            drawn,
+        } = scratch;
+        if !family.as_ref().is_some_and(|f| f.is_for(tau, dt)) {
+            *family = Some(counting::family(tau, dt));
+        }
+        let family = family.as_deref().expect("set above");
+        let counts = photons.counts();
+        let has_law = |i: usize| laws.get(i).is_some_and(Option::is_some);
+        let active = |i: usize| counts.get(i).is_some_and(|&c| c > 0) || has_law(i);
+        // lone photons at once (without branches on their outcome), the first bins of
+        // the other runs kept
+        let hits = photons.hit_bins();
+        runs.clear();
+        runs.resize(hits.len(), 0);
+        let mut len = 0;
+        for &b in hits {
+            let i = b as usize;
+            let prev = i > 0 && active(i - 1);
+            let lone = (counts[i] == 1) & !prev & !active(i + 1);
+            acc[i] += u64::from(lone);
+            runs[len] = b;
+            len += usize::from(!lone & !prev);
+        }
+        // every dense law bin's body first, in bin order (their table loads overlap)
+        drawn.resize(laws.len(), Drawn::default());
+        {
+            for &i in dense {
+                if let Some(law) = &laws[i as usize] {
+                    drawn[i as usize] = law.draw_body(rng);
+                }
+            }
+        }
+        let first_law_bins = starts
+            .iter()
+            .filter(|&&a| a == 0 || !active(a as usize - 1));
+        for &start in runs[..len].iter().chain(first_law_bins) {
+            let (mut i, mut r) = (start as usize, 0.0);
+            loop {
+                if has_law(i) {
+                    // a run of law bins (i is its first), in one loop
+                    let end = ends[i] as usize;
+                    for ((law, d), a) in laws[i..end]
+                        .iter()
+                        .zip(&drawn[i..end])
+                        .zip(&mut acc[i..end])
+                    {
+                        let Some(law) = law else { continue };
+                        let (k, left) = if law.dense {
+                            law.finish(d, r)
+                        } else {
+                            law.record(rng, r)
+                        };
+                        *a += u64::from(k);
+                        r = left;
+                    }
+                    if !active(end) {
+                        break;
+                    }
+                    i = end;
+                    continue;
+                }
+                let next = active(i + 1);
+                let n = counts[i];
+                let (k, left) = if n <= counting::MAX_PHOTONS {
+                    family.record_bin(rng, n, r, next)
+                } else {
+                    self.sweep_bin(rng, n, r, times)
+                };
+                acc[i] += u64::from(k);
+                if !next {
+                    break;
+                }
+                r = left;
+                i += 1;
+            }
+        }
+    }
+
+    /// One bin of `n` photons by its arrival times, entered dead for `r`
+    /// (non-paralyzable): the recorded count and the dead time left at its end.
+    fn sweep_bin<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        n: u32,
+        r: f64,
+        times: &mut Vec<f64>,
+    ) -> (u32, f64) {
+        sorted_uniform_times(rng, n, 0.0, self.bin_width_s, times);
+        let (mut k, mut live_at) = (0u32, r);
+        for &t in times.iter() {
+            if t >= live_at {
+                k += 1;
+                live_at = t + self.tau_s;
+            }
+        }
+        (k, (live_at - self.bin_width_s).max(0.0))
     }
 
     /// Draws the arrival times of the photons of `bins` (sorted, in time order), bin by
@@ -277,6 +469,10 @@ fn sorted_uniform_times<R: Rng + ?Sized>(
 pub struct Scratch {
     times: Vec<f64>,
     hit: Vec<u32>,
+    /// The counting tables of the last (τ, Δt) recorded.
+    family: Option<std::sync::Arc<counting::Family>>,
+    /// Per law bin, its body drawn.
+    drawn: Vec<Drawn>,
 }
 
 /// Accumulates one profile of `shots` shots through the detector into `acc`: the
@@ -304,6 +500,188 @@ pub fn recorded_profile(
         });
         part
     });
+}
+
+/// Fewest expected photons per shot for a bin to be drawn from its counting law
+/// ([`RateLaw`], its photons not drawn) rather than given its photons: measured
+/// (`benches/dead_time_rates.rs`), the photon path costs more from about here on.
+pub const LAW_FROM_PHOTONS: f64 = 0.5;
+
+/// Most bytes of [`RateLaw`] tables one run keeps; bins past it are recorded given
+/// their photons.
+pub const LAW_BUDGET_BYTES: usize = 32 << 20;
+
+/// Shots of fixed means recorded through a dead-time detector: what `simulate --method
+/// shot` draws for a channel with dead time and without jitter.
+///
+/// A non-paralyzable detector ([`DeadTime::by_counts`]) draws each bin of at least
+/// [`LAW_FROM_PHOTONS`] photons per shot from its counting law ([`RateLaw`], built once
+/// for the run) without drawing its photons, and the other bins' photons by a
+/// [`ShotSampler`] over them, recorded given those photons; otherwise
+/// ([`recorded_profile`]) every photon is drawn and recorded.
+#[derive(Debug, Clone)]
+pub struct DeadTimedShots {
+    photons: ShotSampler,
+    dead: DeadTime,
+    split: std::sync::OnceLock<Split>,
+    /// Every bin's photons drawn by `photons` and recorded given them, none from its law:
+    /// the photons are then the shot path's own, shot for shot (a `both` detector's
+    /// photon-counting half records the analog half's photons).
+    every_photon: bool,
+}
+
+/// The bins drawn by their law and the sampler of the others.
+#[derive(Debug, Clone)]
+struct Split {
+    others: ShotSampler,
+    laws: LawBins,
+}
+
+/// The bins drawn from their counting law.
+#[derive(Debug, Clone)]
+struct LawBins {
+    /// Per bin, its law if it has one (empty: none has).
+    laws: Vec<Option<RateLaw>>,
+    /// The first bins of the runs of law bins.
+    starts: Vec<u32>,
+    /// At the first bin of each such run, the bin past its end.
+    ends: Vec<u32>,
+    /// The bins of dense laws ([`RateLaw::dense`]).
+    dense: Vec<u32>,
+}
+
+/// No bin drawn from its law.
+static NO_LAWS: LawBins = LawBins {
+    laws: Vec::new(),
+    starts: Vec::new(),
+    ends: Vec::new(),
+    dense: Vec::new(),
+};
+
+impl DeadTimedShots {
+    /// The shots of `photons` through `dead`.
+    pub fn new(photons: ShotSampler, dead: DeadTime) -> Self {
+        DeadTimedShots {
+            photons,
+            dead,
+            split: std::sync::OnceLock::new(),
+            every_photon: false,
+        }
+    }
+
+    /// The same shots with every bin's photons drawn (no bin from its counting law), so
+    /// that they are the shot path's photons, shot for shot; slower at high rates.
+    pub fn drawing_every_photon(mut self) -> Self {
+        self.every_photon = true;
+        self
+    }
+
+    /// The sampler of every bin's photons.
+    pub fn photons(&self) -> &ShotSampler {
+        &self.photons
+    }
+
+    /// The detector.
+    pub fn dead(&self) -> &DeadTime {
+        &self.dead
+    }
+
+    fn split(&self) -> &Split {
+        self.split.get_or_init(|| {
+            let (tau, dt) = (self.dead.tau_s, self.dead.bin_width_s);
+            let means = self.photons.means();
+            let mut spent = 0usize;
+            let laws: Vec<Option<RateLaw>> = means
+                .iter()
+                .map(|&l| {
+                    (l >= LAW_FROM_PHOTONS && spent < LAW_BUDGET_BYTES).then(|| {
+                        let law = RateLaw::new(l / dt, tau, dt);
+                        spent += counting::rate_law_bytes(&law);
+                        law
+                    })
+                })
+                .collect();
+            let others: Vec<f64> = means
+                .iter()
+                .zip(&laws)
+                .map(|(&l, law)| if law.is_some() { 0.0 } else { l })
+                .collect();
+            let starts: Vec<u32> = (0..laws.len())
+                .filter(|&i| laws[i].is_some() && (i == 0 || laws[i - 1].is_none()))
+                .map(|i| i as u32)
+                .collect();
+            let mut ends = vec![0u32; laws.len()];
+            for &a in &starts {
+                let mut e = a as usize;
+                while e < laws.len() && laws[e].is_some() {
+                    e += 1;
+                }
+                ends[a as usize] = e as u32;
+            }
+            let dense = (0..laws.len() as u32)
+                .filter(|&i| laws[i as usize].as_ref().is_some_and(|l| l.dense))
+                .collect();
+            Split {
+                others: ShotSampler::new(&others),
+                laws: LawBins {
+                    // without law bins, none to look up
+                    laws: if starts.is_empty() { Vec::new() } else { laws },
+                    starts,
+                    ends,
+                    dense,
+                },
+            }
+        })
+    }
+
+    /// Draws `shots` shots from `stream_rng(seed, profile, 0)` and its arrival stream and
+    /// hands each one's recorded counts to `f` (per-shot consumers: tests, onboard sums).
+    pub fn for_each_shot(&self, seed: u64, profile: u64, shots: u64, mut f: impl FnMut(&[u64])) {
+        let bins = self.photons.bins();
+        let mut acc = vec![0u64; bins];
+        let mut scratch = Scratch::default();
+        let mut arrivals = stream_rng(seed ^ ARRIVAL_STREAM, profile, 0);
+        let mut rng = stream_rng(seed, profile, 0);
+        if !self.dead.by_counts() || self.every_photon {
+            return self.photons.for_each_shot(&mut rng, shots, |shot| {
+                acc.iter_mut().for_each(|a| *a = 0);
+                self.dead
+                    .record_shot(&mut arrivals, shot, &mut scratch, &mut acc);
+                f(&acc);
+            });
+        }
+        let split = self.split();
+        split.others.for_each_shot(&mut rng, shots, |shot| {
+            acc.iter_mut().for_each(|a| *a = 0);
+            self.dead
+                .record_runs(&mut arrivals, shot, &split.laws, &mut scratch, &mut acc);
+            f(&acc);
+        });
+    }
+
+    /// Accumulates one profile of `shots` shots into `acc`, by blocks of [`SHOT_BLOCK`]
+    /// shots from `stream_rng(seed, profile, block)` (photons) and its arrival stream
+    /// (the detector's draws), summed in integers: independent of the thread count.
+    pub fn profile(&self, seed: u64, profile: u64, shots: u64, acc: &mut [u64]) {
+        if !self.dead.by_counts() || self.every_photon {
+            return recorded_profile(&self.photons, &self.dead, seed, profile, shots, acc);
+        }
+        let split = self.split();
+        let bins = acc.len();
+        add_block_sums(acc, shots.div_ceil(SHOT_BLOCK), |b| {
+            let mut part = vec![0u64; bins];
+            let mut scratch = Scratch::default();
+            let n = SHOT_BLOCK.min(shots - b * SHOT_BLOCK);
+            let mut arrivals = stream_rng(seed ^ ARRIVAL_STREAM, profile, b);
+            split
+                .others
+                .for_each_shot(&mut stream_rng(seed, profile, b), n, |shot| {
+                    self.dead
+                        .record_runs(&mut arrivals, shot, &split.laws, &mut scratch, &mut part)
+                });
+            part
+        });
+    }
 }
 
 /// A uniform in [0, 1) from the top 53 bits of `x`.

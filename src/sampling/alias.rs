@@ -123,11 +123,33 @@ impl AliasTable {
         }
     }
 
+    /// Number of columns (16 bytes each).
+    pub(crate) fn columns(&self) -> usize {
+        self.cols.len()
+    }
+
     /// The bin for the uniform `u64` `x`.
     #[inline(always)]
     pub(crate) fn bin_for(&self, x: u64) -> usize {
         let c = &self.cols[(x >> self.shift) as usize];
         c.bins[usize::from((x & self.mask) >= c.thr)] as usize
+    }
+
+    /// Realised probability of each column half, for tests: `(bin, P)` pairs, a bin
+    /// possibly more than once (ids need not be small).
+    #[cfg(test)]
+    pub(crate) fn halves(&self) -> Vec<(u32, f64)> {
+        let cap = (self.mask as f64) + 1.0;
+        let ncols = self.cols.len() as f64;
+        self.cols
+            .iter()
+            .flat_map(|c| {
+                [
+                    (c.bins[0], c.thr as f64 / cap / ncols),
+                    (c.bins[1], (cap - c.thr as f64) / cap / ncols),
+                ]
+            })
+            .collect()
     }
 
     /// Realised probability of each column entry, for tests: `(bin, P)` pairs summed by bin.

@@ -70,12 +70,14 @@ pub use aggregate::{
     AGGREGATE_CHUNK, AGGREGATE_INVERSION_MAX, AGGREGATE_PREBUILT_MAX, AggregateSampler,
     add_aggregate, poisson_u64,
 };
+pub(crate) use alias::AliasTable;
 pub use pmf_alias::{PmfAlias, pmf_alias_columns};
 pub use pmf_cells::{CELLS_PER_SIGMA, PmfCells, pmf_cells_bytes};
 pub use shot::{
     ALIAS_BUDGET_BYTES, DENSE_ALIAS_MAX, DENSE_TABLE_MAX, DenseMethod, PathChoice, ShotSampler,
     ShotStrategy, StrategyKind, TOTAL_TABLE_MAX, cost, table_bytes_bound,
 };
+pub(crate) use table::count_above;
 
 use rand_pcg::Pcg64Mcg;
 use rayon::prelude::*;

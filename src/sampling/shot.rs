@@ -242,6 +242,8 @@ struct SparseSet {
 #[derive(Clone, Debug)]
 pub struct ShotSampler {
     bins: usize,
+    /// The means it was built from (a detector stage may draw some bins otherwise).
+    means: Box<[f64]>,
     /// Dense inversion bins, structure of arrays in bin order.
     d_first: Box<[u64]>,
     d_bin: Box<[u32]>,
@@ -485,6 +487,7 @@ impl ShotSampler {
         };
         ShotSampler {
             bins,
+            means: lambda_per_bin.into(),
             d_first: d_first.into_boxed_slice(),
             d_bin: d_bin.into_boxed_slice(),
             d_off: d_off.into_boxed_slice(),
@@ -495,6 +498,11 @@ impl ShotSampler {
             sparse,
             strategy,
         }
+    }
+
+    /// The per-bin means it was built from.
+    pub fn means(&self) -> &[f64] {
+        &self.means
     }
 
     /// Number of bins (length of the λ vector it was built from).

@@ -316,7 +316,7 @@ pub enum StreamSampler {
     /// Aggregate with the normal approximation at and above a mean threshold.
     AggregateNormal(Vec<f64>, f64),
     /// Every shot drawn and recorded through the detector's dead time.
-    DeadTimed(Box<ShotSampler>, DeadTime),
+    DeadTimed(Box<dead_time::DeadTimedShots>),
     /// Every shot drawn and recorded by an analog chain (ADC codes).
     AnalogShots(Box<ShotSampler>, Box<Analog>),
     /// A profile's photoelectrons drawn by the inner (aggregate) sampler, recorded by an
@@ -382,11 +382,25 @@ impl StreamSampler {
     /// ensures the method is `shot`).
     pub fn through_detector(self, dead: Option<DeadTime>) -> Self {
         match (self, dead) {
-            (StreamSampler::Shot(s), Some(d)) => StreamSampler::DeadTimed(s, d),
+            (StreamSampler::Shot(s), Some(d)) => {
+                StreamSampler::DeadTimed(Box::new(dead_time::DeadTimedShots::new(*s, d)))
+            }
             (StreamSampler::Modulated(m), Some(d)) => {
                 StreamSampler::Modulated(Box::new(m.through_detector(Some(d))))
             }
             (other, _) => other,
+        }
+    }
+
+    /// The same sampler drawing every photon of a dead-time detector's shots (none from a
+    /// bin's counting law) when `yes`: a `both` pair's photon-counting half, whose photons
+    /// must be the analog half's, shot for shot.
+    pub fn every_photon(self, yes: bool) -> Self {
+        match self {
+            StreamSampler::DeadTimed(d) if yes => {
+                StreamSampler::DeadTimed(Box::new(d.drawing_every_photon()))
+            }
+            other => other,
         }
     }
 
@@ -442,9 +456,7 @@ impl StreamSampler {
             StreamSampler::AggregateNormal(l, threshold) => {
                 approx::aggregate_approx_profile(l, seed, profile, shots, *threshold, acc)
             }
-            StreamSampler::DeadTimed(s, d) => {
-                dead_time::recorded_profile(s, d, seed, profile, shots, acc)
-            }
+            StreamSampler::DeadTimed(s) => s.profile(seed, profile, shots, acc),
             StreamSampler::AnalogShots(s, a) => {
                 analog::recorded_profile(s, a, seed, profile, shots, acc)
             }
@@ -500,6 +512,7 @@ pub fn stream_samplers(
         let rest = vec![e.background + e.dark; n];
         let sampler = StreamSampler::with_energy(method, &e.photon_signal(), &rest, energy)
             .through_detector(instrument.dead_time)
+            .every_photon(instrument.glued)
             .through_analog(instrument.analog.as_ref())
             .through_afterpulsing(instrument.afterpulsing.as_ref());
         vec![(sampler, seed)]
@@ -756,19 +769,19 @@ pub fn run(
         }
         None => (0..profiles, spec),
     };
-    // true photons per shot through the dead-time path (its cost follows them)
-    let dead_time_photons: f64 = lidar
+    // the dead-time detector's cost per shot (ns), from its channels' means
+    let dead_time_ns: f64 = lidar
         .channels
         .iter()
         .zip(&expected)
-        .filter(|(c, _)| c.instrument.dead_time.is_some() && method == ResolvedMethod::Shot)
-        .map(|(_, e)| e.total_per_shot().iter().sum::<f64>())
+        .filter(|_| method == ResolvedMethod::Shot)
+        .filter_map(|(c, e)| Some(c.instrument.dead_time?.ns_per_shot(&e.total_per_shot())))
         .sum();
     let sizes = RunSizes {
         shots,
         profiles: rows.len(),
         components,
-        dead_time_photons,
+        dead_time_ns,
     };
     check_sizes(&totals, method, &sizes, opts)?;
     let mut writer = RawFileWriter::create(outputs.temp_path(raw)?, &opts.output, &spec)?;
@@ -1305,9 +1318,9 @@ struct RunSizes {
     profiles: usize,
     /// Component-resolved counts.
     components: bool,
-    /// True photons per shot recorded through the dead-time arrival path (summed over
-    /// its channels' bins; 0 without dead time or in the aggregate path).
-    dead_time_photons: f64,
+    /// The dead-time detector's cost per shot, ns (`DeadTime::ns_per_shot` summed over
+    /// its channels; 0 without dead time or in the aggregate path).
+    dead_time_ns: f64,
 }
 
 /// Refuses a run whose memory or file cannot fit, and announces a long one
@@ -1323,7 +1336,7 @@ fn check_sizes(
         shots,
         profiles,
         components,
-        dead_time_photons,
+        dead_time_ns,
     } = *sizes;
     let streams = if components { 4 } else { 1 };
     let bins = totals.len() as f64;
@@ -1340,7 +1353,7 @@ fn check_sizes(
     let draw_ns_per_profile = match method {
         ResolvedMethod::Shot => ShotSampler::new(totals).strategy().est_ns_per_shot * shots as f64,
         _ => bins * cost::AGGREGATE_LARGE_NS,
-    } + dead_time_photons * shots as f64 * dead_time::NS_PER_PHOTON;
+    } + dead_time_ns * shots as f64;
     let ns = profiles as f64
         * (draw_ns_per_profile * streams.min(3) as f64 / threads as f64
             + bins * streams as f64 * FILE_NS_PER_COUNT);

@@ -534,8 +534,8 @@ fn draw_run(
     let energies = || factors.expect("a modulated sampler draws with the run's energies");
     match (sampler, sky) {
         // through a dead-time detector the sunlight joins each shot
-        (StreamSampler::DeadTimed(photons, dead), Some(b)) => {
-            return sunlit_dead_time_run(photons, dead, b, seed, p, n, acc);
+        (StreamSampler::DeadTimed(s), Some(b)) => {
+            return sunlit_dead_time_run(s.photons(), s.dead(), b, seed, p, n, acc);
         }
         (StreamSampler::Modulated(m), Some(b)) if m.has_detector() => {
             let mut add_sky = |shot: &mut ShotCounts| add_background(&mut sky_rng, b, bins, shot);

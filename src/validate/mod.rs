@@ -332,6 +332,7 @@ impl SimulatorSource {
                 let rest = vec![e.background + e.dark; e.n_bins()];
                 let sampler = StreamSampler::with_energy(method, &e.photon_signal(), &rest, energy)
                     .through_detector(c.instrument.dead_time)
+                    .every_photon(c.instrument.glued)
                     .through_analog(c.instrument.analog.as_ref())
                     .through_afterpulsing(c.instrument.afterpulsing.as_ref());
                 (

@@ -145,18 +145,18 @@ impl<'a> Validation<'a> {
                 ..
             } => {
                 let shots = self.lidar.first().shots_per_profile();
-                // true photons per shot through the dead-time arrival path
-                let dead_time_photons: f64 = self
+                // the dead-time detector's cost per shot (ns)
+                let dead_time_ns: f64 = self
                     .lidar
                     .channels
                     .iter()
                     .zip(channels.iter())
-                    .filter(|(c, _)| {
-                        c.instrument.dead_time.is_some() && self.method == ResolvedMethod::Shot
+                    .filter(|_| self.method == ResolvedMethod::Shot)
+                    .filter_map(|(c, b)| {
+                        Some(c.instrument.dead_time?.ns_per_shot(&totals[b.bins.clone()]))
                     })
-                    .map(|(_, b)| totals[b.bins.clone()].iter().sum::<f64>())
                     .sum();
-                check_sizes(totals, self.method, shots, n, dead_time_photons)?;
+                check_sizes(totals, self.method, shots, n, dead_time_ns)?;
                 check_exact_sums(models, channels, self.realizations)
             }
             Kind::Changing { .. } => Ok(()),
@@ -326,32 +326,31 @@ fn changing(lidar: &Lidar, scene: SceneModel, energy: RunEnergy) -> Result<(Vec<
 const BYTES_PER_BIN: f64 = 800.0;
 
 /// Refuses a validation whose memory cannot fit and announces a long one; `totals` are
-/// the per-shot means of every bin of every channel, `dead_time_photons` the true photons
-/// per shot of the channels recorded through the dead-time arrival path.
+/// the per-shot means of every bin of every channel, `dead_time_ns` the dead-time
+/// detector's cost per shot (`DeadTime::ns_per_shot`).
 fn check_sizes(
     totals: &[f64],
     method: ResolvedMethod,
     shots: u64,
     n: usize,
-    dead_time_photons: f64,
+    dead_time_ns: f64,
 ) -> Result<()> {
     let bins = totals.len() as f64;
     crate::resources::require_memory(
         &format!("validating {} bins", crate::error::compact(bins)),
         bins * BYTES_PER_BIN + (8 << 20) as f64 * 8.0,
     )?;
-    let per_profile_ns =
-        (match method {
-            ResolvedMethod::Shot => {
-                crate::sampling::ShotSampler::new(totals)
-                    .strategy()
-                    .est_ns_per_shot
-                    * shots as f64
-            }
-            _ => bins * 45.0,
-        } + dead_time_photons * shots as f64 * crate::detector::dead_time::NS_PER_PHOTON)
-            / rayon::current_num_threads().max(1) as f64
-            + bins * 20.0;
+    let per_profile_ns = (match method {
+        ResolvedMethod::Shot => {
+            crate::sampling::ShotSampler::new(totals)
+                .strategy()
+                .est_ns_per_shot
+                * shots as f64
+        }
+        _ => bins * 45.0,
+    } + dead_time_ns * shots as f64)
+        / rayon::current_num_threads().max(1) as f64
+        + bins * 20.0;
     crate::resources::announce_duration(
         &format!("validating {n} realizations of {} bins", totals.len()),
         n as f64 * per_profile_ns * 1e-9,
