@@ -39,7 +39,8 @@ TRUTH = ["alpha_mol", "alpha_aer", "alpha_cld", "alpha_o3", "alpha_total", "beta
          "beta_cld", "lidar_ratio_aer", "lidar_ratio_cld", "ms_factor_aer", "ms_factor_cld", "depol_aer",
          "depol_cld", "depol_mol", "depol_volume", "t2"]
 STATE = ["pressure", "temperature", "number_density"]
-CHANNEL_TEXT = ["channel_kind", "channel_species", "polarization", "detection_mode", "dead_time_model",
+CHANNEL_TEXT = ["channel_kind", "channel_species", "polarization", "detection_mode", "acquisition_mode",
+                "glue_partner", "dead_time_model",
                 "molecular_line"]
 REQUIRED_VARIABLES = [
     "counts", "channel", "altitude", "range", "time", "n_shots", "pulse_energy",

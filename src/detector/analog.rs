@@ -24,7 +24,9 @@
 //! LSB/2. Clipping is not in the law: `simulate` warns where a bin's mean is within four
 //! standard deviations of either end of the ADC range.
 //!
-//! **Shot path** ([`Analog::record_shot`]): exact, per shot and bin, as above.
+//! **Shot path** ([`Analog::record_shot`], through [`super::recorded_profile`]: its gains
+//! and noise from `stream_rng(seed ^ ANALOG_STREAM, profile, block)`, the photons the
+//! photon-counting draw's own): exact, per shot and bin, as above.
 //! **Aggregate path** ([`Analog::record_profile`]): the photoelectrons of the M shots
 //! summed (one Poisson draw per bin, as the photon-counting aggregate path), their
 //! charge one Gamma(N_tot·k, 1/k) draw (exact), the low-pass applied to the sum (exact:
@@ -37,8 +39,7 @@ use rand::Rng;
 use rand_distr::{Distribution, Gamma, StandardNormal};
 
 use crate::config::DetectorConfig;
-use crate::sampling::stream_rng;
-use crate::sampling::{AGGREGATE_STREAM, SHOT_BLOCK, ShotCounts, ShotSampler, add_block_sums};
+use crate::sampling::{AGGREGATE_STREAM, ShotCounts, stream_rng};
 
 /// The nearest code to `v` (halves up), clipped to `[0, full]`: a cast, not a call to
 /// the C library's `round`.
@@ -398,30 +399,19 @@ impl Analog {
     }
 }
 
-/// Accumulates one profile of `shots` shots recorded in analog into `acc`: the photons
-/// of each shot drawn by `photons` (the shot path, with the photon-counting draw's own
-/// streams `stream_rng(seed, profile, block)`), their gains and the noise from
-/// `stream_rng(seed ^ ANALOG_STREAM, profile, block)`; blocks of [`SHOT_BLOCK`] shots
-/// summed in integers, so the codes do not depend on the thread count.
-pub fn recorded_profile(
-    photons: &ShotSampler,
-    analog: &Analog,
-    seed: u64,
-    profile: u64,
-    shots: u64,
-    acc: &mut [u64],
-) {
-    let bins = acc.len();
-    add_block_sums(acc, shots.div_ceil(SHOT_BLOCK), |b| {
-        let mut part = vec![0u64; bins];
-        let mut scratch = AnalogScratch::default();
-        let n = SHOT_BLOCK.min(shots - b * SHOT_BLOCK);
-        let mut electronics = stream_rng(seed ^ ANALOG_STREAM, profile, b);
-        photons.for_each_shot(&mut stream_rng(seed, profile, b), n, |shot| {
-            analog.record_shot(&mut electronics, shot, &mut scratch, &mut part)
-        });
-        part
-    });
+impl super::ShotRecorder for Analog {
+    type Scratch = AnalogScratch;
+    const STREAM: u64 = ANALOG_STREAM;
+
+    fn record_shot<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        photons: &ShotCounts,
+        scratch: &mut AnalogScratch,
+        acc: &mut [u64],
+    ) {
+        Analog::record_shot(self, rng, photons, scratch, acc)
+    }
 }
 
 /// The generator of an aggregate analog profile's gains and noise.

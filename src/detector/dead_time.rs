@@ -475,31 +475,23 @@ pub struct Scratch {
     drawn: Vec<Drawn>,
 }
 
-/// Accumulates one profile of `shots` shots through the detector into `acc`: the
-/// photons of each shot drawn by `photons` (the shot path), recorded by `dead`. Shots
-/// are cut into blocks of [`SHOT_BLOCK`] drawn from `stream_rng(seed, profile, block)`
-/// and summed in integers, so the counts do not depend on the thread count.
-pub fn recorded_profile(
-    photons: &ShotSampler,
-    dead: &DeadTime,
-    seed: u64,
-    profile: u64,
-    shots: u64,
-    acc: &mut [u64],
-) {
-    let bins = acc.len();
-    add_block_sums(acc, shots.div_ceil(SHOT_BLOCK), |b| {
-        let mut part = vec![0u64; bins];
-        let mut scratch = Scratch::default();
-        let n = SHOT_BLOCK.min(shots - b * SHOT_BLOCK);
-        // arrival times from a stream of their own: the photons are those of the
-        // shot path without dead time, shot for shot
-        let mut arrivals = stream_rng(seed ^ ARRIVAL_STREAM, profile, b);
-        photons.for_each_shot(&mut stream_rng(seed, profile, b), n, |shot| {
-            dead.record_shot(&mut arrivals, shot, &mut scratch, &mut part)
-        });
-        part
-    });
+/// One profile through the dead time, every photon drawn ([`super::recorded_profile`];
+/// the detector's draws from the arrival stream `seed ^ ARRIVAL_STREAM`).
+pub use super::recorded_profile;
+
+impl super::ShotRecorder for DeadTime {
+    type Scratch = Scratch;
+    const STREAM: u64 = ARRIVAL_STREAM;
+
+    fn record_shot<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        photons: &ShotCounts,
+        scratch: &mut Scratch,
+        acc: &mut [u64],
+    ) {
+        DeadTime::record_shot(self, rng, photons, scratch, acc)
+    }
 }
 
 /// Fewest expected photons per shot for a bin to be drawn from its counting law

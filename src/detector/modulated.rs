@@ -7,7 +7,8 @@
 //! and `stream_rng(seed ^ ARRIVAL_STREAM, profile, block)` for their arrival times, so
 //! results depend on the seed only.
 
-use super::analog::{ANALOG_STREAM, Analog, AnalogScratch};
+use super::ShotRecorder;
+use super::analog::Analog;
 use super::dead_time::{ARRIVAL_STREAM, DeadTime, Scratch};
 use crate::sampling::jitter::ModulatedShots;
 use crate::sampling::{SHOT_BLOCK, ShotCounts, add_block_sums, stream_rng};
@@ -27,7 +28,6 @@ struct Buffers {
     shot: ShotCounts,
     factors: Vec<f64>,
     scratch: Scratch,
-    analog: AnalogScratch,
 }
 
 impl Buffers {
@@ -37,7 +37,6 @@ impl Buffers {
             shot: ShotCounts::new(bins),
             factors,
             scratch: Scratch::default(),
-            analog: AnalogScratch::default(),
         }
     }
 }
@@ -100,34 +99,18 @@ impl DetectedShots {
 
     /// Accumulates one profile of `shots` shots into `acc`.
     pub fn profile(&self, seed: u64, profile: u64, shots: u64, acc: &mut [u64]) {
-        if let Some(analog) = &self.analog {
-            return self.analog_profile(analog, seed, profile, shots, acc);
+        match (&self.analog, &self.dead) {
+            (Some(analog), _) => self.recorded(analog, seed, profile, shots, acc),
+            (None, Some(dead)) => self.recorded(dead, seed, profile, shots, acc),
+            (None, None) => self.photons.profile(seed, profile, shots, acc),
         }
-        let Some(dead) = &self.dead else {
-            return self.photons.profile(seed, profile, shots, acc);
-        };
-        let bins = acc.len();
-        add_block_sums(acc, shots.div_ceil(SHOT_BLOCK), |b| {
-            let mut part = vec![0u64; bins];
-            let mut buf = Buffers::new(bins, Vec::new());
-            self.photons
-                .block_factors(seed, profile, shots, b, &mut buf.factors);
-            let mut arrivals = stream_rng(seed ^ ARRIVAL_STREAM, profile, b);
-            let mut rng = stream_rng(seed, profile, b);
-            for &f in &buf.factors {
-                self.photons
-                    .draw_shot(&mut rng, f, &mut buf.envelope, &mut buf.shot);
-                dead.record_shot(&mut arrivals, &buf.shot, &mut buf.scratch, &mut part);
-            }
-            part
-        });
     }
 
-    /// [`profile`](Self::profile) through an analog chain: the photons as without it,
-    /// shot for shot.
-    fn analog_profile(
+    /// [`profile`](Self::profile) through a detector stage: the photons as without it,
+    /// shot for shot, the stage's draws from its own stream.
+    fn recorded<D: ShotRecorder>(
         &self,
-        analog: &Analog,
+        detector: &D,
         seed: u64,
         profile: u64,
         shots: u64,
@@ -137,14 +120,15 @@ impl DetectedShots {
         add_block_sums(acc, shots.div_ceil(SHOT_BLOCK), |b| {
             let mut part = vec![0u64; bins];
             let mut buf = Buffers::new(bins, Vec::new());
+            let mut scratch = D::Scratch::default();
             self.photons
                 .block_factors(seed, profile, shots, b, &mut buf.factors);
-            let mut electronics = stream_rng(seed ^ ANALOG_STREAM, profile, b);
+            let mut own = stream_rng(seed ^ D::STREAM, profile, b);
             let mut rng = stream_rng(seed, profile, b);
             for &f in &buf.factors {
                 self.photons
                     .draw_shot(&mut rng, f, &mut buf.envelope, &mut buf.shot);
-                analog.record_shot(&mut electronics, &buf.shot, &mut buf.analog, &mut part);
+                detector.record_shot(&mut own, &buf.shot, &mut scratch, &mut part);
             }
             part
         });

@@ -458,7 +458,7 @@ impl StreamSampler {
             }
             StreamSampler::DeadTimed(s) => s.profile(seed, profile, shots, acc),
             StreamSampler::AnalogShots(s, a) => {
-                analog::recorded_profile(s, a, seed, profile, shots, acc)
+                crate::detector::recorded_profile(s, a.as_ref(), seed, profile, shots, acc)
             }
             StreamSampler::AnalogAggregate(photons, a) => {
                 let mut n = vec![0u64; acc.len()];
