@@ -144,16 +144,11 @@ impl Instrument {
         self
     }
 
-    /// The instrument with its photon counter's afterpulsing on a window of `bins` bins
-    /// (none for an analog record).
-    pub fn with_afterpulsing(
-        mut self,
-        detector: Option<&crate::config::DetectorConfig>,
-        bins: usize,
-    ) -> Self {
+    /// The instrument with its photon counter's afterpulsing (none for an analog record).
+    pub fn with_afterpulsing(mut self, detector: Option<&crate::config::DetectorConfig>) -> Self {
         if self.analog.is_none() {
             self.afterpulsing = detector.and_then(|d| d.afterpulsing.as_ref()).map(|a| {
-                crate::detector::afterpulse::Afterpulsing::from_config(a, self.bin_width_s, bins)
+                crate::detector::afterpulse::Afterpulsing::from_config(a, self.bin_width_s)
             });
         }
         self

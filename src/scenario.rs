@@ -249,7 +249,7 @@ impl Scenario {
         let channel = &loaded.channels[0];
         let instrument = Instrument::from_config(cfg, atmosphere.detected_line())
             .recording(channel.record, channel.detector())
-            .with_afterpulsing(channel.detector(), geometry.n_bins);
+            .with_afterpulsing(channel.detector());
         // at least four slabs per bin, so that the piecewise representation resolves every bin
         let lowest = cfg.acquisition.bottom_altitude_km * 1e3;
         atmosphere.grid_m = atmosphere
@@ -438,6 +438,22 @@ impl Scenario {
         }
         let detector = self.loaded.config.instrument.detector.as_ref();
         if let Some(sin) = detector.and_then(|d| d.signal_induced_noise.as_ref()) {
+            let power_law = matches!(
+                sin,
+                crate::config::SignalInducedNoiseConfig::PowerLaw { .. }
+            );
+            let most = crate::detector::induced::MAX_POWER_LAW_BINS;
+            if power_law && n > most {
+                return Err(Error::config(
+                    self.loaded.file_label(),
+                    "instrument.detector.signal_induced_noise.model",
+                    format!(
+                        "\"power_law\" convolves the signal directly, in time growing as the \
+                         square of the bins: at most {most} bins, the window has {n}; use \
+                         \"exponential\" (any number of bins) or fewer bins"
+                    ),
+                ));
+            }
             e.induced = sin.induced_counts(&e.signal, self.instrument.bin_width_s);
         }
         e.recorded = match &self.instrument.dead_time {

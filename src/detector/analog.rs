@@ -86,10 +86,6 @@ pub mod defaults {
     pub const ADC_RANGE_V: f64 = 0.1;
 }
 
-/// Weight of the low-pass's tail beyond which taps are dropped; what is dropped is added
-/// to the last tap kept, so that the response keeps a unit sum (the mean charge is kept).
-const KERNEL_TAIL: f64 = 1e-12;
-
 /// An analog recorder on a window of bins of equal width.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Analog {
@@ -111,32 +107,31 @@ pub struct Analog {
     pub adc_range_v: f64,
     /// Bin width Δt, s.
     pub bin_width_s: f64,
-    /// The low-pass's share of a bin's charge in each later bin, `h_0, h_1, …`.
-    kernel: Vec<f64>,
+    /// The low-pass's shares as `(h_0, h_1, a)`, `h_j = h_1·a^{j−1}` for j ≥ 1
+    /// ([`super::delay::exponential_law`] of τ_e); `None` without a low-pass.
+    low_pass: Option<(f64, f64, f64)>,
 }
 
-/// The share `h_j` of a bin's charge (spread evenly over the bin) that a first-order
-/// low-pass of time constant τ_e moves into the bin j later, for bin width Δt:
-/// `h_0 = 1 − r(1−a)`, `h_j = r(1−a)²a^{j−1}`, with `r = τ_e/Δt`, `a = e^{−Δt/τ_e}` (the
-/// step response `1 − e^{−t/τ_e}` averaged over each bin). The sum is 1. `τ_e = 0`: `[1]`.
-pub fn impulse_response(tau_e_s: f64, bin_width_s: f64) -> Vec<f64> {
+/// The shares `h_0, h_1, …` (the first `n`) of a bin's charge (spread evenly over the
+/// bin) that a first-order low-pass of time constant τ_e moves into the bin j later,
+/// for bin width Δt: `h_0 = 1 − r(1−a)`, `h_j = r(1−a)²a^{j−1}`, with `r = τ_e/Δt`,
+/// `a = e^{−Δt/τ_e}` (the step response `1 − e^{−t/τ_e}` averaged over each bin: the
+/// exponential delay law of mean τ_e, [`super::delay::exponential_law`]). The shares sum
+/// to 1. `τ_e = 0`: `[1, 0, …]`.
+pub fn impulse_response(tau_e_s: f64, bin_width_s: f64, n: usize) -> Vec<f64> {
     if tau_e_s <= 0.0 {
-        return vec![1.0];
+        return (0..n).map(|j| if j == 0 { 1.0 } else { 0.0 }).collect();
     }
-    let r = tau_e_s / bin_width_s;
-    let a = (-bin_width_s / tau_e_s).exp();
-    let mut h = vec![1.0 - r * (1.0 - a)];
-    let mut tail = 1.0 - h[0];
-    let mut tap = r * (1.0 - a) * (1.0 - a);
-    while tail > KERNEL_TAIL && tap > 0.0 {
-        h.push(tap);
-        tail -= tap;
-        tap *= a;
-    }
-    if let Some(last) = h.last_mut() {
-        *last += tail.max(0.0);
-    }
-    h
+    let (h0, h1, a) = super::delay::exponential_law(tau_e_s, bin_width_s);
+    (0..n)
+        .map(|j| {
+            if j == 0 {
+                h0
+            } else {
+                h1 * a.powi(j as i32 - 1)
+            }
+        })
+        .collect()
 }
 
 /// Reusable buffer of [`Analog::record_shot`]: the smeared charge of every bin.
@@ -169,13 +164,24 @@ impl Analog {
             adc_bits: d.adc_bits.unwrap_or(defaults::ADC_BITS),
             adc_range_v: d.adc_range_v.unwrap_or(defaults::ADC_RANGE_V),
             bin_width_s,
-            kernel: impulse_response(tau_e, bin_width_s),
+            low_pass: (tau_e > 0.0).then(|| super::delay::exponential_law(tau_e, bin_width_s)),
         }
     }
 
-    /// The low-pass's shares `h_j`.
-    pub fn kernel(&self) -> &[f64] {
-        &self.kernel
+    /// The low-pass's first `n` shares `h_j` ([`impulse_response`]).
+    pub fn kernel(&self, n: usize) -> Vec<f64> {
+        match self.low_pass {
+            Some((h0, h1, a)) => (0..n)
+                .map(|j| {
+                    if j == 0 {
+                        h0
+                    } else {
+                        h1 * a.powi(j as i32 - 1)
+                    }
+                })
+                .collect(),
+            None => impulse_response(0.0, self.bin_width_s, n),
+        }
     }
 
     /// One ADC code (LSB), V: `range/2^bits`.
@@ -210,21 +216,18 @@ impl Analog {
     }
 
     /// `Σ_j h_j^power x_{b−j}` for every bin b (the low-pass applied to `x`; its squares
-    /// etc. for the cumulants).
+    /// etc. for the cumulants), by the recursion of [`super::delay::exponential_tail`]
+    /// (`h_j^p = h_1^p·(a^p)^{j−1}`): O(bins).
     pub fn smear(&self, x: &[f64], power: i32) -> Vec<f64> {
-        let mut y = vec![0.0; x.len()];
-        for (b, &v) in x.iter().enumerate() {
-            if v == 0.0 {
-                continue;
-            }
-            for (j, h) in self.kernel.iter().enumerate() {
-                match y.get_mut(b + j) {
-                    Some(t) => *t += h.powi(power) * v,
-                    None => break,
-                }
-            }
-        }
-        y
+        let Some((h0, h1, a)) = self.low_pass else {
+            return x.to_vec();
+        };
+        let (h0, h1) = (h0.powi(power), h1.powi(power));
+        super::delay::exponential_tail(x, a.powi(power))
+            .iter()
+            .zip(x)
+            .map(|(z, v)| h0 * v + h1 * z)
+            .collect()
     }
 
     /// Expected code per shot of each bin for photoelectron means `lambda` per shot.
@@ -291,12 +294,9 @@ impl Analog {
     ) {
         let bins = acc.len();
         scratch.charge.resize(bins, 0.0);
-        let y = &mut scratch.charge;
+        let q = &mut scratch.charge;
         for (b, n) in photons.nonzero() {
-            let q = self.charge(rng, f64::from(n));
-            for (t, h) in y[b..].iter_mut().zip(&self.kernel) {
-                *t += h * q;
-            }
+            q[b] = self.charge(rng, f64::from(n));
         }
         let (c, v0, sigma) = (
             self.codes_per_photoelectron(),
@@ -304,14 +304,18 @@ impl Analog {
             self.noise_codes(),
         );
         let full = self.full_scale_code() as f64;
-        for (a, t) in acc.iter_mut().zip(y.iter_mut()) {
+        let (h0, h1, a) = self.low_pass.unwrap_or((1.0, 0.0, 0.0));
+        // z = Σ_{j≥1} a^{j−1}·q_{b−j}: the charge the low-pass carries into bin b
+        let mut z = 0.0;
+        for (acc_b, q_b) in acc.iter_mut().zip(q.iter_mut()) {
             let noise = if sigma > 0.0 {
                 sigma * normal(rng)
             } else {
                 0.0
             };
-            *a += quantize(v0 + c * *t + noise, full);
-            *t = 0.0;
+            *acc_b += quantize(v0 + c * (h0 * *q_b + h1 * z) + noise, full);
+            z = *q_b + a * z;
+            *q_b = 0.0;
         }
     }
 
@@ -328,7 +332,7 @@ impl Analog {
         let (c, v0) = (self.codes_per_photoelectron(), self.offset_codes());
         let sd = (m * (self.noise_codes().powi(2) + 1.0 / 12.0)).sqrt();
         let full = m * self.full_scale_code() as f64;
-        if self.kernel.len() == 1 {
+        if self.low_pass.is_none() {
             // no low-pass: each bin's charge straight to its code, in one pass
             for (a, &n) in acc.iter_mut().zip(photoelectrons) {
                 let t = self.charge(rng, n as f64);
@@ -425,13 +429,13 @@ mod tests {
 
     #[test]
     fn the_impulse_response_sums_to_one_and_matches_the_rc_step() {
-        let h = impulse_response(16e-9, 50e-9);
+        let h = impulse_response(16e-9, 50e-9, 200);
         assert!((h.iter().sum::<f64>() - 1.0).abs() < 1e-15);
         // first bin: 1 − (τ/Δt)(1 − e^{−Δt/τ})
         let (r, a) = (16.0 / 50.0, (-50.0f64 / 16.0).exp());
         assert!((h[0] - (1.0 - r * (1.0 - a))).abs() < 1e-15);
         assert!((h[2] / h[1] - a).abs() < 1e-12);
-        assert_eq!(impulse_response(0.0, 50e-9), vec![1.0]);
+        assert_eq!(impulse_response(0.0, 50e-9, 2), vec![1.0, 0.0]);
     }
 
     #[test]

@@ -78,7 +78,7 @@ pub fn validate(config: &ScenarioConfig, c: &Checker) -> Result<()> {
             0.0,
             MAX_DEAD_TIME_S,
         )?;
-        validate_analog(d, c)?;
+        validate_analog(d, config.instrument.bin_width_s, c)?;
         if let Some(sin) = &d.signal_induced_noise {
             validate_induced(sin, c)?;
         }
@@ -170,7 +170,7 @@ fn validate_induced(sin: &crate::config::SignalInducedNoiseConfig, c: &Checker) 
 
 /// The analog keys of `d` with their limits: each a finite number in its range; the
 /// offset and the noise within the ADC's range.
-fn validate_analog(d: &DetectorConfig, c: &Checker) -> Result<()> {
+fn validate_analog(d: &DetectorConfig, bin_width_s: f64, c: &Checker) -> Result<()> {
     let key = |k: &str| format!("instrument.detector.{k}");
     let set: Vec<&str> = [
         ("gain", d.gain.is_some()),
@@ -212,6 +212,18 @@ fn validate_analog(d: &DetectorConfig, c: &Checker) -> Result<()> {
     )?;
     c.positive(&key("load_resistance_ohm"), a.load_resistance_ohm, 1e6)?;
     c.range(&key("bandwidth_hz"), a.bandwidth_hz, 0.0, 1e12)?;
+    // a slower low-pass smears a bin over most of a window: taken for a unit error
+    let slowest = 1.0 / (2.0 * std::f64::consts::PI * MAX_LOW_PASS_BINS * bin_width_s);
+    if a.bandwidth_hz > 0.0 && a.bandwidth_hz < slowest {
+        return Err(c.fail(
+            &key("bandwidth_hz"),
+            format!(
+                "{} Hz smears a bin over more than {MAX_LOW_PASS_BINS} bins of {} s; give at \
+                 least {slowest:.4e} Hz, or 0 for no low-pass",
+                a.bandwidth_hz, bin_width_s
+            ),
+        ));
+    }
     c.positive(&key("adc_range_v"), a.adc_range_v, 100.0)?;
     if !(1..=24).contains(&a.adc_bits) {
         return Err(c.fail(
@@ -228,6 +240,9 @@ fn validate_analog(d: &DetectorConfig, c: &Checker) -> Result<()> {
     c.range(&key("offset_v"), a.offset_v, 0.0, a.adc_range_v)?;
     Ok(())
 }
+
+/// Slowest low-pass of an analog chain: a time constant of this many bins.
+pub const MAX_LOW_PASS_BINS: f64 = 1000.0;
 
 /// Largest relative loss of a photon counter's record to its dead time in a bin the
 /// file's `linear_range` still calls linear (where gluing may use it).
