@@ -367,8 +367,9 @@ impl Scenario {
     }
 
     /// The warning for a scene without dead time that counts beyond a photon counter's
-    /// linear range (the commands print it after a successful run, so that an error
-    /// stays one line).
+    /// linear range, or for an analog record that leaves its law (noise below one code,
+    /// clipping: `Analog::clipping_warning`); the commands print it after a successful
+    /// run, so that an error stays one line.
     pub fn linear_range_warning(&self, e: &ExpectedProfile) -> Option<String> {
         if let Some(a) = &self.instrument.analog {
             return a.clipping_warning(&e.total_per_shot(), &e.altitude_m);
