@@ -78,7 +78,10 @@ def main(path):
         stop = ds.variables["Raw_Data_Stop_Time"][:, 0]
         assert start[0] == 0 and (stop > start).all(), "start/stop times"
         data = ds.variables["Raw_Lidar_Data"][:]
-        assert (data >= 0).all() and np.all(data == np.round(data)), "counts"
+        # photon counts (Acquisition_Mode 1) are whole; analog signals (0) are mV per shot
+        counting = ds.variables["Acquisition_Mode"][:] == 1
+        pc = data[:, counting, :]
+        assert (data >= 0).all() and np.all(pc == np.round(pc)), "counts"
         checks += 3
     print(f"{checks} passed, 0 failed")
 
