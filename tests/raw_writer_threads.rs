@@ -62,6 +62,40 @@ fn one_and_two_threads_write_the_same_bytes() {
                 "acquisition.accumulation_time_s=1000",
             ],
         ),
+        // issue 21's detectors: dead time (its fast paths), afterpulses and jitter over
+        // two shot blocks of 75,000-shot profiles; a both pair's analog and photon
+        // counts; analog codes with a low-pass and signal-induced noise, aggregate
+        (
+            "ground/mpl_like.toml",
+            vec![
+                "--profiles",
+                "2",
+                "--set",
+                "acquisition.accumulation_time_s=30",
+            ],
+        ),
+        (
+            "ground/pollyxt_like_glued.toml",
+            vec![
+                "--profiles",
+                "2",
+                "--set",
+                "acquisition.accumulation_time_s=5",
+            ],
+        ),
+        (
+            "ground/ground_532_depol.toml",
+            vec![
+                "--profiles",
+                "50",
+                "--method",
+                "aggregate",
+                "--set",
+                "instrument.pulse_energy_jitter=0",
+                "--set",
+                "instrument.detector={mode=\"analog\", bandwidth_hz=1e7, signal_induced_noise={model=\"exponential\", fraction=1e-3, time_constant_s=2e-5}}",
+            ],
+        ),
     ]
     .into_iter()
     .enumerate()
