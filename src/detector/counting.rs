@@ -300,31 +300,7 @@ impl BodyLaw {
                 hi = mid - 1;
             }
         }
-        let median = lo;
-        let total = |(a, c): (f64, f64)| a + c;
-        let peak = total(masses(median));
-        let mut below = Vec::new();
-        let mut k = median;
-        while k > 1 {
-            k -= 1;
-            let x = masses(k);
-            if total(x) < CUTOFF * peak {
-                break;
-            }
-            below.push(x);
-        }
-        let k0 = median - below.len() as u32;
-        let mut entries: Vec<(f64, f64)> = below.into_iter().rev().collect();
-        entries.push(masses(median));
-        let mut k = median;
-        while k < k_top {
-            k += 1;
-            let x = masses(k);
-            if total(x) < CUTOFF * peak {
-                break;
-            }
-            entries.push(x);
-        }
+        let (k0, entries) = around(lo, 1, k_top, masses);
         let mut weights = Vec::with_capacity(2 * entries.len());
         let mut ids = Vec::with_capacity(2 * entries.len());
         let mut cells = Vec::with_capacity(entries.len());
@@ -491,7 +467,7 @@ impl RateLaw {
                 hi = mid - 1;
             }
         }
-        let (k0, entries) = around(lo, k_top, masses);
+        let (k0, entries) = around(lo, 0, k_top, masses);
         let mut weights = Vec::with_capacity(2 * entries.len());
         let mut ids = Vec::with_capacity(2 * entries.len());
         let mut law = RateLaw {
@@ -767,15 +743,20 @@ fn exp1_slow<R: Rng + ?Sized>(i: usize, u: f64, rng: &mut R) -> f64 {
     }
 }
 
-/// The entries of a law around its median `median` (R from 0 to `k_top`), each side
-/// stopped once a mass (atom + cell) falls below [`CUTOFF`] of the median's: the first R
-/// and the (atom, cell) masses.
-fn around(median: u32, k_top: u32, masses: impl Fn(u32) -> (f64, f64)) -> (u32, Vec<(f64, f64)>) {
+/// The entries of a law around its median `median` (R from `k_bottom` to `k_top`), each
+/// side stopped once a mass (atom + cell) falls below [`CUTOFF`] of the median's: the
+/// first R and the (atom, cell) masses.
+fn around(
+    median: u32,
+    k_bottom: u32,
+    k_top: u32,
+    masses: impl Fn(u32) -> (f64, f64),
+) -> (u32, Vec<(f64, f64)>) {
     let total = |(a, c): (f64, f64)| a + c;
     let peak = total(masses(median));
     let mut below = Vec::new();
     let mut k = median;
-    while k > 0 {
+    while k > k_bottom {
         k -= 1;
         let x = masses(k);
         if total(x) < CUTOFF * peak {
