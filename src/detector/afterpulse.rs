@@ -66,21 +66,12 @@ impl Afterpulsing {
         }
     }
 
-    /// The shares `w_j` of the mixed delay law, j = 0 … `n − 1`.
-    pub fn shares(&self, n: usize) -> Vec<f64> {
-        let mut w = vec![0.0; n];
-        for &(c, _, (w0, w1, a)) in &self.components {
-            let mut x = w1;
-            for (j, s) in w.iter_mut().enumerate() {
-                if j == 0 {
-                    *s += c * w0;
-                } else {
-                    *s += c * x;
-                    x *= a;
-                }
-            }
-        }
-        w
+    /// The share `w_0` of the mixed delay law: what lands in the count's own bin.
+    fn first_share(&self) -> f64 {
+        self.components
+            .iter()
+            .map(|&(c, _, (w0, _, _))| c * w0)
+            .sum()
     }
 
     /// `Σ_j w_j·x_{b−j}` for the mixed law, by one recursion per component (O(bins)).
@@ -121,7 +112,7 @@ impl Afterpulsing {
     /// `(1+q_0)²v_b + Σ_{j≥1} q_j² v_{b−j} + Σ_j q_j m_{b−j} − Σ_j q_j² m_{b−j}`.
     pub fn variance(&self, mean: &[f64], var: &[f64]) -> Vec<f64> {
         let p = self.probability;
-        let q0: f64 = p * self.shares(1)[0];
+        let q0 = p * self.first_share();
         let from_var = self.convolve_squares(var);
         let q_m = self.convolve(mean);
         let q2_m = self.convolve_squares(mean);

@@ -52,6 +52,13 @@ fn quantize(v: f64, full: f64) -> u64 {
     }
 }
 
+/// Whether a shot's code of cumulants `k` comes within four standard deviations of
+/// either end of the ADC's range `[0, full]` (where clipping leaves the law).
+fn clips(k: &[f64; 4], full: f64) -> bool {
+    let sd = k[1].max(0.0).sqrt();
+    k[0] - 4.0 * sd < -0.5 || k[0] + 4.0 * sd > full + 0.5
+}
+
 /// One standard normal variate (rand_distr's ziggurat).
 fn normal<R: Rng + ?Sized>(rng: &mut R) -> f64 {
     StandardNormal.sample(rng)
@@ -144,13 +151,7 @@ impl Analog {
     /// The recorder of `[instrument.detector]` (its analog keys, defaults where absent) on
     /// bins of `bin_width_s`.
     pub fn from_config(d: &DetectorConfig, bin_width_s: f64) -> Self {
-        let bandwidth_hz = d.bandwidth_hz.unwrap_or(defaults::BANDWIDTH_HZ);
-        let tau_e = if bandwidth_hz > 0.0 {
-            1.0 / (2.0 * std::f64::consts::PI * bandwidth_hz)
-        } else {
-            0.0
-        };
-        Analog {
+        let mut a = Analog {
             gain: d.gain.unwrap_or(defaults::GAIN),
             excess_noise_factor: d
                 .excess_noise_factor
@@ -158,30 +159,31 @@ impl Analog {
             load_resistance_ohm: d
                 .load_resistance_ohm
                 .unwrap_or(defaults::LOAD_RESISTANCE_OHM),
-            bandwidth_hz,
+            bandwidth_hz: d.bandwidth_hz.unwrap_or(defaults::BANDWIDTH_HZ),
             electronic_noise_v: d.electronic_noise_v.unwrap_or(defaults::ELECTRONIC_NOISE_V),
             offset_v: d.offset_v.unwrap_or(defaults::OFFSET_V),
             adc_bits: d.adc_bits.unwrap_or(defaults::ADC_BITS),
             adc_range_v: d.adc_range_v.unwrap_or(defaults::ADC_RANGE_V),
             bin_width_s,
-            low_pass: (tau_e > 0.0).then(|| super::delay::exponential_law(tau_e, bin_width_s)),
+            low_pass: None,
+        };
+        let tau_e = a.time_constant_s();
+        a.low_pass = (tau_e > 0.0).then(|| super::delay::exponential_law(tau_e, bin_width_s));
+        a
+    }
+
+    /// The low-pass's time constant τ_e = 1/(2πB), s (0 without a low-pass).
+    pub fn time_constant_s(&self) -> f64 {
+        if self.bandwidth_hz > 0.0 {
+            1.0 / (2.0 * std::f64::consts::PI * self.bandwidth_hz)
+        } else {
+            0.0
         }
     }
 
     /// The low-pass's first `n` shares `h_j` ([`impulse_response`]).
     pub fn kernel(&self, n: usize) -> Vec<f64> {
-        match self.low_pass {
-            Some((h0, h1, a)) => (0..n)
-                .map(|j| {
-                    if j == 0 {
-                        h0
-                    } else {
-                        h1 * a.powi(j as i32 - 1)
-                    }
-                })
-                .collect(),
-            None => impulse_response(0.0, self.bin_width_s, n),
-        }
+        impulse_response(self.time_constant_s(), self.bin_width_s, n)
     }
 
     /// One ADC code (LSB), V: `range/2^bits`.
@@ -332,21 +334,13 @@ impl Analog {
         let (c, v0) = (self.codes_per_photoelectron(), self.offset_codes());
         let sd = (m * (self.noise_codes().powi(2) + 1.0 / 12.0)).sqrt();
         let full = m * self.full_scale_code() as f64;
-        if self.low_pass.is_none() {
-            // no low-pass: each bin's charge straight to its code, in one pass
-            for (a, &n) in acc.iter_mut().zip(photoelectrons) {
-                let t = self.charge(rng, n as f64);
-                *a += quantize(m * v0 + c * t + sd * normal(rng), full);
-            }
-            return;
-        }
-        let q: Vec<f64> = photoelectrons
-            .iter()
-            .map(|&n| self.charge(rng, n as f64))
-            .collect();
-        let y = self.smear(&q, 1);
-        for (a, t) in acc.iter_mut().zip(&y) {
-            *a += quantize(m * v0 + c * t + sd * normal(rng), full);
+        let (h0, h1, a) = self.low_pass.unwrap_or((1.0, 0.0, 0.0));
+        // one pass: each bin's charge, the low-pass's carry z (as in `record_shot`)
+        let mut z = 0.0;
+        for (acc_b, &n) in acc.iter_mut().zip(photoelectrons) {
+            let q = self.charge(rng, n as f64);
+            *acc_b += quantize(m * v0 + c * (h0 * q + h1 * z) + sd * normal(rng), full);
+            z = q + a * z;
         }
     }
 
@@ -359,12 +353,7 @@ impl Analog {
         let full = self.full_scale_code() as f64;
         self.shot_cumulants(lambda)
             .iter()
-            .map(|k| {
-                let sd = k[1].max(0.0).sqrt();
-                k[0] - self.offset_codes() >= floor
-                    && k[0] - 4.0 * sd >= -0.5
-                    && k[0] + 4.0 * sd <= full + 0.5
-            })
+            .map(|k| k[0] - self.offset_codes() >= floor && !clips(k, full))
             .collect()
     }
 
@@ -387,10 +376,7 @@ impl Analog {
         }
         let full = self.full_scale_code() as f64;
         let cumulants = self.shot_cumulants(lambda);
-        let (bin, k) = cumulants.iter().enumerate().find(|(_, k)| {
-            let sd = k[1].max(0.0).sqrt();
-            k[0] - 4.0 * sd < -0.5 || k[0] + 4.0 * sd > full + 0.5
-        })?;
+        let (bin, k) = cumulants.iter().enumerate().find(|(_, k)| clips(k, full))?;
         Some(format!(
             "lidarsim: warning: analog bin {bin} ({:.2} km) has a mean of {:.1} codes per shot \
              (sd {:.1}) within 4 sd of the ADC's ends (0, {full}): its codes clip, and \

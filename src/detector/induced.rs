@@ -36,31 +36,6 @@ impl SignalInducedNoiseConfig {
         }
     }
 
-    /// `J(x) = ∫₀ˣ S(s) ds`, s.
-    fn integrated_survival(&self, x: f64) -> f64 {
-        if x <= 0.0 {
-            return 0.0;
-        }
-        match *self {
-            SignalInducedNoiseConfig::Exponential {
-                time_constant_s: tau,
-                ..
-            } => -tau * (-x / tau).exp_m1(),
-            SignalInducedNoiseConfig::PowerLaw {
-                time_constant_s: tau,
-                exponent: p,
-                ..
-            } => {
-                let q = 2.0 - p;
-                if q.abs() < 1e-12 {
-                    tau * (x / tau).ln_1p()
-                } else {
-                    tau * ((q * (x / tau).ln_1p()).exp_m1()) / q
-                }
-            }
-        }
-    }
-
     /// The shares `w_j` of a bin's signal in the bins j = 0, 1, … later, for `bins` bins
     /// of `bin_width_s` (module docs).
     pub fn shares(&self, bin_width_s: f64, bins: usize) -> Vec<f64> {
@@ -69,8 +44,12 @@ impl SignalInducedNoiseConfig {
             SignalInducedNoiseConfig::Exponential {
                 time_constant_s, ..
             } => super::delay::exponential_shares(time_constant_s, dt, bins),
-            SignalInducedNoiseConfig::PowerLaw { .. } => {
-                let j_at = |k: usize| self.integrated_survival(k as f64 * dt);
+            SignalInducedNoiseConfig::PowerLaw {
+                time_constant_s,
+                exponent,
+                ..
+            } => {
+                let j_at = |k: usize| power_law_integral(k as f64 * dt, time_constant_s, exponent);
                 let mut w = Vec::with_capacity(bins);
                 if bins > 0 {
                     w.push(1.0 - j_at(1) / dt);
@@ -110,6 +89,19 @@ impl SignalInducedNoiseConfig {
             }
         }
         out
+    }
+}
+
+/// `J(x) = ∫₀ˣ S(s) ds` of the power law `S(t) = (1 + t/τ)^{1−p}`, s.
+fn power_law_integral(x: f64, tau: f64, p: f64) -> f64 {
+    if x <= 0.0 {
+        return 0.0;
+    }
+    let q = 2.0 - p;
+    if q.abs() < 1e-12 {
+        tau * (x / tau).ln_1p()
+    } else {
+        tau * (q * (x / tau).ln_1p()).exp_m1() / q
     }
 }
 

@@ -593,8 +593,9 @@ pub fn recorded_bin_models(
     energy: &PulseEnergy,
 ) -> Vec<BinModel> {
     let rest = e.background + e.dark;
-    let (mean, var) = dead.recorded_moments(&e.photon_signal(), rest, energy);
-    e.photon_signal()
+    let signal = e.photon_signal();
+    let (mean, var) = dead.recorded_moments(&signal, rest, energy);
+    signal
         .iter()
         .zip(mean.iter().zip(&var))
         .map(|(&s, (&m, &v))| BinModel::recorded(s, rest, m, v, shots as f64))
@@ -614,11 +615,12 @@ pub fn analog_bin_models(
     let m = shots as f64;
     let rest = e.background + e.dark;
     let c = analog.codes_per_photoelectron();
-    let smeared_signal = analog.smear(&e.photon_signal(), 1);
+    let signal = e.photon_signal();
+    let smeared_signal = analog.smear(&signal, 1);
     analog
         .shot_cumulants(&e.total_per_shot())
         .iter()
-        .zip(e.photon_signal().iter())
+        .zip(signal.iter())
         .zip(&smeared_signal)
         .map(|((k, &s), &hs)| {
             let jitter_var = (c * jitter * hs).powi(2);
