@@ -52,6 +52,43 @@ pub struct ScenarioConfig {
     /// Monte Carlo settings.
     #[serde(default)]
     pub simulation: SimulationConfig,
+    /// How multiple scattering enters the signal (`src/atmosphere/multiple_scattering.rs`).
+    #[serde(default)]
+    pub multiple_scattering: MultipleScatteringConfig,
+}
+
+/// `[multiple_scattering]`: the model of the multiply scattered return (docs/model.md §4j).
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MultipleScatteringConfig {
+    /// Which model; absent = `constant` (each layer's η on its optical depth).
+    #[serde(default)]
+    pub model: MultipleScatteringModel,
+}
+
+/// The models of `multiple_scattering.model`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MultipleScatteringModel {
+    /// A constant factor η per layer on its optical depth (Platt); the paper's model.
+    #[default]
+    Constant,
+    /// Quasi-small-angle forward scattering: Hogan's (2008) photon variance–covariance
+    /// method, which depends on the field of view, the beam and the particles' size.
+    SmallAngle,
+    /// The small-angle part plus the wide-angle diffuse part (Hogan & Battaglia 2008).
+    SmallAndWideAngle,
+}
+
+/// A cloud's thermodynamic phase: sets the defaults of its particles' size and
+/// asymmetry factor for the multiple-scattering models.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CloudPhase {
+    /// Liquid droplets (spherical: no depolarization when singly scattered).
+    Water,
+    /// Ice crystals.
+    Ice,
 }
 
 /// Instrument parameters (paper Eq. 2–3 symbols in brackets).
@@ -80,6 +117,10 @@ pub struct InstrumentConfig {
     pub quantum_efficiency: f64,
     /// Receiver full field-of-view angle θ, rad.
     pub fov_rad: f64,
+    /// The laser beam's divergence as the 1/e **half**-width of its Gaussian angular
+    /// profile, rad (Hogan 2008's ρ_t); what the multiple-scattering models need.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub beam_divergence_rad: Option<f64>,
     /// Filter width Δλ, nm.
     pub filter_width_nm: f64,
     /// Detector dark-count rate, counts s⁻¹.
@@ -480,6 +521,10 @@ pub struct AerosolConfig {
     /// Linear depolarization ratio δ of the aerosol backscatter.
     #[serde(default)]
     pub depolarization: f64,
+    /// Effective radius of the aerosol particles, µm (the multiple-scattering models);
+    /// absent = 0.5.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub effective_radius_um: Option<f64>,
 }
 
 /// Layer species.
@@ -509,9 +554,23 @@ pub struct LayerConfig {
     /// Linear depolarization ratio δ.
     #[serde(default)]
     pub depolarization: f64,
-    /// Multiple-scattering factor η_ms multiplying the layer's optical depth (1 = single scattering).
+    /// Multiple-scattering factor η_ms multiplying the layer's optical depth (1 = single
+    /// scattering): the `constant` model's; the other models compute the multiply
+    /// scattered return instead.
     #[serde(default = "one")]
     pub multiple_scattering: f64,
+    /// A cloud's phase (water or ice); absent = water below a depolarization of 0.1,
+    /// ice from 0.1 (`src/atmosphere/multiple_scattering.rs`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phase: Option<CloudPhase>,
+    /// Effective radius of the layer's particles, µm: sets the width of their forward
+    /// diffraction lobe; absent = the kind's and phase's default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub effective_radius_um: Option<f64>,
+    /// Asymmetry factor g of the particles' phase function (wide-angle scattering);
+    /// absent = 0.85 for droplets, 0.75 for ice, 0.7 for aerosol.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub asymmetry_factor: Option<f64>,
     /// Fraction of the track the layer covers (broken cloud, docs/model.md §4f); absent = 1.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cloud_fraction: Option<f64>,
@@ -1069,6 +1128,8 @@ pub struct OwnerChecks {
     pub orbit: OwnerCheck,
     /// `[simulation]` (the sampler's tolerance).
     pub simulation: OwnerCheck,
+    /// `[multiple_scattering]` and the particles' sizes (the multiple-scattering model).
+    pub multiple_scattering: OwnerCheck,
 }
 
 impl ScenarioConfig {
@@ -1300,6 +1361,7 @@ impl ScenarioConfig {
         {
             return Err(c.fail("atmosphere.layers", "at most 3 broken layers"));
         }
+        (owners.multiple_scattering)(self, &c)?;
         (owners.simulation)(self, &c)
     }
 

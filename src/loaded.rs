@@ -106,6 +106,7 @@ const OWNERS: OwnerChecks = OwnerChecks {
     water_vapour: crate::atmosphere::water_vapour::validate,
     orbit: crate::scene::orbit::validate,
     simulation: |config, c| crate::sampling::approx::validate(&config.simulation, c),
+    multiple_scattering: crate::atmosphere::multiple_scattering::validate,
 };
 
 /// Checks a whole config, `file` naming it in errors: the config's own checks

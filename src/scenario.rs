@@ -3,13 +3,14 @@
 
 use std::path::Path;
 
+use crate::atmosphere::multiple_scattering::Footprint;
 use crate::atmosphere::{Atmosphere, MolecularState, Optics};
-use crate::config;
+use crate::config::{self, MultipleScatteringModel};
 use crate::error::{Error, Result};
 use crate::geometry::{Geometry, Overlap};
 use crate::instrument::Instrument;
 use crate::loaded::{self, LoadedConfig};
-use crate::signal::BeamPath;
+use crate::signal::{BeamPath, BinMultipleScattering};
 use crate::snr;
 
 /// Memory the deterministic model holds per range bin, bytes: the expected profile and
@@ -152,6 +153,10 @@ pub struct ExpectedProfile {
     /// Expected afterpulses per shot per bin (`src/detector/afterpulse.rs`), included in
     /// `recorded`; empty when the detector has none.
     pub afterpulse: Vec<f64>,
+    /// The small-angle multiple scattering of each bin (`multiple_scattering.model =
+    /// "small_angle"`), already in `signal` and `attenuated_backscatter`; empty in the
+    /// `constant` model.
+    pub multiple_scattering: Vec<BinMultipleScattering>,
     /// Signal-free bins used to estimate the background (0 = none available).
     pub background_bins: usize,
     /// Their indices: bins of the window lying wholly above the atmosphere, nearest the
@@ -163,6 +168,17 @@ impl ExpectedProfile {
     /// Number of bins.
     pub fn n_bins(&self) -> usize {
         self.signal.len()
+    }
+
+    /// Bin `i`'s small-angle multiple scattering (ratio 1 in the `constant` model).
+    pub fn multiple_scattering_at(&self, i: usize) -> BinMultipleScattering {
+        self.multiple_scattering
+            .get(i)
+            .copied()
+            .unwrap_or(BinMultipleScattering {
+                ratio: 1.0,
+                particle_optical_depth: 0.0,
+            })
     }
 
     /// Expected total counts per shot in each bin, `λ_i = λ_sig,i + λ_bkg + λ_dc` (Eq. 1).
@@ -268,6 +284,18 @@ impl Scenario {
             .surface
             .as_ref()
             .map(crate::surface::Surface::from_config);
+        if cfg.multiple_scattering.model != MultipleScatteringModel::Constant
+            && atmosphere.raman.is_some()
+        {
+            return Err(Error::config(
+                &file,
+                "multiple_scattering.model",
+                format!(
+                    "models the elastic return; channel {channel_name} is a Raman channel: use \
+                     \"constant\" (each layer's multiple_scattering factor)"
+                ),
+            ));
+        }
         let path = BeamPath::new(&atmosphere, &geometry, overlap, surface);
         let sc = Scenario {
             loaded,
@@ -437,6 +465,7 @@ impl Scenario {
             e.attenuated_backscatter
                 .push(if weight > 0.0 { integral / weight } else { 0.0 });
         }
+        self.add_multiple_scattering(&mut e);
         let detector = self.loaded.config.instrument.detector.as_ref();
         if let Some(sin) = detector.and_then(|d| d.signal_induced_noise.as_ref()) {
             let power_law = matches!(
@@ -480,6 +509,35 @@ impl Scenario {
         e.background_bin_indices = self.background_bin_indices();
         e.background_bins = e.background_bin_indices.len();
         Ok(e)
+    }
+
+    /// Multiplies each bin's signal and attenuated backscatter by its small-angle
+    /// multiple-scattering ratio ([`BeamPath::small_angle_bins`]) when the config asks
+    /// for that model.
+    fn add_multiple_scattering(&self, e: &mut ExpectedProfile) {
+        let cfg = &self.loaded.config;
+        if cfg.multiple_scattering.model == MultipleScatteringModel::Constant {
+            return;
+        }
+        let footprint = Footprint {
+            divergence_rad: cfg.instrument.beam_divergence_rad.unwrap_or(0.0),
+            fov_half_angle_rad: cfg.instrument.fov_rad / 2.0,
+        };
+        let g = &self.geometry;
+        let bins: Vec<(f64, f64)> = (g.pretrigger_bins..g.n_bins)
+            .map(|i| g.bin_range_bounds(i))
+            .collect();
+        let none = BinMultipleScattering {
+            ratio: 1.0,
+            particle_optical_depth: 0.0,
+        };
+        e.multiple_scattering = vec![none; g.pretrigger_bins];
+        e.multiple_scattering
+            .extend(self.path.small_angle_bins(footprint, &bins));
+        for (i, m) in e.multiple_scattering.iter().enumerate() {
+            e.signal[i] *= m.ratio;
+            e.attenuated_backscatter[i] *= m.ratio;
+        }
     }
 
     /// A pre-trigger bin at (negative) range `r_m`: recorded before the pulse leaves, it

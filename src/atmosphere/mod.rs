@@ -4,6 +4,7 @@
 
 pub mod aerosol_profile;
 pub mod cabannes_line;
+pub mod multiple_scattering;
 pub mod ozone;
 pub mod profile_file;
 pub mod raman;
@@ -12,7 +13,8 @@ pub mod us76;
 pub mod water_vapour;
 
 use crate::config::{
-    Channel, ExtinctionSource, LayerKind, MolecularLine, MolecularModel, ScenarioConfig,
+    Channel, ExtinctionSource, LayerKind, MolecularLine, MolecularModel, MultipleScatteringModel,
+    ScenarioConfig,
 };
 use crate::constants::BOLTZMANN_J_PER_K;
 use crate::error::Result;
@@ -214,6 +216,8 @@ pub struct BackgroundAerosol {
     pub lidar_ratio_sr: f64,
     /// Linear depolarization ratio.
     pub depolarization: f64,
+    /// Its particles' forward-lobe 1/e half-width Θ, rad (`multiple_scattering`).
+    pub forward_lobe_rad: f64,
 }
 
 impl BackgroundAerosol {
@@ -238,8 +242,11 @@ pub struct Layer {
     pub lidar_ratio_sr: f64,
     /// Linear depolarization ratio.
     pub depolarization: f64,
-    /// Multiple-scattering factor η_ms on the layer's optical depth.
+    /// Multiple-scattering factor η_ms on the layer's optical depth (1 but in the
+    /// `constant` model).
     pub multiple_scattering: f64,
+    /// Its particles' forward-lobe 1/e half-width Θ, rad (`multiple_scattering`).
+    pub forward_lobe_rad: f64,
 }
 
 impl Layer {
@@ -275,6 +282,12 @@ pub struct Optics {
     pub ms_alpha_cld: f64,
     /// Extinction that attenuates the signal, `α_mol + α_o3 + Σ η·α`, m⁻¹.
     pub alpha_effective: f64,
+    /// Extinction of the particles whose forward lobe is narrow enough for the
+    /// small-angle model (`multiple_scattering::in_small_angle_model`), m⁻¹.
+    pub alpha_lobe: f64,
+    /// The same weighted by each species' squared forward-lobe width, `Σ α·Θ²`,
+    /// m⁻¹ rad².
+    pub alpha_theta2: f64,
     /// Cross-polarized part of the aerosol backscatter, `Σ β·δ/(1+δ)`, m⁻¹ sr⁻¹.
     pub beta_perp_aer: f64,
     /// Cross-polarized part of the cloud backscatter, m⁻¹ sr⁻¹.
@@ -286,6 +299,17 @@ pub struct Optics {
     /// The share of the Cabannes line the channel's filter passes here, `f_m`: 1 but in
     /// an HSRL molecular channel, where a filter table makes it follow the temperature.
     pub molecular_transmission: f64,
+}
+
+impl Optics {
+    /// Adds particles of extinction `alpha` and forward-lobe half-width `theta_rad` to
+    /// the small-angle model's sums, if their lobe is narrow enough for it.
+    fn add_forward_lobe(&mut self, alpha: f64, theta_rad: f64) {
+        if multiple_scattering::in_small_angle_model(theta_rad) {
+            self.alpha_lobe += alpha;
+            self.alpha_theta2 += alpha * theta_rad * theta_rad;
+        }
+    }
 }
 
 /// `a/b`, or `absent` where `b` is 0 (the species is not there).
@@ -598,6 +622,7 @@ impl Atmosphere {
             let beta = alpha / a.lidar_ratio_sr;
             o.alpha_aer += alpha;
             o.ms_alpha_aer += alpha;
+            o.add_forward_lobe(alpha, a.forward_lobe_rad);
             o.beta_aer += beta;
             o.beta_perp_aer += perpendicular(beta, a.depolarization);
             o.beta_channel += self.lines.particle
@@ -625,6 +650,7 @@ impl Atmosphere {
             *ms += alpha * l.multiple_scattering;
             *b += beta;
             *perp += perpendicular(beta, l.depolarization);
+            o.add_forward_lobe(alpha, l.forward_lobe_rad);
             o.beta_channel += self.lines.particle
                 * beta
                 * self.polarization.share(self.channel, l.depolarization);
@@ -763,6 +789,11 @@ fn background_aerosol(cfg: &ScenarioConfig) -> Option<BackgroundAerosol> {
         surface_extinction_per_m,
         lidar_ratio_sr: a.lidar_ratio_sr,
         depolarization: a.depolarization,
+        forward_lobe_rad: multiple_scattering::forward_lobe_half_width_rad(
+            wl,
+            a.effective_radius_um
+                .unwrap_or(multiple_scattering::DEFAULT_AEROSOL_RADIUS_UM),
+        ),
     })
 }
 
@@ -780,7 +811,15 @@ fn layers(cfg: &ScenarioConfig) -> Vec<Layer> {
                 extinction_per_m: extinction_per_km * 1e-3,
                 lidar_ratio_sr,
                 depolarization: l.depolarization,
-                multiple_scattering: l.multiple_scattering,
+                // the other models compute the multiply scattered return instead
+                multiple_scattering: match cfg.multiple_scattering.model {
+                    MultipleScatteringModel::Constant => l.multiple_scattering,
+                    _ => 1.0,
+                },
+                forward_lobe_rad: multiple_scattering::forward_lobe_half_width_rad(
+                    wl,
+                    multiple_scattering::effective_radius_um(l),
+                ),
             }
         })
         .collect()

@@ -14,7 +14,7 @@ pub(crate) type Truth = fn(&ExpectedProfile, usize) -> f64;
 /// The point truth at the bin centre by species (model.md §8), each (column, channel,
 /// bin): name, long name, units, value. The onboard product averages the same table over
 /// each region bin's native bins (`crate::onboard::truth`).
-pub(crate) const COLUMN_TRUTH: [(&str, &str, &str, Truth); 17] = [
+pub(crate) const COLUMN_TRUTH: [(&str, &str, &str, Truth); 20] = [
     (
         "alpha_mol",
         "molecular (Rayleigh) extinction coefficient at the bin centre",
@@ -116,6 +116,24 @@ pub(crate) const COLUMN_TRUTH: [(&str, &str, &str, Truth); 17] = [
         "two-way transmission to the bin centre: exp(-2 integral of (alpha_mol + alpha_o3 + ms_factor_aer alpha_aer + ms_factor_cld alpha_cld))",
         "1",
         |e, i| e.t2[i],
+    ),
+    (
+        "single_scattering_attenuated_backscatter",
+        "bin-averaged attenuated backscatter of single scattering alone (equal to attenuated_backscatter in the constant multiple-scattering model)",
+        "m-1 sr-1",
+        |e, i| e.attenuated_backscatter[i] / e.multiple_scattering_at(i).ratio,
+    ),
+    (
+        "multiple_scattering_ratio",
+        "apparent over single-scattering signal of the bin (small-angle multiple scattering; 1 in the constant model)",
+        "1",
+        |e, i| e.multiple_scattering_at(i).ratio,
+    ),
+    (
+        "ms_factor_effective",
+        "effective multiple-scattering factor eta of the particle optical depth to the bin centre: multiple_scattering_ratio = exp(2 (1 - eta) tau_particle); 1 without particles above and in the constant model",
+        "1",
+        |e, i| e.multiple_scattering_at(i).effective_factor(),
     ),
 ];
 
