@@ -64,6 +64,10 @@ pub struct MultipleScatteringConfig {
     /// Which model; absent = `constant` (each layer's η on its optical depth).
     #[serde(default)]
     pub model: MultipleScatteringModel,
+    /// Particles whose forward lobe is wider than this, rad, only attenuate in the
+    /// small-angle model; absent = 0.1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wide_angle_cutoff_rad: Option<f64>,
 }
 
 /// The models of `multiple_scattering.model`.

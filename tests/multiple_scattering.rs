@@ -7,6 +7,7 @@
 mod common;
 
 use common::scenario;
+use lidarsim::atmosphere::multiple_scattering::{Footprint, Step, small_angle_ratios};
 use lidarsim::scenario::ExpectedProfile;
 
 const CIRRUS: &str = "ground/cirrus_small_angle.toml";
@@ -140,4 +141,205 @@ fn single_scattering_truth_is_the_constant_model_without_eta() {
         enhanced += usize::from(r > 1.01);
     }
     assert!(enhanced > 100, "{enhanced} bins enhanced by over 1 %");
+}
+
+/// One of Hogan's example inputs as this model's steps: gates of `width_m` from
+/// `start_range_m` on (the instrument's side of the first gate), each gate's particle
+/// extinction (m⁻¹), equivalent-area radius (m) and air extinction (m⁻¹).
+fn steps(wavelength_m: f64, width_m: f64, gates: &[(f64, f64, f64)]) -> Vec<Step> {
+    gates
+        .iter()
+        .map(|&(alpha, radius_m, alpha_air)| {
+            let theta = wavelength_m / (std::f64::consts::PI * radius_m);
+            Step {
+                width_m,
+                alpha_particle_per_m: alpha,
+                alpha_theta2_per_m: alpha * theta * theta,
+                alpha_air_per_m: alpha_air,
+            }
+        })
+        .collect()
+}
+
+/// The air of Hogan's examples: `1.34041e-5·e^{−z/8000 m}` m⁻¹.
+fn air(z_m: f64) -> f64 {
+    1.34041e-5 * (-z_m / 8000.0).exp()
+}
+
+/// Each gate's ratio within `tol` of the reference's.
+fn assert_close(ours: &[f64], reference: &[f64], tol: f64, case: &str) {
+    assert_eq!(ours.len(), reference.len(), "{case}");
+    for (k, (o, r)) in ours.iter().zip(reference).enumerate() {
+        assert!(
+            (o / r - 1.0).abs() < tol,
+            "{case}, gate {k}: {o} against {r}"
+        );
+    }
+}
+
+/// Reference ratios (apparent over single-scattering backscatter of each gate) from
+/// Hogan's own implementation, `multiscatter` 1.2.10 (LGPL; built outside this
+/// repository from the copy in github.com/mgrecu35/gmp_combined,
+/// `Code/multiscatter-1.2.10`), run as `multiscatter -algorithms fast none` and
+/// `-algorithms single none` on the inputs described in each test, which are those of
+/// its `examples/` files (`validation/reports/multiple_scattering.md`). Printed to six
+/// digits: 1e-5 is the comparison's resolution; a 1 % change of any coefficient of the
+/// moment equations moves some gate by more.
+const PRINTED: f64 = 1e-5;
+
+/// Hogan (2008) Fig. 8's input (`examples/hogan2008fig8.in`): CALIPSO-like at 700 km,
+/// beam 5 µrad, field of view 71.429 µrad (1/e and top-hat half-widths), 532 nm, 200 m
+/// gates from 8 km down: an ice cloud of 6e-4 m⁻¹ and 50 µm from 7 to 5 km and a water
+/// cloud of 3e-3 m⁻¹ and 10 µm from 2 to 1.2 km (gate centres).
+#[test]
+fn hogan_2008_figure_8_case() {
+    let gates: Vec<(f64, f64, f64)> = (0..41)
+        .map(|k| {
+            let z = 8000.0 - 200.0 * k as f64;
+            let (alpha, radius) = match z {
+                z if (5000.0..=7000.0).contains(&z) => (6e-4, 50e-6),
+                z if (1200.0..=2000.0).contains(&z) => (3e-3, 10e-6),
+                _ => (0.0, 100e-6),
+            };
+            (alpha, radius, air(z))
+        })
+        .collect();
+    let fp = Footprint {
+        divergence_rad: 5e-6,
+        fov_half_angle_rad: 7.1429e-6,
+    };
+    let ours = small_angle_ratios(fp, 700e3 - 8000.0 - 100.0, &steps(532e-9, 200.0, &gates));
+    let reference = [
+        1.0, 1.0, 1.0, 1.0, 1.0, 1.05966, 1.19257, 1.33657, 1.48759, 1.64001, 1.78729, 1.92317,
+        2.0218, 2.08452, 2.17299, 2.29713, 2.2859, 2.15062, 2.03768, 1.93152, 1.83332, 1.74408,
+        1.66412, 1.59324, 1.53084, 1.47612, 1.42822, 1.38631, 1.3496, 1.31739, 1.62865, 2.42884,
+        2.97638, 3.6048, 4.51116, 4.40105, 3.32714, 2.6869, 2.27092, 1.98772, 1.78742,
+    ];
+    assert_close(&ours, &reference, PRINTED, "Hogan (2008) Fig. 8");
+}
+
+/// `examples/ground_based_cirrus_example.in`: a zenith lidar 100 m below the first
+/// gate, beam 0.5 mrad, field of view 0.75 mrad, 532 nm, 200 m gates from 0 to 8 km;
+/// cirrus of 100 µm particles, 2e-3 m⁻¹ from 3.2 to 4 km, 5e-4 to 5 km, 1e-4 to 6 km,
+/// 5e-4 to 7 km.
+#[test]
+fn ground_based_cirrus_case() {
+    let gates: Vec<(f64, f64, f64)> = (0..41)
+        .map(|k| {
+            let z = 200.0 * k as f64;
+            let alpha = match z {
+                z if (3200.0..=4000.0).contains(&z) => 2e-3,
+                z if (4200.0..=5000.0).contains(&z) => 5e-4,
+                z if (5200.0..=6000.0).contains(&z) => 1e-4,
+                z if (6200.0..=7000.0).contains(&z) => 5e-4,
+                _ => 0.0,
+            };
+            (alpha, 100e-6, air(z))
+        })
+        .collect();
+    let fp = Footprint {
+        divergence_rad: 5e-4,
+        fov_half_angle_rad: 7.5e-4,
+    };
+    let ours = small_angle_ratios(fp, 0.0, &steps(532e-9, 200.0, &gates));
+    let reference = [
+        1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.19645,
+        1.77632, 2.61199, 3.7883, 5.40623, 6.64662, 6.8272, 6.86397, 6.79871, 6.93988, 7.03277,
+        6.87664, 6.7388, 6.60484, 6.47651, 6.61229, 7.03022, 7.46605, 7.93519, 8.4405, 8.5508,
+        8.24795, 7.9771, 7.72502, 7.49054,
+    ];
+    assert_close(&ours, &reference, PRINTED, "ground-based cirrus");
+}
+
+/// The I3RC lidar case of `examples/i3rc_lidar_exp4.in` (Intercomparison of 3D
+/// Radiation Codes, phase 3; Hogan 2008 §5): 1,000 km away, beam 2.5 nrad, field of
+/// view 2.5 mrad (a 2.5 km footprint), 532 nm, 15 m gates of a cloud of 0.04 m⁻¹ and
+/// 1.22517 µm, no air: the first 33 gates, to an optical depth of 19.8.
+#[test]
+fn i3rc_lidar_case() {
+    let gates = vec![(0.04, 1.22517e-6, 0.0); 33];
+    let fp = Footprint {
+        divergence_rad: 2.5e-9,
+        fov_half_angle_rad: 2.5e-3,
+    };
+    let ours = small_angle_ratios(fp, 1e6, &steps(532e-9, 15.0, &gates));
+    let reference = [
+        1.29131, 2.35292, 4.28731, 7.81199, 14.2344, 25.9367, 47.2598, 86.1129, 156.908, 285.905,
+        520.953, 949.238, 1729.62, 3151.58, 5742.55, 10463.6, 19065.9, 34740.4, 63301.2, 115342.0,
+        210167.0, 382950.0, 697780.0, 1.27144e6, 2.31671e6, 4.22132e6, 7.69175e6, 1.40153e7,
+        2.55375e7, 4.65324e7, 8.47875e7, 1.54493e8, 2.81505e8,
+    ];
+    assert_close(&ours, &reference, PRINTED, "I3RC");
+}
+
+/// `validate` on the shipped small-angle preset: the counts every sampler draws follow
+/// the expectation with multiple scattering in it (false-alarm rate: `validate`'s own,
+/// fixed seed).
+#[test]
+fn validate_is_consistent_on_the_small_angle_preset() {
+    let dir = std::env::temp_dir().join(format!("lidarsim-ms-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    common::h5::validate_preset_consistent(
+        &dir,
+        &common::config_path(CIRRUS),
+        "acquisition.accumulation_time_s=0.5",
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// What the model needs and does not take is refused in one line naming the key.
+#[test]
+fn refusals_name_the_key() {
+    let load = |overrides: &[&str]| {
+        let ov: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+        lidarsim::scenario::Scenario::load(&common::config_path(CIRRUS), &ov)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default()
+    };
+    let cases: [(&[&str], &str); 5] = [
+        (
+            &["instrument.beam_divergence_rad=0"],
+            "instrument.beam_divergence_rad",
+        ),
+        (
+            &["multiple_scattering.model=\"small_and_wide_angle\""],
+            "not built yet",
+        ),
+        (
+            &["multiple_scattering.wide_angle_cutoff_rad=-1"],
+            "multiple_scattering.wide_angle_cutoff_rad",
+        ),
+        (
+            &["atmosphere.aerosol.effective_radius_um=1e9"],
+            "atmosphere.aerosol.effective_radius_um",
+        ),
+        (
+            &[
+                "atmosphere.layers=[{ kind = \"aerosol\", phase = \"ice\", base_km = 1.0, \
+               top_km = 2.0, extinction_per_km = 0.1, lidar_ratio_sr = 50.0 }]",
+            ],
+            "an aerosol layer has none",
+        ),
+    ];
+    for (overrides, needle) in cases {
+        let e = load(overrides);
+        assert!(e.contains(needle), "{overrides:?}: {e}");
+        assert_eq!(e.lines().count(), 1, "{e}");
+    }
+    // a config without the beam's divergence: which key to set
+    let text = std::fs::read_to_string(common::config_path(CIRRUS)).unwrap();
+    let without: String = text
+        .lines()
+        .filter(|l| !l.starts_with("beam_divergence_rad"))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let e = lidarsim::loaded::load_str(&without, std::path::Path::new("c.toml"), &[])
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+    assert!(
+        e.contains("instrument.beam_divergence_rad") && e.contains("small_angle"),
+        "{e}"
+    );
 }

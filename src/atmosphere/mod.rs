@@ -283,7 +283,7 @@ pub struct Optics {
     /// Extinction that attenuates the signal, `α_mol + α_o3 + Σ η·α`, m⁻¹.
     pub alpha_effective: f64,
     /// Extinction of the particles whose forward lobe is narrow enough for the
-    /// small-angle model (`multiple_scattering::in_small_angle_model`), m⁻¹.
+    /// small-angle model (`multiple_scattering.wide_angle_cutoff_rad`), m⁻¹.
     pub alpha_lobe: f64,
     /// The same weighted by each species' squared forward-lobe width, `Σ α·Θ²`,
     /// m⁻¹ rad².
@@ -303,9 +303,9 @@ pub struct Optics {
 
 impl Optics {
     /// Adds particles of extinction `alpha` and forward-lobe half-width `theta_rad` to
-    /// the small-angle model's sums, if their lobe is narrow enough for it.
-    fn add_forward_lobe(&mut self, alpha: f64, theta_rad: f64) {
-        if multiple_scattering::in_small_angle_model(theta_rad) {
+    /// the small-angle model's sums, if their lobe is not wider than `cutoff_rad`.
+    fn add_forward_lobe(&mut self, alpha: f64, theta_rad: f64, cutoff_rad: f64) {
+        if theta_rad <= cutoff_rad {
             self.alpha_lobe += alpha;
             self.alpha_theta2 += alpha * theta_rad * theta_rad;
         }
@@ -389,6 +389,9 @@ pub struct Atmosphere {
     pub aerosol: Option<BackgroundAerosol>,
     /// Layers, overlapping ones adding.
     pub layers: Vec<Layer>,
+    /// Particles with a wider forward lobe only attenuate in the small-angle
+    /// multiple-scattering model, rad.
+    pub wide_angle_cutoff_rad: f64,
     /// Vertical resolution of the piecewise representation, m.
     pub grid_m: f64,
     /// Receiver channel (weights each species' backscatter by its depolarization).
@@ -490,6 +493,10 @@ impl Atmosphere {
             molecules,
             aerosol: background_aerosol(cfg),
             layers: layers(cfg),
+            wide_angle_cutoff_rad: cfg
+                .multiple_scattering
+                .wide_angle_cutoff_rad
+                .unwrap_or(multiple_scattering::DEFAULT_WIDE_ANGLE_CUTOFF_RAD),
             grid_m: m.grid_m,
             channel: cfg.instrument.channel,
             polarization: PolarizationOptics::from_config(&cfg.instrument),
@@ -622,7 +629,7 @@ impl Atmosphere {
             let beta = alpha / a.lidar_ratio_sr;
             o.alpha_aer += alpha;
             o.ms_alpha_aer += alpha;
-            o.add_forward_lobe(alpha, a.forward_lobe_rad);
+            o.add_forward_lobe(alpha, a.forward_lobe_rad, self.wide_angle_cutoff_rad);
             o.beta_aer += beta;
             o.beta_perp_aer += perpendicular(beta, a.depolarization);
             o.beta_channel += self.lines.particle
@@ -650,7 +657,7 @@ impl Atmosphere {
             *ms += alpha * l.multiple_scattering;
             *b += beta;
             *perp += perpendicular(beta, l.depolarization);
-            o.add_forward_lobe(alpha, l.forward_lobe_rad);
+            o.add_forward_lobe(alpha, l.forward_lobe_rad, self.wide_angle_cutoff_rad);
             o.beta_channel += self.lines.particle
                 * beta
                 * self.polarization.share(self.channel, l.depolarization);

@@ -64,16 +64,12 @@ pub const DEFAULT_AEROSOL_RADIUS_UM: f64 = 0.5;
 /// droplets depolarize nothing when singly scattered; ice crystals 0.2–0.5).
 pub const ICE_DEPOLARIZATION: f64 = 0.1;
 
-/// The widest forward lobe the small-angle model takes, rad: particles with a wider one
-/// (effective radius below `λ/(0.1π)`, 1.7 µm at 532 nm) scatter out of any lidar's
-/// field of view and outside the small-angle approximation; their extinction only
-/// attenuates, as the air's does.
-pub const MAX_LOBE_HALF_WIDTH_RAD: f64 = 0.1;
-
-/// Whether particles of forward-lobe half-width `theta_rad` enter the small-angle model.
-pub fn in_small_angle_model(theta_rad: f64) -> bool {
-    theta_rad <= MAX_LOBE_HALF_WIDTH_RAD
-}
+/// The default of `multiple_scattering.wide_angle_cutoff_rad`, rad: particles with a
+/// wider forward lobe (effective radius below `λ/(0.1π)`, 1.7 µm at 532 nm: the
+/// background aerosol) scatter out of any lidar's field of view and outside the
+/// small-angle approximation; their extinction only attenuates, as the air's does.
+/// Hogan suggests the same cutoff for aerosol (`multiscatter -wide-angle-cutoff 0.1`).
+pub const DEFAULT_WIDE_ANGLE_CUTOFF_RAD: f64 = 0.1;
 
 /// Steps no thicker than this two-way optical depth: `1 + M` is taken exponential within
 /// a step, which holds to < 1e-3 here (`tests/multiple_scattering.rs`).
@@ -137,6 +133,9 @@ pub fn validate(config: &ScenarioConfig, c: &Checker) -> Result<()> {
         .map(|(n, l)| (format!("atmosphere.layers[{n}]."), l));
     for (key, l) in top_layers.chain(segment_layers) {
         validate_layer(c, &key, l)?;
+    }
+    if let Some(cut) = config.multiple_scattering.wide_angle_cutoff_rad {
+        c.positive("multiple_scattering.wide_angle_cutoff_rad", cut, 1.0)?;
     }
     match config.multiple_scattering.model {
         MultipleScatteringModel::Constant => Ok(()),
@@ -219,7 +218,7 @@ impl Population {
     }
 
     /// The energy-weighted difference `self − other` (the photons in one and not in the
-    /// other); `None` where it holds no energy.
+    /// other); `None` where it holds (almost) no energy.
     fn minus(&self, other: &Population) -> Option<Population> {
         let energy = self.energy - other.energy;
         (energy > 1e-12 * self.energy).then(|| Population {
@@ -293,15 +292,18 @@ pub fn small_angle_ratios(footprint: Footprint, start_range_m: f64, steps: &[Ste
         let w_max = range * range * rho_r2;
         let mut m = 0.0;
         if let Some(mut narrow) = reduced.minus(&unscattered) {
+            // the wide photons before this step's cut: those cut now join them from the
+            // next step on, as Hogan's published implementation counts them
+            let wide_energy = total.energy - reduced.energy;
             if narrow.width2 > w_max {
                 narrow.cut_to(w_max);
                 reduced = unscattered.plus(&narrow);
             }
-            let seen = |p: &Population| -(-w_max / p.width2).exp_m1() * p.energy;
-            m = seen(&narrow);
-            if let Some(mut wide) = total.minus(&reduced) {
-                wide.width2 = wide.width2.max(narrow.width2);
-                m += seen(&wide);
+            let seen = |energy: f64, width2: f64| -(-w_max / width2).exp_m1() * energy;
+            m = seen(narrow.energy, narrow.width2);
+            if wide_energy > 0.0 {
+                let moment = total.energy * total.width2 - reduced.energy * reduced.width2;
+                m += seen(wide_energy, (moment / wide_energy).max(narrow.width2));
             }
             m /= unscattered_seen;
         }
