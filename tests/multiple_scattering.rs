@@ -189,7 +189,7 @@ const PRINTED: f64 = 1e-5;
 
 /// Hogan (2008) Fig. 8's input (`examples/hogan2008fig8.in`): CALIPSO-like at 700 km,
 /// beam 5 µrad, field of view 71.429 µrad (1/e and top-hat half-widths), 532 nm, 200 m
-/// gates from 8 km down: an ice cloud of 6e-4 m⁻¹ and 50 µm from 7 to 5 km and a water
+/// gates from 8 km down: an ice cloud of 6e-4 m⁻¹ and 50 µm from 7 to 4.2 km and a water
 /// cloud of 3e-3 m⁻¹ and 10 µm from 2 to 1.2 km (gate centres).
 #[test]
 fn hogan_2008_figure_8_case() {
@@ -197,7 +197,7 @@ fn hogan_2008_figure_8_case() {
         .map(|k| {
             let z = 8000.0 - 200.0 * k as f64;
             let (alpha, radius) = match z {
-                z if (5000.0..=7000.0).contains(&z) => (6e-4, 50e-6),
+                z if (4200.0..=7000.0).contains(&z) => (6e-4, 50e-6),
                 z if (1200.0..=2000.0).contains(&z) => (3e-3, 10e-6),
                 _ => (0.0, 100e-6),
             };
@@ -211,9 +211,9 @@ fn hogan_2008_figure_8_case() {
     let ours = small_angle_ratios(fp, 700e3 - 8000.0 - 100.0, &steps(532e-9, 200.0, &gates));
     let reference = [
         1.0, 1.0, 1.0, 1.0, 1.0, 1.05966, 1.19257, 1.33657, 1.48759, 1.64001, 1.78729, 1.92317,
-        2.0218, 2.08452, 2.17299, 2.29713, 2.2859, 2.15062, 2.03768, 1.93152, 1.83332, 1.74408,
-        1.66412, 1.59324, 1.53084, 1.47612, 1.42822, 1.38631, 1.3496, 1.31739, 1.62865, 2.42884,
-        2.97638, 3.6048, 4.51116, 4.40105, 3.32714, 2.6869, 2.27092, 1.98772, 1.78742,
+        2.0218, 2.08452, 2.17299, 2.29713, 2.42396, 2.54695, 2.66423, 2.77535, 2.71694, 2.51284,
+        2.34017, 2.18646, 2.05094, 1.93237, 1.82916, 1.73956, 1.66185, 1.59441, 1.94649, 2.90603,
+        3.65401, 4.56596, 5.82991, 5.79007, 4.38762, 3.50909, 2.91975, 2.50886, 2.21306,
     ];
     assert_close(&ours, &reference, PRINTED, "Hogan (2008) Fig. 8");
 }
