@@ -26,6 +26,14 @@ fn cirrus(extinction_per_km: f64, effective_radius_um: f64) -> String {
     )
 }
 
+/// The largest `|F − 1|` over the bins.
+fn largest_departure(e: &ExpectedProfile) -> f64 {
+    e.multiple_scattering
+        .iter()
+        .map(|m| (m.ratio - 1.0).abs())
+        .fold(0.0, f64::max)
+}
+
 /// The bins inside the cloud (9–11 km) beyond its first 300 m, where the particle
 /// optical depth above is at least 0.15.
 fn deep_cloud_bins(e: &ExpectedProfile) -> Vec<usize> {
@@ -54,12 +62,7 @@ fn clear_air_is_single_scattering() {
 /// effective η stays finite.
 #[test]
 fn vanishing_optical_depth_is_single_scattering() {
-    let e = expected(CIRRUS, &[&cirrus(5e-5, 30.0)]);
-    let worst = e
-        .multiple_scattering
-        .iter()
-        .map(|m| (m.ratio - 1.0).abs())
-        .fold(0.0, f64::max);
+    let worst = largest_departure(&expected(CIRRUS, &[&cirrus(5e-5, 30.0)]));
     assert!(worst < 1e-3, "largest |ratio − 1| = {worst}");
     assert!(worst > 0.0, "the thin cirrus still scatters forward");
 }
@@ -70,18 +73,13 @@ fn vanishing_optical_depth_is_single_scattering() {
 /// shrinks, docs/model.md §4j).
 #[test]
 fn vanishing_field_of_view_is_single_scattering() {
-    let e = expected(
+    let worst = largest_departure(&expected(
         CIRRUS,
         &[
             "instrument.fov_rad=2e-8",
             "instrument.beam_divergence_rad=1e-8",
         ],
-    );
-    let worst = e
-        .multiple_scattering
-        .iter()
-        .map(|m| (m.ratio - 1.0).abs())
-        .fold(0.0, f64::max);
+    ));
     assert!(worst < 1e-3, "largest |ratio − 1| = {worst}");
 }
 

@@ -344,12 +344,16 @@ mod tests {
         ]
     }
 
+    fn footprint(fov_half_angle_rad: f64) -> Footprint {
+        Footprint {
+            divergence_rad: 1e-4,
+            fov_half_angle_rad,
+        }
+    }
+
     #[test]
     fn clear_air_is_single_scattering_exactly() {
-        let fp = Footprint {
-            divergence_rad: 1e-4,
-            fov_half_angle_rad: 1e-3,
-        };
+        let fp = footprint(1e-3);
         let steps = cloud(100, 10.0, 0.0, 10.0);
         assert!(
             small_angle_ratios(fp, 1e3, &steps)
@@ -360,10 +364,7 @@ mod tests {
 
     #[test]
     fn thick_cloud_stays_finite() {
-        let fp = Footprint {
-            divergence_rad: 1e-4,
-            fov_half_angle_rad: 1e-2,
-        };
+        let fp = footprint(1e-2);
         let steps = cloud(20_000, 1.0, 0.1, 10.0);
         let r = small_angle_ratios(fp, 1e3, &steps);
         assert!(
