@@ -175,10 +175,7 @@ impl ExpectedProfile {
         self.multiple_scattering
             .get(i)
             .copied()
-            .unwrap_or(BinMultipleScattering {
-                ratio: 1.0,
-                particle_optical_depth: 0.0,
-            })
+            .unwrap_or(BinMultipleScattering::NONE)
     }
 
     /// Expected total counts per shot in each bin, `λ_i = λ_sig,i + λ_bkg + λ_dc` (Eq. 1).
@@ -527,11 +524,7 @@ impl Scenario {
         let bins: Vec<(f64, f64)> = (g.pretrigger_bins..g.n_bins)
             .map(|i| g.bin_range_bounds(i))
             .collect();
-        let none = BinMultipleScattering {
-            ratio: 1.0,
-            particle_optical_depth: 0.0,
-        };
-        e.multiple_scattering = vec![none; g.pretrigger_bins];
+        e.multiple_scattering = vec![BinMultipleScattering::NONE; g.pretrigger_bins];
         e.multiple_scattering
             .extend(self.path.small_angle_bins(footprint, &bins));
         for (i, m) in e.multiple_scattering.iter().enumerate() {

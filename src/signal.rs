@@ -64,6 +64,12 @@ pub struct BinMultipleScattering {
 }
 
 impl BinMultipleScattering {
+    /// A bin without multiple scattering (the `constant` model, pre-trigger bins).
+    pub const NONE: BinMultipleScattering = BinMultipleScattering {
+        ratio: 1.0,
+        particle_optical_depth: 0.0,
+    };
+
     /// The effective multiple-scattering factor η of the particle optical depth above
     /// the bin centre: the constant η that would give the same signal,
     /// `ratio = e^{2(1−η)τ_p}`; 1 where there are no particles above.
@@ -273,13 +279,7 @@ impl BeamPath {
         footprint: multiple_scattering::Footprint,
         bins: &[(f64, f64)],
     ) -> Vec<BinMultipleScattering> {
-        let mut out = vec![
-            BinMultipleScattering {
-                ratio: 1.0,
-                particle_optical_depth: 0.0,
-            };
-            bins.len()
-        ];
+        let mut out = vec![BinMultipleScattering::NONE; bins.len()];
         let Some(first) = self.segments.first() else {
             return out;
         };
