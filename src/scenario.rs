@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use crate::atmosphere::multiple_scattering::Footprint;
+use crate::atmosphere::multiple_scattering::{self, Footprint};
 use crate::atmosphere::{Atmosphere, MolecularState, Optics};
 use crate::config::{self, MultipleScatteringModel};
 use crate::error::{Error, Result};
@@ -530,6 +530,63 @@ impl Scenario {
         for (i, m) in e.multiple_scattering.iter().enumerate() {
             e.signal[i] *= m.ratio;
             e.attenuated_backscatter[i] *= m.ratio;
+        }
+        self.depolarize_water_clouds(e);
+    }
+
+    /// Gives each water cloud's apparent return the depolarization of Hu et al. (2006)
+    /// (`multiple_scattering::water_cloud_depolarization`, docs/model.md §4j): the
+    /// channel sees the cloud's part of the bin's return (from the point optics at the bin
+    /// centre) with that depolarization instead of the droplets' own (`depolarization`,
+    /// kept where it is larger); the air's part keeps its own.
+    fn depolarize_water_clouds(&self, e: &mut ExpectedProfile) {
+        let g = &self.geometry;
+        let share = |d: f64| {
+            self.atmosphere
+                .polarization
+                .share(self.atmosphere.channel, d)
+        };
+        let mut k = g.pretrigger_bins;
+        while k < g.n_bins {
+            if e.point[k].alpha_water <= 0.0 {
+                k += 1;
+                continue;
+            }
+            let start = k;
+            while k < g.n_bins && e.point[k].alpha_water > 0.0 {
+                k += 1;
+            }
+            let before = e.multiple_scattering_at(start.saturating_sub(1)).ratio;
+            let (mut single, mut apparent, mut tau) = (vec![], vec![], vec![]);
+            let mut depth = 0.0;
+            // the cloud's part of the channel's return, and that return in every
+            // polarization (the channel's share of the droplets' own depolarization)
+            let cloud_part = |i: usize| {
+                let o = &e.point[i];
+                let part = self.atmosphere.lines.particle * o.beta_cld * share(o.depol_cld());
+                (part / o.beta_channel).clamp(0.0, 1.0)
+            };
+            for i in start..k {
+                let (ra, rb) = g.bin_range_bounds(i);
+                let half = 0.5 * e.point[i].alpha_water * (rb - ra);
+                tau.push(depth + half);
+                depth += 2.0 * half;
+                let whole =
+                    e.attenuated_backscatter[i] * cloud_part(i) / share(e.point[i].depol_cld());
+                apparent.push(whole / before);
+                single.push(whole / e.multiple_scattering[i].ratio);
+            }
+            let delta = multiple_scattering::water_cloud_depolarization(&single, &apparent, &tau);
+            for (i, d) in (start..k).zip(delta) {
+                let own = e.point[i].depol_cld();
+                let d = d.max(own);
+                let part = cloud_part(i);
+                let factor = 1.0 - part + part * share(d) / share(own);
+                e.signal[i] *= factor;
+                e.attenuated_backscatter[i] *= factor;
+                e.multiple_scattering[i].water_depolarization = d;
+                e.multiple_scattering[i].polarization_factor = factor;
+            }
         }
     }
 

@@ -61,13 +61,27 @@ pub struct BinMultipleScattering {
     pub ratio: f64,
     /// One-way particle optical depth from the instrument to the bin centre.
     pub particle_optical_depth: f64,
+    /// Linear depolarization of a water cloud's apparent return in the bin (Hu et al.
+    /// 2006, `multiple_scattering::water_cloud_depolarization`); 0 outside water cloud.
+    pub water_depolarization: f64,
+    /// What that depolarization changes of the channel's share of the bin's return
+    /// (1 outside water cloud and for a channel that sees every polarization alike).
+    pub polarization_factor: f64,
 }
 
 impl BinMultipleScattering {
+    /// The channel's apparent over its single-scattering signal in the bin: the ratio
+    /// times the polarization factor.
+    pub fn channel_ratio(&self) -> f64 {
+        self.ratio * self.polarization_factor
+    }
+
     /// A bin without multiple scattering (the `constant` model, pre-trigger bins).
     pub const NONE: BinMultipleScattering = BinMultipleScattering {
         ratio: 1.0,
         particle_optical_depth: 0.0,
+        water_depolarization: 0.0,
+        polarization_factor: 1.0,
     };
 
     /// The effective multiple-scattering factor η of the particle optical depth above

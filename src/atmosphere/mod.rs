@@ -247,6 +247,8 @@ pub struct Layer {
     pub multiple_scattering: f64,
     /// Its particles' forward-lobe 1/e half-width Θ, rad (`multiple_scattering`).
     pub forward_lobe_rad: f64,
+    /// A cloud of liquid droplets (`multiple_scattering::phase`).
+    pub water: bool,
 }
 
 impl Layer {
@@ -282,6 +284,9 @@ pub struct Optics {
     pub ms_alpha_cld: f64,
     /// Extinction that attenuates the signal, `α_mol + α_o3 + Σ η·α`, m⁻¹.
     pub alpha_effective: f64,
+    /// Extinction of water-droplet clouds, m⁻¹ (their multiply scattered return
+    /// depolarizes, `multiple_scattering::water_cloud_depolarization`).
+    pub alpha_water: f64,
     /// Extinction of the particles whose forward lobe is narrow enough for the
     /// small-angle model (`multiple_scattering.wide_angle_cutoff_rad`), m⁻¹.
     pub alpha_lobe: f64,
@@ -658,6 +663,9 @@ impl Atmosphere {
             *b += beta;
             *perp += perpendicular(beta, l.depolarization);
             o.add_forward_lobe(alpha, l.forward_lobe_rad, self.wide_angle_cutoff_rad);
+            if l.water {
+                o.alpha_water += alpha;
+            }
             o.beta_channel += self.lines.particle
                 * beta
                 * self.polarization.share(self.channel, l.depolarization);
@@ -827,6 +835,8 @@ fn layers(cfg: &ScenarioConfig) -> Vec<Layer> {
                     wl,
                     multiple_scattering::effective_radius_um(l),
                 ),
+                water: l.kind == LayerKind::Cloud
+                    && multiple_scattering::phase(l) == crate::config::CloudPhase::Water,
             }
         })
         .collect()

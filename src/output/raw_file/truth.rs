@@ -14,7 +14,7 @@ pub(crate) type Truth = fn(&ExpectedProfile, usize) -> f64;
 /// The point truth at the bin centre by species (model.md §8), each (column, channel,
 /// bin): name, long name, units, value. The onboard product averages the same table over
 /// each region bin's native bins (`crate::onboard::truth`).
-pub(crate) const COLUMN_TRUTH: [(&str, &str, &str, Truth); 20] = [
+pub(crate) const COLUMN_TRUTH: [(&str, &str, &str, Truth); 21] = [
     (
         "alpha_mol",
         "molecular (Rayleigh) extinction coefficient at the bin centre",
@@ -121,11 +121,11 @@ pub(crate) const COLUMN_TRUTH: [(&str, &str, &str, Truth); 20] = [
         "single_scattering_attenuated_backscatter",
         "bin-averaged attenuated backscatter of single scattering alone (equal to attenuated_backscatter in the constant multiple-scattering model)",
         "m-1 sr-1",
-        |e, i| e.attenuated_backscatter[i] / e.multiple_scattering_at(i).ratio,
+        |e, i| e.attenuated_backscatter[i] / e.multiple_scattering_at(i).channel_ratio(),
     ),
     (
         "multiple_scattering_ratio",
-        "apparent over single-scattering signal of the bin (small-angle multiple scattering; 1 in the constant model)",
+        "apparent over single-scattering return of the bin, every polarization together (small-angle multiple scattering; 1 in the constant model); a polarization channel's own ratio also has its water-cloud depolarization factor: attenuated_backscatter / single_scattering_attenuated_backscatter",
         "1",
         |e, i| e.multiple_scattering_at(i).ratio,
     ),
@@ -134,6 +134,12 @@ pub(crate) const COLUMN_TRUTH: [(&str, &str, &str, Truth); 20] = [
         "effective multiple-scattering factor eta of the particle optical depth to the bin centre: multiple_scattering_ratio = exp(2 (1 - eta) tau_particle); 1 without particles above and in the constant model",
         "1",
         |e, i| e.multiple_scattering_at(i).effective_factor(),
+    ),
+    (
+        "ms_depolarization_water",
+        "linear depolarization ratio of a water cloud's apparent return in the bin, from multiple scattering (Hu et al. 2006; small-angle model): what the channels see there instead of the droplets' own; 0 outside water cloud and in the constant model",
+        "1",
+        |e, i| e.multiple_scattering_at(i).water_depolarization,
     ),
 ];
 
