@@ -37,7 +37,9 @@ struct Panel {
 }
 
 fn expected(config: &str, overrides: &[String]) -> ExpectedProfile {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs").join(config);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("configs")
+        .join(config);
     Scenario::load(&path, overrides)
         .and_then(|s| s.expected())
         .unwrap_or_else(|e| panic!("{config}: {e}"))
@@ -92,7 +94,10 @@ fn main() {
     ];
     let all: Vec<[ExpectedProfile; 3]> = panels.iter().map(profiles).collect();
     for (p, e) in panels.iter().zip(&all) {
-        println!("{}\n  altitude_km  single  constant(eta={})  small_angle", p.title, p.eta);
+        println!(
+            "{}\n  altitude_km  single  constant(eta={})  small_angle",
+            p.title, p.eta
+        );
         for i in (0..e[0].n_bins()).step_by(if p.eta < 0.65 { 40 } else { 4 }) {
             let z = e[0].altitude_m[i] / 1e3;
             if z >= p.altitude_km.0 && z <= p.altitude_km.1 {
@@ -167,7 +172,10 @@ fn plot(panels: &[Panel], all: &[[ExpectedProfile; 3]], path: &Path) {
                     .map(|i| (x.attenuated_backscatter[i], x.altitude_m[i] / 1e3))
                     .collect();
                 chart
-                    .draw_series(std::iter::once(PathElement::new(line, colour.stroke_width(2))))
+                    .draw_series(std::iter::once(PathElement::new(
+                        line,
+                        colour.stroke_width(2),
+                    )))
                     .expect("line")
                     .label(name)
                     .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
