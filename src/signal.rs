@@ -30,6 +30,10 @@ use crate::surface::Surface;
 const NODES: usize = 6;
 /// Largest piece length relative to its start range.
 const MAX_PIECE_FRACTION: f64 = 0.1;
+/// One-way optical depth beyond which `e^{−2τ}` underflows to 0 (e^{−800}): the
+/// multiple-scattering steps stop there, so that an opaque scene costs no more steps
+/// than its first 400 optical depths.
+const OPAQUE_OPTICAL_DEPTH: f64 = 400.0;
 /// Smallest piece next to an overlap kink, m.
 const GRADED_MIN_PIECE_M: f64 = 1e-4;
 
@@ -307,6 +311,9 @@ impl BeamPath {
         let mut weights = Vec::new(); // (bin, single-scattering weight)
         let mut tau_p = 0.0;
         for s in &self.segments {
+            if s.tau_start > OPAQUE_OPTICAL_DEPTH {
+                break; // T² underflows to 0 here: these bins hold no signal to enhance
+            }
             let lo = cuts.partition_point(|&c| c <= s.r_start);
             let hi = cuts.partition_point(|&c| c < s.r_end);
             let edges = std::iter::once(s.r_start)

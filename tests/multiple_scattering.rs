@@ -454,3 +454,21 @@ fn coarse_bins_are_the_sum_of_fine_ones() {
         assert!(checked > 30, "{model}: {checked} bins");
     }
 }
+
+/// An opaque cloud (optical depth 1.8e5): every value finite, and the steps stop where
+/// T² underflows (the run takes as few steps as an optical depth of 400 needs).
+#[test]
+fn opaque_cloud_stays_finite() {
+    let e = expected(
+        CIRRUS,
+        &[
+            "atmosphere.layers=[{ kind = \"cloud\", base_km = 1.0, top_km = 19.0, \
+           extinction_per_km = 1e4, lidar_ratio_sr = 18.0 }]",
+        ],
+    );
+    for i in 0..e.n_bins() {
+        let m = e.multiple_scattering_at(i);
+        assert!(e.signal[i].is_finite() && m.ratio.is_finite(), "bin {i}");
+        assert!(m.effective_factor().is_finite(), "bin {i}");
+    }
+}
