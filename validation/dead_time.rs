@@ -21,24 +21,22 @@
 //! paralyzable, whose interval has transform `1/(1 + (s/n)e^{(n+s)τ})`, `a₁ = A = e^{nτ}/n`,
 //! `a₂ = 2A² − 2τA`, `a₃ = 6A³ − 12τA² + 3τ²A`.
 
+#[path = "figure.rs"]
+mod figure;
+
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
+use figure::FONT;
 use lidarsim::detector::dead_time::DeadTimedShots;
 use lidarsim::detector::{DeadTime, DeadTimeModel};
 use lidarsim::sampling::{ShotSampler, stream_rng};
 use plotters::prelude::*;
-use plotters::style::{FontStyle, register_font};
 
 const COMMAND: &str = "cargo run --release --example dead_time -- --out validation/reports";
 const TAU: f64 = 3.5e-9;
 const DT: f64 = 2e-6;
 const BINS: usize = 20;
-const FONT: &str = "sans-serif";
-static FONT_BYTES: &[u8] = include_bytes!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/assets/fonts/DejaVuSans.ttf"
-));
 
 struct Row {
     model: DeadTimeModel,
@@ -254,9 +252,7 @@ fn report(rows: &[Row]) -> String {
 fn plot(rows: &[Row], path: &std::path::Path) {
     const W: u32 = 1000;
     const H: u32 = 650;
-    register_font(FONT, FontStyle::Normal, FONT_BYTES)
-        .map_err(|_| "font")
-        .expect("embedded font");
+    figure::register();
     let mut rgb = vec![255u8; (W * H * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut rgb, (W, H)).into_drawing_area();
@@ -329,14 +325,5 @@ fn plot(rows: &[Row], path: &std::path::Path) {
             .expect("legend");
         root.present().expect("present");
     }
-    let mut bytes = Vec::new();
-    {
-        let mut enc = png::Encoder::new(&mut bytes, W, H);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut wr = enc.write_header().expect("png header");
-        wr.write_image_data(&rgb).expect("png data");
-        wr.finish().expect("png finish");
-    }
-    std::fs::write(path, bytes).expect("write the PNG");
+    figure::write_png(&rgb, W, H, path);
 }

@@ -14,17 +14,14 @@
 //! over a 0.8–1.5 km water stratocumulus of 8 km⁻¹ (τ = 5.6, 10 µm), the shipped
 //! orbit's broken cells.
 
+#[path = "figure.rs"]
+mod figure;
+
 use std::path::{Path, PathBuf};
 
+use figure::FONT;
 use lidarsim::scenario::{ExpectedProfile, Scenario};
 use plotters::prelude::*;
-use plotters::style::{FontStyle, register_font};
-
-const FONT: &str = "sans-serif";
-static FONT_BYTES: &[u8] = include_bytes!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/assets/fonts/DejaVuSans.ttf"
-));
 
 /// One panel: a config, its overrides, the constant model's η and the altitude range.
 struct Panel {
@@ -118,9 +115,7 @@ fn main() {
 fn plot(panels: &[Panel], all: &[[ExpectedProfile; 3]], path: &Path) {
     const W: u32 = 1200;
     const H: u32 = 650;
-    register_font(FONT, FontStyle::Normal, FONT_BYTES)
-        .map_err(|_| "font")
-        .expect("embedded font");
+    figure::register();
     let mut rgb = vec![255u8; (W * H * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut rgb, (W, H)).into_drawing_area();
@@ -191,14 +186,5 @@ fn plot(panels: &[Panel], all: &[[ExpectedProfile; 3]], path: &Path) {
         }
         root.present().expect("present");
     }
-    let mut bytes = Vec::new();
-    {
-        let mut enc = png::Encoder::new(&mut bytes, W, H);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut wr = enc.write_header().expect("png header");
-        wr.write_image_data(&rgb).expect("png data");
-        wr.finish().expect("png finish");
-    }
-    std::fs::write(path, bytes).expect("write the PNG");
+    figure::write_png(&rgb, W, H, path);
 }

@@ -16,14 +16,17 @@
 //! Deterministic: every profile comes from `stream_rng(seed, profile, block)` with fixed
 //! seeds; only the timings change from run to run.
 
+#[path = "figure.rs"]
+mod figure;
+
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use figure::FONT;
 use lidarsim::sampling::{self, PathChoice, ShotSampler};
 use lidarsim::scenario::Scenario;
 use plotters::prelude::*;
-use plotters::style::{FontStyle, register_font};
 use statrs::distribution::{ContinuousCDF, Normal};
 
 use lidarsim::sampling::approx::{
@@ -1172,11 +1175,6 @@ fn reading(w: &mut String, rows: &[Row]) {
 // Plot
 // ---------------------------------------------------------------------------
 
-const FONT: &str = "sans-serif";
-static FONT_BYTES: &[u8] = include_bytes!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/assets/fonts/DejaVuSans.ttf"
-));
 const W: u32 = 1200;
 const H: u32 = 800;
 
@@ -1201,9 +1199,7 @@ fn method_colour(m: Method) -> RGBColor {
 }
 
 fn plot(rows: &[Row], path: &Path, mode: &Mode) {
-    register_font(FONT, FontStyle::Normal, FONT_BYTES)
-        .map_err(|_| "font")
-        .expect("embedded font");
+    figure::register();
     let mut rgb = vec![255u8; (W * H * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut rgb, (W, H)).into_drawing_area();
@@ -1333,14 +1329,5 @@ fn plot(rows: &[Row], path: &Path, mode: &Mode) {
             .expect("legend");
         root.present().expect("present");
     }
-    let mut bytes = Vec::new();
-    {
-        let mut enc = png::Encoder::new(&mut bytes, W, H);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut wr = enc.write_header().expect("png header");
-        wr.write_image_data(&rgb).expect("png data");
-        wr.finish().expect("png finish");
-    }
-    std::fs::write(path, bytes).expect("write the PNG");
+    figure::write_png(&rgb, W, H, path);
 }
