@@ -438,6 +438,17 @@ mod tests {
         );
     }
 
+    /// `(1 − e^{−k})/k` at 0 and on both sides of the series' switch at 1e-8 (the series
+    /// `1 − k/2 + k²/6` to 1e-17; the library's `expm1` to two ulps).
+    #[test]
+    fn mean_exp_near_zero() {
+        assert_eq!(mean_exp(0.0), 1.0);
+        for k in [1e-9, -1e-9, 2e-8, -2e-8] {
+            let series = 1.0 - 0.5 * k + k * k / 6.0;
+            assert!((mean_exp(k) - series).abs() < 4e-16, "{k}: {}", mean_exp(k));
+        }
+    }
+
     /// Hu's relation at its ends and at η = ½: δ = (1 − √½)/(1 + √½) = 3 − 2√2.
     #[test]
     fn hu_relation_values() {
