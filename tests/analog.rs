@@ -437,14 +437,7 @@ fn the_glued_pollyxt_preset_validates_and_each_pair_has_a_common_linear_range() 
 fn a_both_pair_records_the_same_photons_shot_for_shot() {
     let dir = scratch("both-same-photons");
     let config = config_path("ground/ground_532_depol.toml");
-    let out = "same.h5";
-    let args = [
-        "simulate",
-        config.to_str().unwrap(),
-        "-o",
-        out,
-        "--profiles",
-        "200",
+    let more = [
         "--method",
         "shot",
         "--set",
@@ -454,8 +447,7 @@ fn a_both_pair_records_the_same_photons_shot_for_shot() {
         "--set",
         "instrument.detector={mode=\"both\", dead_time_s=3.5e-9, gain=1e8, excess_noise_factor=1.0, electronic_noise_v=0.0}",
     ];
-    common::cli::ok(common::cli::lidarsim(&dir, &args, &[]));
-    let f = hdf5::File::open(dir.join(out)).unwrap();
+    let f = common::h5::simulate_with(&dir, &config, "same.h5", "200", &more);
     let counts = floats(&f, "counts");
     let names = strings(&f, "channel");
     let lsb = floats(&f, "adc_volts_per_count")[0];

@@ -33,7 +33,18 @@ pub fn channel_rows(f: &hdf5::File, name: &str, channels: usize) -> Vec<Vec<f64>
 
 /// `lidarsim simulate CONFIG -o OUT --profiles N` in `dir`, opened.
 pub fn simulate(dir: &Path, config: &Path, out: &str, profiles: &str) -> hdf5::File {
-    let args = [
+    simulate_with(dir, config, out, profiles, &[])
+}
+
+/// [`simulate`] with more arguments after `--profiles N` (`--method`, `--set`, …).
+pub fn simulate_with(
+    dir: &Path,
+    config: &Path,
+    out: &str,
+    profiles: &str,
+    more: &[&str],
+) -> hdf5::File {
+    let mut args = vec![
         "simulate",
         config.to_str().unwrap(),
         "-o",
@@ -41,6 +52,7 @@ pub fn simulate(dir: &Path, config: &Path, out: &str, profiles: &str) -> hdf5::F
         "--profiles",
         profiles,
     ];
+    args.extend_from_slice(more);
     ok(lidarsim(dir, &args, &[]));
     hdf5::File::open(dir.join(out)).unwrap()
 }
