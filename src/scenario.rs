@@ -508,9 +508,9 @@ impl Scenario {
         Ok(e)
     }
 
-    /// Multiplies each bin's signal and attenuated backscatter by its small-angle
-    /// multiple-scattering ratio ([`BeamPath::small_angle_bins`]) when the config asks
-    /// for that model.
+    /// Multiplies each bin's signal and attenuated backscatter by its multiple-scattering
+    /// ratio ([`BeamPath::multiple_scattering_bins`]) when the config asks for the
+    /// `small_angle` or `small_and_wide_angle` model.
     fn add_multiple_scattering(&self, e: &mut ExpectedProfile) {
         let cfg = &self.loaded.config;
         if cfg.multiple_scattering.model == MultipleScatteringModel::Constant {
@@ -526,7 +526,11 @@ impl Scenario {
             .collect();
         e.multiple_scattering = vec![BinMultipleScattering::NONE; g.pretrigger_bins];
         e.multiple_scattering
-            .extend(self.path.small_angle_bins(footprint, &bins));
+            .extend(self.path.multiple_scattering_bins(
+                footprint,
+                &bins,
+                cfg.multiple_scattering.model == MultipleScatteringModel::SmallAndWideAngle,
+            ));
         for (i, m) in e.multiple_scattering.iter().enumerate() {
             e.signal[i] *= m.ratio;
             e.attenuated_backscatter[i] *= m.ratio;

@@ -301,8 +301,11 @@ fn refusals_name_the_key() {
             "instrument.beam_divergence_rad",
         ),
         (
-            &["multiple_scattering.model=\"small_and_wide_angle\""],
-            "not built yet",
+            &[
+                "atmosphere.layers=[{ kind = \"cloud\", base_km = 1.0, top_km = 2.0, \
+               extinction_per_km = 1.0, lidar_ratio_sr = 18.0, asymmetry_factor = 1.0 }]",
+            ],
+            "within [0, 0.99], got 1",
         ),
         (
             &["multiple_scattering.wide_angle_cutoff_rad=-1"],

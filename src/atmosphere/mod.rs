@@ -11,6 +11,7 @@ pub mod raman;
 pub mod rayleigh;
 pub mod us76;
 pub mod water_vapour;
+pub mod wide_angle;
 
 use crate::config::{
     Channel, ExtinctionSource, LayerKind, MolecularLine, MolecularModel, MultipleScatteringModel,
@@ -221,6 +222,9 @@ pub struct BackgroundAerosol {
 }
 
 impl BackgroundAerosol {
+    /// Its particles' asymmetry factor (`wide_angle`).
+    pub const ASYMMETRY: f64 = multiple_scattering::DEFAULT_AEROSOL_ASYMMETRY;
+
     /// `α_aer(z)`, m⁻¹ (Eq. 6).
     pub fn extinction_per_m(&self, z_m: f64) -> f64 {
         self.surface_extinction_per_m * aerosol_profile::relative_concentration(z_m)
@@ -247,6 +251,8 @@ pub struct Layer {
     pub multiple_scattering: f64,
     /// Its particles' forward-lobe 1/e half-width Θ, rad (`multiple_scattering`).
     pub forward_lobe_rad: f64,
+    /// Its particles' asymmetry factor g (`wide_angle`).
+    pub asymmetry_factor: f64,
     /// A cloud of liquid droplets (`multiple_scattering::phase`).
     pub water: bool,
 }
@@ -293,6 +299,8 @@ pub struct Optics {
     /// The same weighted by each species' squared forward-lobe width, `Σ α·Θ²`,
     /// m⁻¹ rad².
     pub alpha_theta2: f64,
+    /// The same weighted by each species' asymmetry factor, `Σ α·g`, m⁻¹.
+    pub alpha_lobe_g: f64,
     /// Cross-polarized part of the aerosol backscatter, `Σ β·δ/(1+δ)`, m⁻¹ sr⁻¹.
     pub beta_perp_aer: f64,
     /// Cross-polarized part of the cloud backscatter, m⁻¹ sr⁻¹.
@@ -307,12 +315,14 @@ pub struct Optics {
 }
 
 impl Optics {
-    /// Adds particles of extinction `alpha` and forward-lobe half-width `theta_rad` to
-    /// the small-angle model's sums, if their lobe is not wider than `cutoff_rad`.
-    fn add_forward_lobe(&mut self, alpha: f64, theta_rad: f64, cutoff_rad: f64) {
+    /// Adds particles of extinction `alpha`, forward-lobe half-width `theta_rad` and
+    /// asymmetry factor `g` to the multiple-scattering models' sums, if their lobe is not
+    /// wider than `cutoff_rad`.
+    fn add_forward_lobe(&mut self, alpha: f64, theta_rad: f64, g: f64, cutoff_rad: f64) {
         if theta_rad <= cutoff_rad {
             self.alpha_lobe += alpha;
             self.alpha_theta2 += alpha * theta_rad * theta_rad;
+            self.alpha_lobe_g += alpha * g;
         }
     }
 }
@@ -634,7 +644,12 @@ impl Atmosphere {
             let beta = alpha / a.lidar_ratio_sr;
             o.alpha_aer += alpha;
             o.ms_alpha_aer += alpha;
-            o.add_forward_lobe(alpha, a.forward_lobe_rad, self.wide_angle_cutoff_rad);
+            o.add_forward_lobe(
+                alpha,
+                a.forward_lobe_rad,
+                BackgroundAerosol::ASYMMETRY,
+                self.wide_angle_cutoff_rad,
+            );
             o.beta_aer += beta;
             o.beta_perp_aer += perpendicular(beta, a.depolarization);
             o.beta_channel += self.lines.particle
@@ -662,7 +677,12 @@ impl Atmosphere {
             *ms += alpha * l.multiple_scattering;
             *b += beta;
             *perp += perpendicular(beta, l.depolarization);
-            o.add_forward_lobe(alpha, l.forward_lobe_rad, self.wide_angle_cutoff_rad);
+            o.add_forward_lobe(
+                alpha,
+                l.forward_lobe_rad,
+                l.asymmetry_factor,
+                self.wide_angle_cutoff_rad,
+            );
             if l.water {
                 o.alpha_water += alpha;
             }
@@ -835,6 +855,7 @@ fn layers(cfg: &ScenarioConfig) -> Vec<Layer> {
                     wl,
                     multiple_scattering::effective_radius_um(l),
                 ),
+                asymmetry_factor: multiple_scattering::asymmetry_factor(l),
                 water: l.kind == LayerKind::Cloud
                     && multiple_scattering::phase(l) == crate::config::CloudPhase::Water,
             }

@@ -95,6 +95,24 @@ pub fn effective_radius_um(l: &LayerConfig) -> f64 {
     })
 }
 
+/// Asymmetry factor of cloud droplets when a layer gives none (HB08; Mie, 10 µm, 532 nm).
+pub const DEFAULT_DROPLET_ASYMMETRY: f64 = 0.85;
+/// Asymmetry factor of ice crystals when a layer gives none (HB08).
+pub const DEFAULT_ICE_ASYMMETRY: f64 = 0.75;
+/// Asymmetry factor of aerosol particles (the background aerosol, and layers that give
+/// none).
+pub const DEFAULT_AEROSOL_ASYMMETRY: f64 = 0.7;
+
+/// A layer's asymmetry factor g (wide-angle scattering): `asymmetry_factor`, or the
+/// default of its kind and phase.
+pub fn asymmetry_factor(l: &LayerConfig) -> f64 {
+    l.asymmetry_factor.unwrap_or(match (l.kind, phase(l)) {
+        (LayerKind::Aerosol, _) => DEFAULT_AEROSOL_ASYMMETRY,
+        (LayerKind::Cloud, CloudPhase::Water) => DEFAULT_DROPLET_ASYMMETRY,
+        (LayerKind::Cloud, CloudPhase::Ice) => DEFAULT_ICE_ASYMMETRY,
+    })
+}
+
 /// The 1/e half-width of the forward diffraction lobe, `Θ = λ/(π·r_e)`, rad (Hogan
 /// 2008, §2).
 pub fn forward_lobe_half_width_rad(wavelength_nm: f64, effective_radius_um: f64) -> f64 {
@@ -138,24 +156,21 @@ pub fn validate(config: &ScenarioConfig, c: &Checker) -> Result<()> {
     if let Some(cut) = config.multiple_scattering.wide_angle_cutoff_rad {
         c.positive("multiple_scattering.wide_angle_cutoff_rad", cut, 1.0)?;
     }
-    match config.multiple_scattering.model {
-        MultipleScatteringModel::Constant => Ok(()),
-        MultipleScatteringModel::SmallAndWideAngle => Err(c.fail(
-            "multiple_scattering.model",
-            "\"small_and_wide_angle\" (the wide-angle diffuse part) is not built yet; use \
-             \"small_angle\" (the forward lobe, docs/model.md §4j) or \"constant\"",
-        )),
-        MultipleScatteringModel::SmallAngle => {
-            if config.instrument.beam_divergence_rad.is_none() {
-                return Err(c.fail(
-                    "instrument.beam_divergence_rad",
-                    "is needed by multiple_scattering.model = \"small_angle\": the laser \
-                     beam's 1/e half-width, rad (e.g. 5e-5 for CALIOP's 100 µrad full beam)",
-                ));
-            }
-            Ok(())
-        }
+    let model = match config.multiple_scattering.model {
+        MultipleScatteringModel::Constant => return Ok(()),
+        MultipleScatteringModel::SmallAngle => "small_angle",
+        MultipleScatteringModel::SmallAndWideAngle => "small_and_wide_angle",
+    };
+    if config.instrument.beam_divergence_rad.is_none() {
+        return Err(c.fail(
+            "instrument.beam_divergence_rad",
+            format!(
+                "is needed by multiple_scattering.model = \"{model}\": the laser beam's 1/e \
+                 half-width, rad (e.g. 5e-5 for CALIOP's 100 µrad full beam)"
+            ),
+        ));
     }
+    Ok(())
 }
 
 fn validate_layer(c: &Checker, key: &str, l: &LayerConfig) -> Result<()> {
@@ -208,6 +223,16 @@ struct Population {
 }
 
 impl Population {
+    /// The unscattered beam of 1/e angular half-width² `rho_t2` at range `r`.
+    fn beam(r: f64, rho_t2: f64) -> Population {
+        Population {
+            energy: 1.0,
+            width2: r * r * rho_t2,
+            cov: r * rho_t2,
+            zeta2: rho_t2,
+        }
+    }
+
     /// The moments after a step of length `d` with lobe source `a = αΘ²` (the exact
     /// integral of the moment equations), the energy gaining `e^{αΔ}` on the
     /// unscattered beam's.
@@ -271,12 +296,7 @@ pub fn small_angle_ratios(footprint: Footprint, start_range_m: f64, steps: &[Ste
     let rho_r2 = footprint.fov_half_angle_rad.powi(2);
     // the unscattered beam's share inside the field of view
     let unscattered_seen = -(-rho_r2 / rho_t2).exp_m1();
-    let beam = |r: f64| Population {
-        energy: 1.0,
-        width2: r * r * rho_t2,
-        cov: r * rho_t2,
-        zeta2: rho_t2,
-    };
+    let beam = |r: f64| Population::beam(r, rho_t2);
     let mut total = beam(start_range_m);
     let mut reduced = total;
     let mut range = start_range_m;

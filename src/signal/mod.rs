@@ -18,9 +18,13 @@
 //! depths in the hundreds are both accurate; `T²` underflows to 0, never to NaN. Pieces
 //! shrink geometrically only towards the overlap's kinks, where η is not smooth.
 
+mod multiple_scattering;
+
+pub use multiple_scattering::BinMultipleScattering;
+
 use std::sync::OnceLock;
 
-use crate::atmosphere::{Atmosphere, multiple_scattering};
+use crate::atmosphere::Atmosphere;
 use crate::config::PlatformKind;
 use crate::error::{Error, Result};
 use crate::geometry::{Geometry, Overlap};
@@ -30,10 +34,6 @@ use crate::surface::Surface;
 const NODES: usize = 6;
 /// Largest piece length relative to its start range.
 const MAX_PIECE_FRACTION: f64 = 0.1;
-/// One-way optical depth beyond which `e^{−2τ}` underflows to 0 (e^{−800}): the
-/// multiple-scattering steps stop there, so that an opaque scene costs no more steps
-/// than its first 400 optical depths.
-const OPAQUE_OPTICAL_DEPTH: f64 = 400.0;
 /// Smallest piece next to an overlap kink, m.
 const GRADED_MIN_PIECE_M: f64 = 1e-4;
 
@@ -56,48 +56,13 @@ pub struct Segment {
     pub alpha_lobe: f64,
     /// `Σ α·Θ²` of their forward lobes, m⁻¹ rad².
     pub alpha_theta2: f64,
-}
-
-/// A bin's multiple scattering in the small-angle model.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BinMultipleScattering {
-    /// Apparent over single-scattering signal of the bin (≥ 1; 1 without particles).
-    pub ratio: f64,
-    /// One-way particle optical depth from the instrument to the bin centre.
-    pub particle_optical_depth: f64,
-    /// Linear depolarization of a water cloud's apparent return in the bin (Hu et al.
-    /// 2006, `multiple_scattering::water_cloud_depolarization`); 0 outside water cloud.
-    pub water_depolarization: f64,
-    /// What that depolarization changes of the channel's share of the bin's return
-    /// (1 outside water cloud and for a channel that sees every polarization alike).
-    pub polarization_factor: f64,
-}
-
-impl BinMultipleScattering {
-    /// The channel's apparent over its single-scattering signal in the bin: the ratio
-    /// times the polarization factor.
-    pub fn channel_ratio(&self) -> f64 {
-        self.ratio * self.polarization_factor
-    }
-
-    /// A bin without multiple scattering (the `constant` model, pre-trigger bins).
-    pub const NONE: BinMultipleScattering = BinMultipleScattering {
-        ratio: 1.0,
-        particle_optical_depth: 0.0,
-        water_depolarization: 0.0,
-        polarization_factor: 1.0,
-    };
-
-    /// The effective multiple-scattering factor η of the particle optical depth above
-    /// the bin centre: the constant η that would give the same signal,
-    /// `ratio = e^{2(1−η)τ_p}`; 1 where there are no particles above.
-    pub fn effective_factor(&self) -> f64 {
-        if self.particle_optical_depth > 1e-9 {
-            1.0 - self.ratio.ln() / (2.0 * self.particle_optical_depth)
-        } else {
-            1.0
-        }
-    }
+    /// `Σ α·g` of the same particles (their asymmetry factors), m⁻¹.
+    pub alpha_lobe_g: f64,
+    /// Absorption by gases (ozone), m⁻¹.
+    pub alpha_absorbing: f64,
+    /// Backscatter of every species in every polarization (the elastic return a
+    /// channel's share is taken from), m⁻¹ sr⁻¹.
+    pub beta_total: f64,
 }
 
 /// The surface's echo on the beam: where it is and its integrated backscatter.
@@ -169,6 +134,9 @@ impl BeamPath {
                         alpha_particle: s.optics.alpha_aer + s.optics.alpha_cld,
                         alpha_lobe: s.optics.alpha_lobe,
                         alpha_theta2: s.optics.alpha_theta2,
+                        alpha_lobe_g: s.optics.alpha_lobe_g,
+                        alpha_absorbing: s.optics.alpha_o3,
+                        beta_total: s.optics.beta_mol + s.optics.beta_aer + s.optics.beta_cld,
                     }
                 })
                 .collect()
@@ -285,84 +253,6 @@ impl BeamPath {
             return 0.0;
         }
         self.attenuated_range_integral(r_a, r_b, 0.0)
-    }
-
-    /// The small-angle multiple scattering of each bin `(r_a, r_b)` (ascending,
-    /// contiguous): Hogan's PVC ([`multiple_scattering::small_angle_ratios`]) along the
-    /// beam in steps cut at the bins' edges and centres and no thicker than 0.05 in
-    /// two-way optical depth, each step's ratio weighted in its bin by its
-    /// single-scattering signal `β·T²·Δ/r²`.
-    pub fn small_angle_bins(
-        &self,
-        footprint: multiple_scattering::Footprint,
-        bins: &[(f64, f64)],
-    ) -> Vec<BinMultipleScattering> {
-        let mut out = vec![BinMultipleScattering::NONE; bins.len()];
-        let Some(first) = self.segments.first() else {
-            return out;
-        };
-        let mut cuts: Vec<f64> = bins
-            .iter()
-            .flat_map(|&(a, b)| [a, 0.5 * (a + b), b])
-            .collect();
-        cuts.dedup();
-        let mut steps = Vec::new();
-        let mut ends = Vec::new(); // (step end range, particle optical depth there)
-        let mut weights = Vec::new(); // (bin, single-scattering weight)
-        let mut tau_p = 0.0;
-        for s in &self.segments {
-            if s.tau_start > OPAQUE_OPTICAL_DEPTH {
-                break; // T² underflows to 0 here: these bins hold no signal to enhance
-            }
-            let lo = cuts.partition_point(|&c| c <= s.r_start);
-            let hi = cuts.partition_point(|&c| c < s.r_end);
-            let edges = std::iter::once(s.r_start)
-                .chain(cuts[lo..hi].iter().copied())
-                .chain(std::iter::once(s.r_end));
-            let edges: Vec<f64> = edges.collect();
-            for w in edges.windows(2) {
-                let n = multiple_scattering::pieces(w[1] - w[0], s.alpha);
-                let d = (w[1] - w[0]) / n as f64;
-                for k in 0..n {
-                    let a = w[0] + k as f64 * d;
-                    let tau = s.tau_start + s.alpha * (a - s.r_start);
-                    let mid = a + 0.5 * d;
-                    steps.push(multiple_scattering::Step {
-                        width_m: d,
-                        alpha_particle_per_m: s.alpha_lobe,
-                        alpha_theta2_per_m: s.alpha_theta2,
-                        alpha_air_per_m: (s.alpha - s.alpha_lobe).max(0.0),
-                    });
-                    tau_p += s.alpha_particle * d;
-                    ends.push((a + d, tau_p));
-                    let bin = bins.partition_point(|&(_, b)| b <= mid);
-                    let bin = match bins.get(bin) {
-                        Some(&(a, _)) if a <= mid => bin,
-                        _ => usize::MAX, // between the path's start and the first bin
-                    };
-                    let single = s.beta * (-2.0 * tau).exp() * d / (mid * mid)
-                        * multiple_scattering::mean_exp(2.0 * s.alpha * d);
-                    weights.push((bin, single));
-                }
-            }
-        }
-        let ratios = multiple_scattering::small_angle_ratios(footprint, first.r_start, &steps);
-        let mut sums = vec![(0.0, 0.0); bins.len()];
-        for ((bin, single), ratio) in weights.into_iter().zip(ratios) {
-            if let Some(s) = sums.get_mut(bin) {
-                s.0 += single * ratio;
-                s.1 += single;
-            }
-        }
-        for ((o, (num, den)), &(a, b)) in out.iter_mut().zip(sums).zip(bins) {
-            if den > 0.0 {
-                o.ratio = num / den;
-            }
-            let centre = 0.5 * (a + b);
-            let k = ends.partition_point(|&(r, _)| r <= centre * (1.0 + 1e-12));
-            o.particle_optical_depth = if k > 0 { ends[k - 1].1 } else { 0.0 };
-        }
-        out
     }
 
     /// `∫_a^b η(r)/r² · e^{−k(r−a)} dr`, splitting at the overlap's kinks.
