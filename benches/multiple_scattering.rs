@@ -12,6 +12,7 @@ use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use lidarsim::atmosphere::multiple_scattering::{Footprint, Step, small_angle_ratios};
+use lidarsim::atmosphere::wide_angle::{Gate, MAX_GATES, wide_angle_backscatter};
 use lidarsim::scenario::Scenario;
 
 /// 3,400 gates of 30 m from 705 km down: cirrus (0.3 km⁻¹, 30 µm) from 11 to 9 km,
@@ -61,7 +62,25 @@ fn bench(c: &mut Criterion) {
     g.bench_function("pvc_3400_gates", |b| {
         b.iter(|| small_angle_ratios(black_box(fp), 705e3 - 100e3, black_box(&steps)))
     });
-    for model in ["constant", "small_angle"] {
+    // the wide-angle part on its largest grid: a stratocumulus (8 km⁻¹, 10 µm, g 0.85)
+    // over the first 25 gates of 30 m, air after
+    let gates: Vec<Gate> = (0..MAX_GATES)
+        .map(|k| {
+            let alpha = if k < 25 { 8e-3 } else { 0.0 };
+            let theta = 532e-9 / (std::f64::consts::PI * 10e-6);
+            Gate {
+                alpha_particle_per_m: alpha,
+                alpha_g_per_m: 0.85 * alpha,
+                alpha_theta2_per_m: alpha * theta * theta,
+                alpha_air_per_m: 1.2e-5,
+                scattering_air_per_m: 1.2e-5,
+            }
+        })
+        .collect();
+    g.bench_function(format!("tdts_{MAX_GATES}_gates"), |b| {
+        b.iter(|| wide_angle_backscatter(black_box(fp), 30.0, 703e3, black_box(&gates), 1.0))
+    });
+    for model in ["constant", "small_angle", "small_and_wide_angle"] {
         let sc = caliop(model);
         g.bench_function(format!("caliop_expected_{model}"), |b| {
             b.iter(|| black_box(sc.expected().unwrap()))

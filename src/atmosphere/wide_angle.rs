@@ -38,14 +38,19 @@
 //!   photon in gate `i` at step `t` is seen at apparent gate `⌊(t + i)/2⌋`.
 //!
 //! Hogan's own C implementation (the `multiscatter` package, LGPL) is the reference the
-//! tests compare with; this is written from the method, with two departures: the
-//! source's spread integrates the moment equations exactly (his steps them once per
-//! gate), and `g_w` leaves the air isotropic (his gives the air the particles' g). The
-//! two agree within a few per cent (tests/multiple_scattering.rs).
+//! tests compare with (tests/wide_angle.rs: within 1e-7 where its inputs are this
+//! model's); this is written from the method. It departs in one place: the source's
+//! asymmetry `g_w` leaves the air isotropic (his gives the air the particles' g),
+//! which moves clear-air gates near a cloud by a few per cent of a return far below
+//! single scattering. The source's spread follows his implementation, not the exact
+//! moment integral ([`SourceBeam`]).
 //!
-//! **Cost.** O(n²) in the gates from where the wide-angle light matters (a transport
-//! mean free path shorter than 50 footprint radii, as HB08's code) to the window's end;
-//! the gates are widened so that there are at most [`MAX_GATES`].
+//! **Not modelled.** The surface (light reaching it is lost), absorbing particles
+//! (ϖ = 1), the depolarization of the diffuse light below a water cloud (it keeps the
+//! air's), and the anisotropic phase function near 180°.
+//!
+//! **Cost.** O(n²) in the gates from the first particles with a forward lobe to the
+//! window's end; past [`MAX_GATES`] the gates are widened (`benches/multiple_scattering.rs`).
 
 use super::multiple_scattering::{Footprint, mean_exp};
 
@@ -54,9 +59,11 @@ const MU1: f64 = 0.5;
 /// Diffusion theory's factor between the transport mean free path and the lateral
 /// spread (HB08 Eq. 18).
 const DIFFUSION_FACTOR: f64 = 4.0 / 3.0;
-/// The most gates the calculation runs on; a longer stretch gets wider gates (the cost
-/// is O(gates²): 400 gates take ~10 ms).
-pub const MAX_GATES: usize = 400;
+/// The most gates the calculation runs on; a longer stretch gets wider gates. The cost is
+/// O(gates²) (`benches/multiple_scattering.rs`: 2,000 gates take ~0.3 s); widening the
+/// gates blurs the return where it changes within a gate, behind a cloud's far edge most
+/// (docs/model.md §4j).
+pub const MAX_GATES: usize = 2000;
 
 /// One gate's optics, each a mean over the gate.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -198,6 +205,11 @@ impl Transfer {
 /// they have now, in a medium of transport mean free path `lt` (HB08 Eq. 18–20, the
 /// fast form: `n` solves `(4/3)(n + e^{−n} − 1) = (var − varw0)/lt²` within 1.5 %).
 pub fn expansion_m2(width_m: f64, lt: f64, varw0: f64, var: f64) -> f64 {
+    expansion_with_decay(width_m, lt, (-width_m / lt).exp_m1(), varw0, var)
+}
+
+/// [`expansion_m2`] given `e^{−Δ/l_t} − 1` (one per gate, not per step).
+fn expansion_with_decay(width_m: f64, lt: f64, decay_m1: f64, varw0: f64, var: f64) -> f64 {
     let n = if var <= varw0 {
         0.0
     } else {
@@ -209,7 +221,7 @@ pub fn expansion_m2(width_m: f64, lt: f64, varw0: f64, var: f64) -> f64 {
             norm / DIFFUSION_FACTOR + 1.0 - 0.24 / (norm * norm)
         }
     };
-    DIFFUSION_FACTOR * lt * (width_m + lt * ((-n - width_m / lt).exp() - (-n).exp()))
+    DIFFUSION_FACTOR * lt * (width_m + lt * (-n).exp() * decay_m1)
 }
 
 /// The quasi-direct beam's second moments at the gates' centres, as the source of the
@@ -331,6 +343,7 @@ pub fn wide_angle_backscatter(
     // the medium: transfer coefficients, return transmission, backscatter phase
     let mut transfer = vec![Transfer::default(); n + 2];
     let mut mfp = vec![f64::INFINITY; n + 2];
+    let mut decay = vec![0.0; n + 2]; // e^{−Δ/l_t} − 1
     let mut ret = vec![0.0; n]; // ϖ'α'·T_back/(4π)
     let mut phase_back = vec![0.0; n];
     let mut phase_on = vec![0.0; n];
@@ -340,6 +353,7 @@ pub fn wide_angle_backscatter(
         let (t, lt) = Transfer::new(width_m, extinction, ssa, g);
         transfer[i + 1] = t;
         mfp[i + 1] = if lt.is_finite() { lt } else { 1e6 * width_m };
+        decay[i + 1] = (-width_m / mfp[i + 1]).exp_m1();
         let od = extinction * width_m;
         let t_back = (-tau_back).exp() * mean_exp(od);
         tau_back += od;
@@ -363,7 +377,7 @@ pub fn wide_angle_backscatter(
             let (vb, vo) = (&now.spread_back, &now.spread_on);
             let grow = |e: f64, v: f64| {
                 if e > 0.0 {
-                    e * expansion_m2(width_m, mfp[k], source_spread[i], v / e)
+                    e * expansion_with_decay(width_m, mfp[k], decay[k], source_spread[i], v / e)
                 } else {
                     0.0
                 }
