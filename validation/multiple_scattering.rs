@@ -1,7 +1,7 @@
 //! Multiple scattering through a cirrus and a stratocumulus (issue 22, docs/model.md
 //! §4j): the bin-averaged attenuated backscatter of single scattering, of the
-//! `constant` model with the usual η (0.6 for cirrus, 0.7 for stratocumulus) and of the
-//! `small_angle` model, side by side. Writes `multiple_scattering.png` into the output
+//! `constant` model with the usual η (0.6 for cirrus, 0.7 for stratocumulus), of the
+//! `small_angle` model and of the `small_and_wide_angle` model, side by side. Writes `multiple_scattering.png` into the output
 //! folder and prints the values at a few altitudes.
 //!
 //! ```text
@@ -42,8 +42,9 @@ fn expected(config: &str, overrides: &[String]) -> ExpectedProfile {
         .unwrap_or_else(|e| panic!("{config}: {e}"))
 }
 
-/// (single scattering, constant η, small angle) attenuated backscatter of the panel.
-fn profiles(p: &Panel) -> [ExpectedProfile; 3] {
+/// (single scattering, constant η, small angle, small and wide angle) attenuated
+/// backscatter of the panel.
+fn profiles(p: &Panel) -> [ExpectedProfile; 4] {
     let with = |model: &str, eta: f64| {
         let mut ov = p.overrides.clone();
         ov.push(format!("multiple_scattering.model=\"{model}\""));
@@ -57,6 +58,7 @@ fn profiles(p: &Panel) -> [ExpectedProfile; 3] {
         with("constant", 1.0),
         with("constant", p.eta),
         with("small_angle", 1.0),
+        with("small_and_wide_angle", 1.0),
     ]
 }
 
@@ -89,20 +91,21 @@ fn main() {
             altitude_km: (0.0, 2.5),
         },
     ];
-    let all: Vec<[ExpectedProfile; 3]> = panels.iter().map(profiles).collect();
+    let all: Vec<[ExpectedProfile; 4]> = panels.iter().map(profiles).collect();
     for (p, e) in panels.iter().zip(&all) {
         println!(
-            "{}\n  altitude_km  single  constant(eta={})  small_angle",
+            "{}\n  altitude_km  single  constant(eta={})  small_angle  small_and_wide_angle",
             p.title, p.eta
         );
         for i in (0..e[0].n_bins()).step_by(if p.eta < 0.65 { 40 } else { 4 }) {
             let z = e[0].altitude_m[i] / 1e3;
             if z >= p.altitude_km.0 && z <= p.altitude_km.1 {
                 println!(
-                    "  {z:8.2}  {:.3e}  {:.3e}  {:.3e}",
+                    "  {z:8.2}  {:.3e}  {:.3e}  {:.3e}  {:.3e}",
                     e[0].attenuated_backscatter[i],
                     e[1].attenuated_backscatter[i],
-                    e[2].attenuated_backscatter[i]
+                    e[2].attenuated_backscatter[i],
+                    e[3].attenuated_backscatter[i]
                 );
             }
         }
@@ -112,7 +115,7 @@ fn main() {
     println!("wrote {}", path.display());
 }
 
-fn plot(panels: &[Panel], all: &[[ExpectedProfile; 3]], path: &Path) {
+fn plot(panels: &[Panel], all: &[[ExpectedProfile; 4]], path: &Path) {
     const W: u32 = 1200;
     const H: u32 = 650;
     figure::register();
@@ -155,11 +158,13 @@ fn plot(panels: &[Panel], all: &[[ExpectedProfile; 3]], path: &Path) {
                 "single scattering".to_string(),
                 format!("constant η = {}", p.eta),
                 "small angle (Hogan 2008)".to_string(),
+                "small + wide angle (Hogan & Battaglia 2008)".to_string(),
             ];
             let colours = [
                 RGBColor(120, 120, 120),
                 RGBColor(31, 119, 180),
                 RGBColor(214, 39, 40),
+                RGBColor(44, 160, 44),
             ];
             for ((x, name), colour) in e.iter().zip(names).zip(colours) {
                 let line: Vec<(f64, f64)> = (0..x.n_bins())
