@@ -297,6 +297,93 @@ fn gather(
         + other[from_behind] * t[from_behind].advance_turned
 }
 
+/// What the quasi-direct beam gives the two streams in each gate: power (relative to
+/// the pulse, calibrated) and the spread it starts with.
+struct Sources {
+    back: Vec<f64>,
+    on: Vec<f64>,
+    spread: Vec<f64>,
+}
+
+impl Sources {
+    /// The sources of `gates`, the first gate's centre at `first_range_m`, for a beam of
+    /// 1/e half-width² `rho_t2`; `calibration` scales the power.
+    fn new(
+        gates: &[Gate],
+        width_m: f64,
+        first_range_m: f64,
+        rho_t2: f64,
+        calibration: f64,
+    ) -> Self {
+        let n = gates.len();
+        let mut out = Sources {
+            back: vec![0.0; n],
+            on: vec![0.0; n],
+            spread: vec![0.0; n],
+        };
+        let mut beam = SourceBeam::new(first_range_m, rho_t2);
+        let mut tau_out = 0.0_f64;
+        for (i, gate) in gates.iter().enumerate() {
+            if i > 0 {
+                beam.step(width_m, gates[i - 1].alpha_theta2_per_m);
+            }
+            out.spread[i] = beam.width2;
+            let od = gate.outward_extinction_per_m() * width_m;
+            let mean_transmission = (-tau_out).exp() * mean_exp(od);
+            tau_out += od;
+            let (power, g_wide) = gate.source();
+            let power = calibration * mean_transmission * power * width_m;
+            let back_share = (0.5 * (1.0 - 3.0 * g_wide * MU1)).clamp(0.0, 1.0);
+            out.back[i] = power * back_share;
+            out.on[i] = power * (1.0 - back_share);
+        }
+        out
+    }
+}
+
+/// The delta-scaled medium of each gate as the streams see it (padded index 1..=n):
+/// transfer shares, transport mean free path, and the return toward the receiver.
+struct Medium {
+    transfer: Vec<Transfer>,
+    mfp: Vec<f64>,
+    /// `e^{−Δ/l_t} − 1`
+    decay: Vec<f64>,
+    /// `ϖ'α'·T_back/(4π)`, unpadded
+    ret: Vec<f64>,
+    /// the backscatter phase of the back and on streams, `1 ± 3g'μ₁`, unpadded
+    phase: Vec<(f64, f64)>,
+}
+
+impl Medium {
+    fn new(gates: &[Gate], width_m: f64) -> Self {
+        let n = gates.len();
+        let mut m = Medium {
+            transfer: vec![Transfer::default(); n + 2],
+            mfp: vec![1e6 * width_m; n + 2],
+            decay: vec![0.0; n + 2],
+            ret: vec![0.0; n],
+            phase: vec![(0.0, 0.0); n],
+        };
+        let mut tau_back = 0.0_f64;
+        for (i, gate) in gates.iter().enumerate() {
+            let (extinction, ssa, g) = gate.scaled();
+            let (t, lt) = Transfer::new(width_m, extinction, ssa, g);
+            m.transfer[i + 1] = t;
+            if lt.is_finite() {
+                m.mfp[i + 1] = lt;
+            }
+            m.decay[i + 1] = (-width_m / m.mfp[i + 1]).exp_m1();
+            let od = extinction * width_m;
+            let t_back = (-tau_back).exp() * mean_exp(od);
+            tau_back += od;
+            m.ret[i] = ssa * extinction * t_back / (4.0 * std::f64::consts::PI);
+            let back = (1.0 + 3.0 * g * MU1).min(2.0);
+            m.phase[i] = (back, (2.0 - back).max(0.0));
+        }
+        m
+    }
+}
+
 /// The wide-angle apparent backscatter (m⁻¹ sr⁻¹, in the units of single scattering's
 /// `β·T²`) of each of `gates` (equal width `width_m`; the first gate's centre at range
 /// `first_range_m` from the instrument), for a quasi-direct beam that reaches the first
@@ -318,49 +405,14 @@ pub fn wide_angle_backscatter(
     // the unscattered beam's share in the field of view: single scattering is calibrated
     let calibration = transmission_to_start / -(-rho_r2 / rho_t2).exp_m1();
     let range = |i: usize| first_range_m + i as f64 * width_m;
-
-    // sources: power into each stream and its spread, from the quasi-direct beam
-    let mut source_back = vec![0.0; n];
-    let mut source_on = vec![0.0; n];
-    let mut source_spread = vec![0.0; n];
-    let mut beam = SourceBeam::new(range(0), rho_t2);
-    let mut tau_out = 0.0_f64;
-    for (i, gate) in gates.iter().enumerate() {
-        if i > 0 {
-            beam.step(width_m, gates[i - 1].alpha_theta2_per_m);
-        }
-        source_spread[i] = beam.width2;
-        let od = gate.outward_extinction_per_m() * width_m;
-        let mean_transmission = (-tau_out).exp() * mean_exp(od);
-        tau_out += od;
-        let (power, g_wide) = gate.source();
-        let power = calibration * mean_transmission * power * width_m;
-        let back_share = (0.5 * (1.0 - 3.0 * g_wide * MU1)).clamp(0.0, 1.0);
-        source_back[i] = power * back_share;
-        source_on[i] = power * (1.0 - back_share);
-    }
-
-    // the medium: transfer coefficients, return transmission, backscatter phase
-    let mut transfer = vec![Transfer::default(); n + 2];
-    let mut mfp = vec![f64::INFINITY; n + 2];
-    let mut decay = vec![0.0; n + 2]; // e^{−Δ/l_t} − 1
-    let mut ret = vec![0.0; n]; // ϖ'α'·T_back/(4π)
-    let mut phase_back = vec![0.0; n];
-    let mut phase_on = vec![0.0; n];
-    let mut tau_back = 0.0_f64;
-    for (i, gate) in gates.iter().enumerate() {
-        let (extinction, ssa, g) = gate.scaled();
-        let (t, lt) = Transfer::new(width_m, extinction, ssa, g);
-        transfer[i + 1] = t;
-        mfp[i + 1] = if lt.is_finite() { lt } else { 1e6 * width_m };
-        decay[i + 1] = (-width_m / mfp[i + 1]).exp_m1();
-        let od = extinction * width_m;
-        let t_back = (-tau_back).exp() * mean_exp(od);
-        tau_back += od;
-        ret[i] = ssa * extinction * t_back / (4.0 * std::f64::consts::PI);
-        phase_back[i] = (1.0 + 3.0 * g * MU1).min(2.0);
-        phase_on[i] = (2.0 - phase_back[i]).max(0.0);
-    }
+    let src = Sources::new(gates, width_m, first_range_m, rho_t2, calibration);
+    let Medium {
+        transfer,
+        mfp,
+        decay,
+        ret,
+        phase,
+    } = Medium::new(gates, width_m);
 
     let mut now = Streams::new(n);
     let mut next = Streams::new(n);
@@ -377,7 +429,7 @@ pub fn wide_angle_backscatter(
             let (vb, vo) = (&now.spread_back, &now.spread_on);
             let grow = |e: f64, v: f64| {
                 if e > 0.0 {
-                    e * expansion_with_decay(width_m, mfp[k], decay[k], source_spread[i], v / e)
+                    e * expansion_with_decay(width_m, mfp[k], decay[k], src.spread[i], v / e)
                 } else {
                     0.0
                 }
@@ -399,16 +451,16 @@ pub fn wide_angle_backscatter(
                     }
                 };
                 out[j] += ret[i]
-                    * (phase_back[i] * seen(next.energy_back[k], next.spread_back[k])
-                        + phase_on[i] * seen(next.energy_on[k], next.spread_on[k]));
+                    * (phase[i].0 * seen(next.energy_back[k], next.spread_back[k])
+                        + phase[i].1 * seen(next.energy_on[k], next.spread_on[k]));
             }
         }
         if it < n {
             let k = it + 1;
-            next.energy_back[k] += source_back[it];
-            next.energy_on[k] += source_on[it];
-            next.spread_back[k] += source_back[it] * source_spread[it];
-            next.spread_on[k] += source_on[it] * source_spread[it];
+            next.energy_back[k] += src.back[it];
+            next.energy_on[k] += src.on[it];
+            next.spread_back[k] += src.back[it] * src.spread[it];
+            next.spread_on[k] += src.on[it] * src.spread[it];
         }
         std::mem::swap(&mut now, &mut next);
     }

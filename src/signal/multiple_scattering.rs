@@ -54,6 +54,16 @@ impl BinMultipleScattering {
     }
 }
 
+/// The small-angle model's steps along the beam and what each bin needs of them.
+#[derive(Default)]
+struct BeamSteps {
+    steps: Vec<ms::Step>,
+    /// (step end range, particle optical depth there)
+    ends: Vec<(f64, f64)>,
+    /// (bin, single-scattering weight `β·T²·Δ/r²`, the same in all polarizations)
+    weights: Vec<(usize, f64, f64)>,
+}
+
 impl BeamPath {
     /// The multiple scattering of each bin `(r_a, r_b)` (ascending, contiguous, of equal
     /// width): Hogan's PVC ([`ms::small_angle_ratios`]) along the beam in steps cut at
@@ -71,50 +81,11 @@ impl BeamPath {
         let Some(first) = self.segments.first() else {
             return out;
         };
-        let mut cuts: Vec<f64> = bins
-            .iter()
-            .flat_map(|&(a, b)| [a, 0.5 * (a + b), b])
-            .collect();
-        cuts.dedup();
-        let mut steps = Vec::new();
-        let mut ends = Vec::new(); // (step end range, particle optical depth there)
-        let mut weights = Vec::new(); // (bin, single-scattering weight, all polarizations)
-        let mut tau_p = 0.0;
-        for s in &self.segments {
-            if s.tau_start > OPAQUE_OPTICAL_DEPTH {
-                break; // T² underflows to 0 here: these bins hold no signal to enhance
-            }
-            let lo = cuts.partition_point(|&c| c <= s.r_start);
-            let hi = cuts.partition_point(|&c| c < s.r_end);
-            let edges = std::iter::once(s.r_start)
-                .chain(cuts[lo..hi].iter().copied())
-                .chain(std::iter::once(s.r_end));
-            let edges: Vec<f64> = edges.collect();
-            for w in edges.windows(2) {
-                let n = ms::pieces(w[1] - w[0], s.alpha);
-                let d = (w[1] - w[0]) / n as f64;
-                for k in 0..n {
-                    let a = w[0] + k as f64 * d;
-                    let tau = s.tau_start + s.alpha * (a - s.r_start);
-                    let mid = a + 0.5 * d;
-                    steps.push(ms::Step {
-                        width_m: d,
-                        alpha_particle_per_m: s.alpha_lobe,
-                        alpha_theta2_per_m: s.alpha_theta2,
-                        alpha_air_per_m: (s.alpha - s.alpha_lobe).max(0.0),
-                    });
-                    tau_p += s.alpha_particle * d;
-                    ends.push((a + d, tau_p));
-                    let bin = bins.partition_point(|&(_, b)| b <= mid);
-                    let bin = match bins.get(bin) {
-                        Some(&(a, _)) if a <= mid => bin,
-                        _ => usize::MAX, // between the path's start and the first bin
-                    };
-                    let t2 = (-2.0 * tau).exp() * d / (mid * mid) * ms::mean_exp(2.0 * s.alpha * d);
-                    weights.push((bin, s.beta * t2, s.beta_total * t2));
-                }
-            }
-        }
+        let BeamSteps {
+            steps,
+            ends,
+            weights,
+        } = self.beam_steps(bins);
         let ratios = ms::small_angle_ratios(footprint, first.r_start, &steps);
         let mut sums = vec![(0.0, 0.0); bins.len()];
         let mut single_total = vec![0.0; bins.len()];
@@ -135,6 +106,54 @@ impl BeamPath {
         }
         if wide_angle {
             self.add_wide_angle(footprint, bins, &single_total, &mut out);
+        }
+        out
+    }
+
+    /// The beam path's slabs cut at every bin's edges and centre and into steps of at
+    /// most 0.05 two-way optical depth, up to where T² underflows.
+    fn beam_steps(&self, bins: &[(f64, f64)]) -> BeamSteps {
+        let mut cuts: Vec<f64> = bins
+            .iter()
+            .flat_map(|&(a, b)| [a, 0.5 * (a + b), b])
+            .collect();
+        cuts.dedup();
+        let mut out = BeamSteps::default();
+        let mut tau_p = 0.0;
+        for s in &self.segments {
+            if s.tau_start > OPAQUE_OPTICAL_DEPTH {
+                break; // T² underflows to 0 here: these bins hold no signal to enhance
+            }
+            let lo = cuts.partition_point(|&c| c <= s.r_start);
+            let hi = cuts.partition_point(|&c| c < s.r_end);
+            let edges = std::iter::once(s.r_start)
+                .chain(cuts[lo..hi].iter().copied())
+                .chain(std::iter::once(s.r_end));
+            let edges: Vec<f64> = edges.collect();
+            for w in edges.windows(2) {
+                let n = ms::pieces(w[1] - w[0], s.alpha);
+                let d = (w[1] - w[0]) / n as f64;
+                for k in 0..n {
+                    let a = w[0] + k as f64 * d;
+                    let tau = s.tau_start + s.alpha * (a - s.r_start);
+                    let mid = a + 0.5 * d;
+                    out.steps.push(ms::Step {
+                        width_m: d,
+                        alpha_particle_per_m: s.alpha_lobe,
+                        alpha_theta2_per_m: s.alpha_theta2,
+                        alpha_air_per_m: (s.alpha - s.alpha_lobe).max(0.0),
+                    });
+                    tau_p += s.alpha_particle * d;
+                    out.ends.push((a + d, tau_p));
+                    let bin = bins.partition_point(|&(_, b)| b <= mid);
+                    let bin = match bins.get(bin) {
+                        Some(&(a, _)) if a <= mid => bin,
+                        _ => usize::MAX, // between the path's start and the first bin
+                    };
+                    let t2 = (-2.0 * tau).exp() * d / (mid * mid) * ms::mean_exp(2.0 * s.alpha * d);
+                    out.weights.push((bin, s.beta * t2, s.beta_total * t2));
+                }
+            }
         }
         out
     }
