@@ -4,6 +4,7 @@
 
 pub mod curtain;
 pub mod expect;
+pub mod plot;
 pub mod product;
 pub mod raw_file;
 pub mod safe_file;
