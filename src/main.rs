@@ -200,6 +200,23 @@ enum Command {
         #[arg(long, value_name = "NAME")]
         channel: Option<String>,
     },
+    /// The quicklook of a raw file, a merged file or an onboard product: the
+    /// range-corrected signal on a log colour scale against time (or along-track
+    /// distance) and altitude, the volume depolarization of a ∥/⊥ pair, the truth with
+    /// --truth (docs/figures.md)
+    Quicklook {
+        /// The raw file (`simulate -o`, `merge -o`) or onboard product (`onboard -o`).
+        file: PathBuf,
+        /// Output PNG.
+        #[arg(long, value_name = "OUT.png")]
+        png: PathBuf,
+        /// The channel to draw (default: the first).
+        #[arg(long, value_name = "NAME")]
+        channel: Option<String>,
+        /// Also draw the truth's attenuated backscatter on the same colour scale.
+        #[arg(long)]
+        truth: bool,
+    },
     /// Converts a raw file (ground run) to the EARLINET SCC raw NetCDF format.
     ExportScc {
         /// The raw lidar file (`simulate -o`).
@@ -382,6 +399,12 @@ fn main() -> ExitCode {
         Command::Curtain { raw, png, channel } => {
             lidarsim::commands::curtain(raw, png, channel.as_deref()).map(|()| true)
         }
+        Command::Quicklook {
+            file,
+            png,
+            channel,
+            truth,
+        } => lidarsim::output::quicklook::run(file, png, channel.as_deref(), *truth).map(|()| true),
         Command::ExportScc {
             raw,
             out,

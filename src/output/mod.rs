@@ -6,6 +6,7 @@ pub mod curtain;
 pub mod expect;
 pub mod plot;
 pub mod product;
+pub mod quicklook;
 pub mod raw_file;
 pub mod safe_file;
 pub mod scc;

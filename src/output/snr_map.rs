@@ -3,16 +3,24 @@
 //! horizontal axis) and altitude (vertical axis), with labelled contours at
 //! S/N = 1, 3 and 10 and a labelled colour bar.
 //!
-//! Text is drawn with DejaVu Sans embedded in the binary (`assets/fonts/`,
-//! licence beside it) through plotters' `ab_glyph` feature, so no system font
-//! or fontconfig is needed. The PNG is encoded in memory with the `png` crate
-//! and written through [`super::safe_file`] (complete or not at all).
-
-use std::sync::OnceLock;
+//! The shared pieces (embedded font and text, PNG encoding, ticks, viridis,
+//! isolines) come from [`super::plot`]; this file holds the figure's layout. The
+//! PNG is encoded in memory and written by the caller through
+//! [`super::safe_file`] (complete or not at all).
 
 use plotters::prelude::*;
+use plotters::style::FontTransform;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
-use plotters::style::{FontStyle, FontTransform, register_font};
+
+use super::plot::colour::viridis;
+use super::plot::isolines::isolines;
+use super::plot::text::{font, label};
+use super::plot::{DrawResult, ticks};
+
+// Kept for `curtain.rs` and `sweep_plot.rs` until they import these from `plot`
+// (both now do: this re-export can go, leaving a private `encode_png, ensure_font`).
+#[allow(unused_imports)]
+pub(crate) use super::plot::text::{FONT, encode_png, ensure_font};
 
 /// S/N against altitude and accumulation time, ready to be drawn.
 #[derive(Debug, Clone)]
@@ -42,13 +50,6 @@ pub const SNR_COLOUR_MAX: f64 = 1000.0;
 /// The colour scale never extends past this.
 const SNR_COLOUR_CAP: f64 = 1e6;
 
-/// Font family name under which the embedded font is registered with plotters.
-pub(crate) const FONT: &str = "sans-serif";
-static FONT_BYTES: &[u8] = include_bytes!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/assets/fonts/DejaVuSans.ttf"
-));
-
 /// Renders `map` as a `WIDTH`×`HEIGHT` PNG, encoded in memory.
 ///
 /// Invalid input (empty grid, fewer than 2 altitudes or times, ragged rows, NaN,
@@ -63,98 +64,85 @@ pub fn png_bytes(map: &SnrMap) -> std::result::Result<Vec<u8>, String> {
     encode_png(&rgb, WIDTH, HEIGHT).map_err(|e| format!("PNG encoding failed: {e}"))
 }
 
-pub(crate) fn ensure_font() -> std::result::Result<(), String> {
-    static REGISTERED: OnceLock<bool> = OnceLock::new();
-    let ok = *REGISTERED.get_or_init(|| register_font(FONT, FontStyle::Normal, FONT_BYTES).is_ok());
-    if ok {
-        Ok(())
-    } else {
-        Err("embedded font DejaVuSans.ttf could not be parsed".into())
-    }
-}
-
-pub(crate) fn encode_png(
-    rgb: &[u8],
-    w: u32,
-    h: u32,
-) -> std::result::Result<Vec<u8>, png::EncodingError> {
-    let mut out = Vec::new();
-    {
-        let mut enc = png::Encoder::new(&mut out, w, h);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut writer = enc.write_header()?;
-        writer.write_image_data(rgb)?;
-        writer.finish()?;
-    }
-    Ok(out)
-}
-
 // ---------------------------------------------------------------------------
 // Validated grid
 // ---------------------------------------------------------------------------
 
-/// The map sorted by ascending altitude, with x = log10(TC).
+/// Why `map` cannot be drawn, if it cannot (shapes, finite values, increasing TC).
+fn check(map: &SnrMap) -> std::result::Result<(), String> {
+    let (n_alt, n_tc) = (map.altitude_km.len(), map.accumulation_time_s.len());
+    if n_alt < 2 || n_tc < 2 {
+        return Err(format!(
+            "S/N map needs at least 2 altitudes and 2 accumulation times, got {n_alt} × {n_tc}"
+        ));
+    }
+    if map.snr.len() != n_alt {
+        return Err(format!(
+            "snr has {} rows but there are {n_alt} altitudes",
+            map.snr.len()
+        ));
+    }
+    for (i, row) in map.snr.iter().enumerate() {
+        if row.len() != n_tc {
+            return Err(format!(
+                "snr[{i}] has {} values but there are {n_tc} accumulation times",
+                row.len()
+            ));
+        }
+        if let Some((j, v)) = row
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
+        {
+            return Err(format!("snr[{i}][{j}] = {v}: S/N must be finite and >= 0"));
+        }
+    }
+    if let Some((i, z)) = map
+        .altitude_km
+        .iter()
+        .enumerate()
+        .find(|(_, z)| !z.is_finite())
+    {
+        return Err(format!("altitude_km[{i}] = {z} is not finite"));
+    }
+    for (j, &t) in map.accumulation_time_s.iter().enumerate() {
+        if !t.is_finite() || t <= 0.0 {
+            return Err(format!(
+                "accumulation_time_s[{j}] = {t}: must be finite and > 0"
+            ));
+        }
+        if j > 0 && t <= map.accumulation_time_s[j - 1] {
+            return Err(format!(
+                "accumulation_time_s must be strictly increasing (index {j})"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The map sorted by ascending altitude, with x = log10(TC), and its mapping to
+/// the figure's pixels.
 struct Grid {
     /// log10(TC), strictly increasing.
     x: Vec<f64>,
     /// Altitude (km), strictly increasing.
     y: Vec<f64>,
-    /// S/N, `snr[iy][ix]`.
-    snr: Vec<Vec<f64>>,
+    /// log10(S/N) floored at the colour-scale minimum, `field[iy][ix]`: the field
+    /// that is both coloured and contoured, so colours and contour lines agree.
+    field: Vec<Vec<f64>>,
+    /// First and last TC (s).
+    tc: (f64, f64),
     /// Upper end of the colour scale.
     vmax: f64,
-    /// Largest S/N in the map.
+    /// Smallest and largest S/N in the map.
+    min: f64,
     max: f64,
 }
 
 impl Grid {
     fn new(map: &SnrMap) -> std::result::Result<Self, String> {
-        let (n_alt, n_tc) = (map.altitude_km.len(), map.accumulation_time_s.len());
-        if n_alt < 2 || n_tc < 2 {
-            return Err(format!(
-                "S/N map needs at least 2 altitudes and 2 accumulation times, got {n_alt} × {n_tc}"
-            ));
-        }
-        if map.snr.len() != n_alt {
-            return Err(format!(
-                "snr has {} rows but there are {n_alt} altitudes",
-                map.snr.len()
-            ));
-        }
-        for (i, row) in map.snr.iter().enumerate() {
-            if row.len() != n_tc {
-                return Err(format!(
-                    "snr[{i}] has {} values but there are {n_tc} accumulation times",
-                    row.len()
-                ));
-            }
-            for (j, &v) in row.iter().enumerate() {
-                if !v.is_finite() || v < 0.0 {
-                    return Err(format!("snr[{i}][{j}] = {v}: S/N must be finite and >= 0"));
-                }
-            }
-        }
-        for (i, &z) in map.altitude_km.iter().enumerate() {
-            if !z.is_finite() {
-                return Err(format!("altitude_km[{i}] = {z} is not finite"));
-            }
-        }
-        let mut prev = 0.0;
-        for (j, &t) in map.accumulation_time_s.iter().enumerate() {
-            if !t.is_finite() || t <= 0.0 {
-                return Err(format!(
-                    "accumulation_time_s[{j}] = {t}: must be finite and > 0"
-                ));
-            }
-            if j > 0 && t <= prev {
-                return Err(format!(
-                    "accumulation_time_s must be strictly increasing (index {j})"
-                ));
-            }
-            prev = t;
-        }
-        let mut order: Vec<usize> = (0..n_alt).collect();
+        check(map)?;
+        let mut order: Vec<usize> = (0..map.altitude_km.len()).collect();
         order.sort_by(|&a, &b| map.altitude_km[a].total_cmp(&map.altitude_km[b]));
         let y: Vec<f64> = order.iter().map(|&i| map.altitude_km[i]).collect();
         if let Some(w) = y.windows(2).find(|w| w[0] == w[1]) {
@@ -164,150 +152,80 @@ impl Grid {
         if x.windows(2).any(|w| w[0] >= w[1]) {
             return Err("accumulation times too close to tell apart on a log axis".into());
         }
-        let snr: Vec<Vec<f64>> = order.iter().map(|&i| map.snr[i].clone()).collect();
-        let max = snr.iter().flatten().fold(0.0f64, |m, &v| m.max(v));
+        let field = order
+            .iter()
+            .map(|&i| {
+                map.snr[i]
+                    .iter()
+                    .map(|&v| v.max(SNR_COLOUR_MIN).log10())
+                    .collect()
+            })
+            .collect();
+        let all = || map.snr.iter().flatten().copied();
+        let (min, max) = (
+            all().fold(f64::INFINITY, f64::min),
+            all().fold(0.0, f64::max),
+        );
         let vmax = if max > SNR_COLOUR_MAX {
             10f64.powf(max.log10().ceil()).min(SNR_COLOUR_CAP)
         } else {
             SNR_COLOUR_MAX
         };
+        let tc = &map.accumulation_time_s;
         Ok(Grid {
             x,
             y,
-            snr,
+            field,
+            tc: (tc[0], tc[tc.len() - 1]),
             vmax,
+            min,
             max,
         })
     }
 
-    /// log10(S/N) floored at the colour-scale minimum: the field that is both
-    /// coloured and contoured, so colours and contour lines agree.
-    fn log_field(&self) -> Vec<Vec<f64>> {
-        self.snr
-            .iter()
-            .map(|row| row.iter().map(|&v| v.max(SNR_COLOUR_MIN).log10()).collect())
-            .collect()
+    /// The contour lines at S/N = `level`, in (log10 TC, altitude km).
+    fn contours(&self, level: f64) -> Vec<Vec<(f64, f64)>> {
+        isolines(&self.x, &self.y, &self.field, level.log10())
+    }
+
+    /// Pixel column of log10(TC) = `lx`.
+    fn px(&self, lx: f64) -> f64 {
+        let (a, b) = ends(&self.x);
+        PLOT_L as f64 + (lx - a) / (b - a) * (PLOT_R - PLOT_L) as f64
+    }
+
+    /// Pixel row of altitude `z` (km).
+    fn py(&self, z: f64) -> f64 {
+        let (a, b) = ends(&self.y);
+        PLOT_B as f64 - (z - a) / (b - a) * (PLOT_B - PLOT_T) as f64
+    }
+
+    /// Where log10(S/N) = `lv` falls on the colour scale, 0 (bottom) to 1 (top).
+    fn scale(&self, lv: f64) -> f64 {
+        let (a, b) = (SNR_COLOUR_MIN.log10(), self.vmax.log10());
+        (lv - a) / (b - a)
+    }
+
+    /// Pixel row of S/N `v` on the colour bar.
+    fn bar_y(&self, v: f64) -> f64 {
+        PLOT_B as f64 - self.scale(v.log10()) * (PLOT_B - PLOT_T) as f64
+    }
+
+    /// Labelled TC ticks (s): powers of ten (1-2-5 under two decades).
+    fn tc_ticks(&self) -> Vec<f64> {
+        ticks::log(self.tc.0, self.tc.1, 10)
+    }
+
+    /// Labelled altitude ticks (km): a 1-2-5 step, about 7 intervals.
+    fn z_ticks(&self) -> Vec<f64> {
+        let (a, b) = ends(&self.y);
+        ticks::linear(a, b, 7.0)
     }
 }
 
-// ---------------------------------------------------------------------------
-// Marching squares
-// ---------------------------------------------------------------------------
-
-/// A grid edge: `(iy, ix, vertical)`; horizontal edges join (iy, ix)–(iy, ix+1),
-/// vertical ones (iy, ix)–(iy+1, ix).
-type EdgeKey = (usize, usize, bool);
-
-/// Contour lines of `f` at `level` by marching squares.
-///
-/// `f[iy][ix]` is sampled at `(x[ix], y[iy])` with `x` and `y` strictly increasing.
-/// Points on grid edges are found by linear interpolation; corners with
-/// `f >= level` count as inside. Saddle cells are resolved with the cell-centre
-/// mean. Segments are chained into polylines (a closed loop repeats its first
-/// point at the end). Returns no lines if the shapes do not match.
-pub fn marching_squares(x: &[f64], y: &[f64], f: &[Vec<f64>], level: f64) -> Vec<Vec<(f64, f64)>> {
-    let (nx, ny) = (x.len(), y.len());
-    if nx < 2 || ny < 2 || f.len() != ny || f.iter().any(|r| r.len() != nx) || !level.is_finite() {
-        return Vec::new();
-    }
-    let inside = |iy: usize, ix: usize| f[iy][ix] >= level;
-    let mut segments: Vec<(EdgeKey, EdgeKey)> = Vec::new();
-    for iy in 0..ny - 1 {
-        for ix in 0..nx - 1 {
-            let (a, b) = (inside(iy, ix), inside(iy, ix + 1));
-            let (c, d) = (inside(iy + 1, ix + 1), inside(iy + 1, ix));
-            let bottom = (iy, ix, false);
-            let right = (iy, ix + 1, true);
-            let top = (iy + 1, ix, false);
-            let left = (iy, ix, true);
-            let mut crossed = Vec::with_capacity(4);
-            if a != b {
-                crossed.push(bottom);
-            }
-            if b != c {
-                crossed.push(right);
-            }
-            if c != d {
-                crossed.push(top);
-            }
-            if d != a {
-                crossed.push(left);
-            }
-            match crossed.len() {
-                2 => segments.push((crossed[0], crossed[1])),
-                4 => {
-                    let centre =
-                        (f[iy][ix] + f[iy][ix + 1] + f[iy + 1][ix + 1] + f[iy + 1][ix]) / 4.0;
-                    if a != (centre >= level) {
-                        // Corners a and c are cut off; b and d connect through the centre.
-                        segments.push((left, bottom));
-                        segments.push((right, top));
-                    } else {
-                        segments.push((bottom, right));
-                        segments.push((top, left));
-                    }
-                }
-                _ => {}
-            }
-        }
-    }
-    let point = |(iy, ix, vertical): EdgeKey| -> (f64, f64) {
-        let (iy2, ix2) = if vertical { (iy + 1, ix) } else { (iy, ix + 1) };
-        let (v0, v1) = (f[iy][ix], f[iy2][ix2]);
-        let t = if v1 != v0 {
-            ((level - v0) / (v1 - v0)).clamp(0.0, 1.0)
-        } else {
-            0.5
-        };
-        (x[ix] + t * (x[ix2] - x[ix]), y[iy] + t * (y[iy2] - y[iy]))
-    };
-    chain(&segments)
-        .into_iter()
-        .map(|line| line.into_iter().map(point).collect())
-        .collect()
-}
-
-/// Joins segments sharing an edge into polylines of edge keys.
-fn chain(segments: &[(EdgeKey, EdgeKey)]) -> Vec<Vec<EdgeKey>> {
-    use std::collections::HashMap;
-    let mut at: HashMap<EdgeKey, Vec<usize>> = HashMap::new();
-    for (s, &(p, q)) in segments.iter().enumerate() {
-        at.entry(p).or_default().push(s);
-        at.entry(q).or_default().push(s);
-    }
-    let mut used = vec![false; segments.len()];
-    let mut lines = Vec::new();
-    // Open chains start at an edge used once (a grid boundary); then closed loops.
-    let mut starts: Vec<(usize, EdgeKey)> = Vec::new();
-    for (s, &(p, q)) in segments.iter().enumerate() {
-        if at[&p].len() == 1 {
-            starts.push((s, p));
-        }
-        if at[&q].len() == 1 {
-            starts.push((s, q));
-        }
-    }
-    starts.extend(segments.iter().enumerate().map(|(s, &(p, _))| (s, p)));
-    for (first, from) in starts {
-        if used[first] {
-            continue;
-        }
-        let mut line = vec![from];
-        let (mut seg, mut cur) = (first, from);
-        loop {
-            used[seg] = true;
-            let (p, q) = segments[seg];
-            let next = if p == cur { q } else { p };
-            line.push(next);
-            cur = next;
-            match at[&cur].iter().find(|&&s| !used[s]) {
-                Some(&s) => seg = s,
-                None => break,
-            }
-        }
-        lines.push(line);
-    }
-    lines
+/// First and last element.
+fn ends(v: &[f64]) -> (f64, f64) {
+    (v[0], v[v.len() - 1])
 }
 
 // ---------------------------------------------------------------------------
@@ -322,40 +240,7 @@ const PLOT_B: i32 = 592;
 const CBAR_L: i32 = 846;
 const CBAR_R: i32 = 870;
 
-/// 17 samples of matplotlib's viridis.
-const VIRIDIS: [(u8, u8, u8); 17] = [
-    (68, 1, 84),
-    (72, 24, 106),
-    (71, 45, 123),
-    (66, 64, 134),
-    (59, 82, 139),
-    (51, 99, 141),
-    (44, 114, 142),
-    (38, 130, 142),
-    (33, 145, 140),
-    (31, 160, 136),
-    (40, 174, 128),
-    (63, 188, 115),
-    (94, 201, 98),
-    (132, 212, 75),
-    (173, 220, 48),
-    (216, 226, 25),
-    (253, 231, 37),
-];
-
-fn viridis(t: f64) -> RGBColor {
-    let t = if t.is_finite() {
-        t.clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let s = t * (VIRIDIS.len() - 1) as f64;
-    let i = (s.floor() as usize).min(VIRIDIS.len() - 2);
-    let w = s - i as f64;
-    let (a, b) = (VIRIDIS[i], VIRIDIS[i + 1]);
-    let mix = |p: u8, q: u8| (p as f64 + w * (q as f64 - p as f64)).round() as u8;
-    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
-}
+type Area<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
 
 /// How one contour level is drawn.
 struct LevelStyle {
@@ -365,104 +250,48 @@ struct LevelStyle {
     dashed: bool,
 }
 
+/// S/N = 1 dashed white, 3 white, 10 black, each on a contrasting halo.
 fn level_styles() -> [LevelStyle; 3] {
-    [
-        LevelStyle {
-            level: CONTOUR_LEVELS[0],
-            colour: WHITE,
-            halo: BLACK,
-            dashed: true,
-        },
-        LevelStyle {
-            level: CONTOUR_LEVELS[1],
-            colour: WHITE,
-            halo: BLACK,
-            dashed: false,
-        },
-        LevelStyle {
-            level: CONTOUR_LEVELS[2],
-            colour: BLACK,
-            halo: WHITE,
-            dashed: false,
-        },
-    ]
-}
-
-fn fmt_snr(v: f64) -> String {
-    if v < 1.0 {
-        format!("{v}")
-    } else if v < 1e5 {
-        format!("{v:.0}")
-    } else {
-        format!("1e{}", v.log10().round())
-    }
-}
-
-fn fmt_tc(v: f64) -> String {
-    if v >= 1.0 {
-        format!("{v:.0}")
-    } else {
-        format!("{}", (v * 1e6).round() / 1e6)
-    }
-}
-
-/// The 1-2-2.5-5 × 10^k step giving the number of intervals over `span` nearest `target`.
-fn nice_step(span: f64, target: f64) -> f64 {
-    let mag = 10f64.powf((span / target).log10().floor());
-    [0.5, 1.0, 2.0, 2.5, 5.0, 10.0, 20.0]
-        .map(|m| m * mag)
-        .into_iter()
-        .min_by(|a, b| ((span / a - target).abs()).total_cmp(&(span / b - target).abs()))
-        .unwrap_or(mag)
-}
-
-type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
-type Area<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
-type AreaResult = std::result::Result<
-    (),
-    DrawingAreaErrorKind<<BitMapBackend<'static> as DrawingBackend>::ErrorType>,
->;
-
-fn font(size: f64) -> TextStyle<'static> {
-    TextStyle::from((FONT, size).into_font()).color(&BLACK)
-}
-
-/// Draws unrotated text anchored at `(x, y)`. plotters' `ab_glyph` renderer puts
-/// glyphs lower than its layout box says; shift so that `VPos::Center` centres
-/// the capitals on `y` and `VPos::Top` puts their tops at about `y`.
-fn label(
-    root: &Area,
-    text: &str,
-    (x, y): (i32, i32),
-    style: &TextStyle<'_>,
-    h: HPos,
-    v: VPos,
-) -> AreaResult {
-    let size = style.font.get_size();
-    let dy = match v {
-        VPos::Center => (0.22 * size).round() as i32,
-        VPos::Top => (0.13 * size).round() as i32,
-        VPos::Bottom => 0,
+    let style = |k: usize, colour, halo, dashed| LevelStyle {
+        level: CONTOUR_LEVELS[k],
+        colour,
+        halo,
+        dashed,
     };
-    root.draw(&Text::new(
-        text.to_string(),
-        (x, y + dy),
-        style.pos(Pos::new(h, v)),
-    ))
+    [
+        style(0, WHITE, BLACK, true),
+        style(1, WHITE, BLACK, false),
+        style(2, BLACK, WHITE, false),
+    ]
 }
 
 fn render(grid: &Grid, map: &SnrMap, rgb: &mut [u8]) -> DrawResult {
     let root = BitMapBackend::with_buffer(rgb, (WIDTH, HEIGHT)).into_drawing_area();
     root.fill(&WHITE)?;
-    let (lx0, lx1) = (grid.x[0], grid.x[grid.x.len() - 1]);
-    let (z0, z1) = (grid.y[0], grid.y[grid.y.len() - 1]);
-    let (lv0, lv1) = (SNR_COLOUR_MIN.log10(), grid.vmax.log10());
-    let (pw, ph) = ((PLOT_R - PLOT_L) as f64, (PLOT_B - PLOT_T) as f64);
-    let px = |lx: f64| PLOT_L as f64 + (lx - lx0) / (lx1 - lx0) * pw;
-    let py = |z: f64| PLOT_B as f64 - (z - z0) / (z1 - z0) * ph;
-    let field = grid.log_field();
+    draw_titles(&root, map)?;
+    draw_field(&root, grid)?;
+    draw_grid_lines(&root, grid)?;
+    let styles = level_styles();
+    let contours: Vec<Vec<Vec<(f64, f64)>>> = styles
+        .iter()
+        .map(|st| {
+            grid.contours(st.level)
+                .iter()
+                .map(|l| l.iter().map(|&(lx, z)| (grid.px(lx), grid.py(z))).collect())
+                .collect()
+        })
+        .collect();
+    draw_contours(&root, &styles, &contours)?;
+    draw_tc_axis(&root, grid)?;
+    draw_z_axis(&root, grid)?;
+    draw_colour_bar(&root, grid, &styles)?;
+    draw_legend(&root, grid, &styles, &contours)?;
+    root.present()?;
+    Ok(())
+}
 
-    // --- Title and subtitle (shrunk to fit the width).
+/// Title and subtitle, centred, each shrunk to fit the width.
+fn draw_titles(root: &Area, map: &SnrMap) -> DrawResult {
     for (text, size, y, colour) in [
         (map.title.as_str(), 24.0, 12, BLACK),
         (map.subtitle.as_str(), 16.0, 47, RGBColor(70, 70, 70)),
@@ -474,92 +303,70 @@ fn render(grid: &Grid, map: &SnrMap, rgb: &mut [u8]) -> DrawResult {
         while s > 9.0 && root.estimate_text_size(text, &font(s))?.0 as i32 > WIDTH as i32 - 30 {
             s -= 1.0;
         }
+        let style = font(s).color(&colour);
         label(
-            &root,
+            root,
             text,
             (WIDTH as i32 / 2, y),
-            &font(s).color(&colour),
+            &style,
             HPos::Center,
             VPos::Top,
         )?;
     }
+    Ok(())
+}
 
-    // --- False colour: bilinear in (log TC, altitude) on the field that is contoured.
+/// The false colour: bilinear in (log TC, altitude) on the field that is contoured.
+fn draw_field(root: &Area, g: &Grid) -> DrawResult {
+    let (lx0, lx1) = ends(&g.x);
+    let (z0, z1) = ends(&g.y);
+    let (pw, ph) = ((PLOT_R - PLOT_L) as f64, (PLOT_B - PLOT_T) as f64);
     let cols: Vec<(usize, f64)> = (PLOT_L..PLOT_R)
-        .map(|p| {
-            locate(
-                &grid.x,
-                lx0 + (p as f64 + 0.5 - PLOT_L as f64) / pw * (lx1 - lx0),
-            )
-        })
+        .map(|p| locate(&g.x, lx0 + ((p - PLOT_L) as f64 + 0.5) / pw * (lx1 - lx0)))
         .collect();
     for p in PLOT_T..PLOT_B {
-        let (iy, wy) = locate(
-            &grid.y,
-            z1 - (p as f64 + 0.5 - PLOT_T as f64) / ph * (z1 - z0),
-        );
-        let (lo, hi) = (&field[iy], &field[iy + 1]);
+        let (iy, wy) = locate(&g.y, z1 - ((p - PLOT_T) as f64 + 0.5) / ph * (z1 - z0));
+        let (lo, hi) = (&g.field[iy], &g.field[iy + 1]);
         for (k, &(ix, wx)) in cols.iter().enumerate() {
             let a = (1.0 - wx) * lo[ix] + wx * lo[ix + 1];
             let b = (1.0 - wx) * hi[ix] + wx * hi[ix + 1];
             let v = (1.0 - wy) * a + wy * b;
-            root.draw_pixel((PLOT_L + k as i32, p), &viridis((v - lv0) / (lv1 - lv0)))?;
+            root.draw_pixel((PLOT_L + k as i32, p), &viridis(g.scale(v)))?;
         }
     }
+    Ok(())
+}
 
-    // --- Grid lines at the labelled ticks.
-    let mut x_major: Vec<f64> = ((lx0 - 1e-9).ceil() as i32..=(lx1 + 1e-9).floor() as i32)
-        .map(f64::from)
-        .collect();
-    if x_major.len() < 2 {
-        // Less than a decade shown: label 2× and 5× too.
-        x_major = (lx0.floor() as i32..=lx1.ceil() as i32)
-            .flat_map(|d| [1.0, 2.0, 5.0].map(|m| (m * 10f64.powi(d)).log10()))
-            .filter(|&l| l >= lx0 - 1e-9 && l <= lx1 + 1e-9)
-            .collect();
-    }
-    let z_step = nice_step(z1 - z0, 7.0);
-    let z_ticks: Vec<f64> = ((z0 / z_step - 1e-9).ceil() as i64
-        ..=(z1 / z_step + 1e-9).floor() as i64)
-        .map(|k| k as f64 * z_step)
-        .collect();
-    // Decimals that show every tick exactly (2.5 × 10^k needs one more).
-    let z_decimals = (0..=12)
-        .find(|&d| {
-            let scaled = z_step * 10f64.powi(d);
-            (scaled - scaled.round()).abs() < 1e-6 * scaled.max(1.0)
-        })
-        .unwrap_or(3) as usize;
-    let grid_style = ShapeStyle::from(&WHITE.mix(0.35)).stroke_width(1);
-    for &l in &x_major {
-        let x = px(l).round() as i32;
-        root.draw(&PathElement::new(
-            vec![(x, PLOT_T), (x, PLOT_B)],
-            grid_style,
-        ))?;
-    }
-    for &z in &z_ticks {
-        let y = py(z).round() as i32;
-        root.draw(&PathElement::new(
-            vec![(PLOT_L, y), (PLOT_R, y)],
-            grid_style,
-        ))?;
-    }
+/// Index `i` with `v[i] <= t <= v[i+1]` (clamped) and the weight of `v[i+1]`.
+fn locate(v: &[f64], t: f64) -> (usize, f64) {
+    let i = v.partition_point(|&a| a <= t).clamp(1, v.len() - 1) - 1;
+    let w = ((t - v[i]) / (v[i + 1] - v[i])).clamp(0.0, 1.0);
+    (i, w)
+}
 
-    // --- Contours, then their labels (kept off the other levels' lines).
-    let styles = level_styles();
-    let contours: Vec<Vec<Vec<(f64, f64)>>> = styles
-        .iter()
-        .map(|st| {
-            marching_squares(&grid.x, &grid.y, &field, st.level.log10())
-                .iter()
-                .map(|l| l.iter().map(|&(lx, z)| (px(lx), py(z))).collect())
-                .collect()
-        })
-        .collect();
-    for (st, lines) in styles.iter().zip(&contours) {
+/// Faint grid lines at the labelled ticks.
+fn draw_grid_lines(root: &Area, g: &Grid) -> DrawResult {
+    let style = ShapeStyle::from(&WHITE.mix(0.35)).stroke_width(1);
+    for t in g.tc_ticks() {
+        let x = g.px(t.log10()).round() as i32;
+        root.draw(&PathElement::new(vec![(x, PLOT_T), (x, PLOT_B)], style))?;
+    }
+    for z in g.z_ticks() {
+        let y = g.py(z).round() as i32;
+        root.draw(&PathElement::new(vec![(PLOT_L, y), (PLOT_R, y)], style))?;
+    }
+    Ok(())
+}
+
+/// The contour lines (pixels), then their labels, kept off the other levels' lines.
+fn draw_contours(
+    root: &Area,
+    styles: &[LevelStyle],
+    contours: &[Vec<Vec<(f64, f64)>>],
+) -> DrawResult {
+    for (st, lines) in styles.iter().zip(contours) {
         for line in lines {
-            draw_polyline(&root, line, st)?;
+            draw_polyline(root, line, st)?;
         }
     }
     let mut taken: Vec<Bbox> = Vec::new();
@@ -570,73 +377,99 @@ fn render(grid: &Grid, map: &SnrMap, rgb: &mut [u8]) -> DrawResult {
             .filter(|&(m, _)| m != k)
             .flat_map(|(_, lines)| lines.iter().flat_map(|l| densify(l, 2.0)))
             .collect();
-        place_labels(&root, &contours[k], st, &others, &mut taken)?;
+        place_labels(root, &contours[k], st, &others, &mut taken)?;
     }
+    Ok(())
+}
 
-    // --- Frame, ticks, tick labels, axis labels.
+/// The frame, and the TC axis: ticks at 1..9 × 10^k (longer at powers of ten and at
+/// the labels), tick labels and title.
+fn draw_tc_axis(root: &Area, g: &Grid) -> DrawResult {
     root.draw(&Rectangle::new(
         [(PLOT_L, PLOT_T), (PLOT_R, PLOT_B)],
         ShapeStyle::from(&BLACK).stroke_width(1),
     ))?;
-    let tick_font = font(15.0);
+    let (lx0, lx1) = ends(&g.x);
     for d in (lx0.floor() as i32)..=(lx1.ceil() as i32) {
         for m in 1..10 {
             let l = (m as f64 * 10f64.powi(d)).log10();
             if l >= lx0 - 1e-9 && l <= lx1 + 1e-9 {
-                let x = px(l).round() as i32;
-                let len = if m == 1 { 7 } else { 4 };
-                root.draw(&PathElement::new(
-                    vec![(x, PLOT_B), (x, PLOT_B + len)],
-                    BLACK,
-                ))?;
+                let (x, len) = (g.px(l).round() as i32, if m == 1 { 7 } else { 4 });
+                line(root, (x, PLOT_B), (x, PLOT_B + len))?;
             }
         }
     }
-    for &l in &x_major {
-        let x = px(l).round() as i32;
-        root.draw(&PathElement::new(vec![(x, PLOT_B), (x, PLOT_B + 7)], BLACK))?;
-        label(
-            &root,
-            &fmt_tc(10f64.powf(l)),
-            (x, PLOT_B + 11),
-            &tick_font,
-            HPos::Center,
-            VPos::Top,
-        )?;
+    let tick_font = font(15.0);
+    for t in g.tc_ticks() {
+        let x = g.px(t.log10()).round() as i32;
+        line(root, (x, PLOT_B), (x, PLOT_B + 7))?;
+        let (text, at) = (ticks::format(t), (x, PLOT_B + 11));
+        label(root, &text, at, &tick_font, HPos::Center, VPos::Top)?;
     }
-    let axis_font = font(17.0);
-    let x_title = "accumulation time TC (s)";
-    label(
-        &root,
-        x_title,
+    let (title, at) = (
+        "accumulation time TC (s)",
         ((PLOT_L + PLOT_R) / 2, PLOT_B + 36),
-        &axis_font,
-        HPos::Center,
-        VPos::Top,
-    )?;
-    for &z in &z_ticks {
-        let y = py(z).round() as i32;
-        root.draw(&PathElement::new(vec![(PLOT_L - 7, y), (PLOT_L, y)], BLACK))?;
-        let text = format!("{z:.*}", z_decimals);
-        label(
-            &root,
-            &text,
-            (PLOT_L - 11, y),
-            &tick_font,
-            HPos::Right,
-            VPos::Center,
-        )?;
-    }
-    root.draw(&Text::new(
-        "altitude (km)",
-        (26, (PLOT_T + PLOT_B) / 2),
-        axis_font
-            .transform(FontTransform::Rotate270)
-            .pos(Pos::new(HPos::Center, VPos::Center)),
-    ))?;
+    );
+    label(root, title, at, &font(17.0), HPos::Center, VPos::Top)?;
+    Ok(())
+}
 
-    // --- Colour bar, with the contour levels marked in their line styles.
-    let cy = |lv: f64| PLOT_B as f64 - (lv - lv0) / (lv1 - lv0) * ph;
+/// The altitude axis: ticks, tick labels and title.
+fn draw_z_axis(root: &Area, g: &Grid) -> DrawResult {
+    let tick_font = font(15.0);
+    for z in g.z_ticks() {
+        let y = g.py(z).round() as i32;
+        line(root, (PLOT_L - 7, y), (PLOT_L, y))?;
+        let (text, at) = (ticks::format(z), (PLOT_L - 11, y));
+        label(root, &text, at, &tick_font, HPos::Right, VPos::Center)?;
+    }
+    let at = (26, (PLOT_T + PLOT_B) / 2);
+    upright(root, "altitude (km)", at, FontTransform::Rotate270)
+}
+
+/// A thin black line from `a` to `b`.
+fn line(root: &Area, a: (i32, i32), b: (i32, i32)) -> DrawResult {
+    root.draw(&PathElement::new(vec![a, b], BLACK))?;
+    Ok(())
+}
+
+/// An axis title turned on its side, centred on `at`.
+fn upright(root: &Area, text: &str, at: (i32, i32), turn: FontTransform) -> DrawResult {
+    let style = font(17.0)
+        .transform(turn)
+        .pos(Pos::new(HPos::Center, VPos::Center));
+    root.draw(&Text::new(text, at, style))?;
+    Ok(())
+}
+
+/// The colour bar's marks: the floor (≤), the contour levels, the decades up to the
+/// top (≥ when the data go past it), with their labels.
+fn bar_marks(g: &Grid) -> Vec<(f64, String)> {
+    let mut marks = vec![SNR_COLOUR_MIN, 1.0, 3.0, 10.0];
+    let mut v = 100.0;
+    while v <= g.vmax * 1.0001 {
+        marks.push(v);
+        v *= 10.0;
+    }
+    marks
+        .into_iter()
+        .map(|v| {
+            let bound = if v == SNR_COLOUR_MIN {
+                "≤"
+            } else if (v - g.vmax).abs() < 1e-9 * v && g.max > g.vmax {
+                "≥"
+            } else {
+                ""
+            };
+            (v, format!("{bound}{}", ticks::format(v)))
+        })
+        .collect()
+}
+
+/// The colour bar with its marks and title, the contour levels drawn on it in their
+/// line styles.
+fn draw_colour_bar(root: &Area, g: &Grid, styles: &[LevelStyle]) -> DrawResult {
+    let ph = (PLOT_B - PLOT_T) as f64;
     for p in PLOT_T..PLOT_B {
         let t = (PLOT_B as f64 - (p as f64 + 0.5)) / ph;
         root.draw(&PathElement::new(
@@ -648,24 +481,12 @@ fn render(grid: &Grid, map: &SnrMap, rgb: &mut [u8]) -> DrawResult {
         [(CBAR_L, PLOT_T), (CBAR_R, PLOT_B)],
         ShapeStyle::from(&BLACK).stroke_width(1),
     ))?;
-    let mut cticks = vec![SNR_COLOUR_MIN, 1.0, 3.0, 10.0];
-    let mut v = 100.0;
-    while v <= grid.vmax * 1.0001 {
-        cticks.push(v);
-        v *= 10.0;
-    }
-    for &v in &cticks {
-        let y = cy(v.log10()).round() as i32;
-        root.draw(&PathElement::new(vec![(CBAR_R, y), (CBAR_R + 5, y)], BLACK))?;
-        let text = if v == SNR_COLOUR_MIN {
-            format!("≤{}", fmt_snr(v))
-        } else if (v - grid.vmax).abs() < 1e-9 * v && grid.max > grid.vmax {
-            format!("≥{}", fmt_snr(v))
-        } else {
-            fmt_snr(v)
-        };
+    let tick_font = font(15.0);
+    for (v, text) in bar_marks(g) {
+        let y = g.bar_y(v).round() as i32;
+        line(root, (CBAR_R, y), (CBAR_R + 5, y))?;
         label(
-            &root,
+            root,
             &text,
             (CBAR_R + 9, y),
             &tick_font,
@@ -673,42 +494,41 @@ fn render(grid: &Grid, map: &SnrMap, rgb: &mut [u8]) -> DrawResult {
             VPos::Center,
         )?;
     }
-    for st in &styles {
-        let y = cy(st.level.log10());
-        draw_polyline(
-            &root,
-            &[(CBAR_L as f64 + 1.0, y), (CBAR_R as f64 - 1.0, y)],
-            st,
-        )?;
+    for st in styles {
+        let y = g.bar_y(st.level);
+        let (a, b) = ((CBAR_L + 1) as f64, (CBAR_R - 1) as f64);
+        draw_polyline(root, &[(a, y), (b, y)], st)?;
     }
-    root.draw(&Text::new(
+    let at = (WIDTH as i32 - 30, (PLOT_T + PLOT_B) / 2);
+    upright(
+        root,
         "signal-to-noise ratio S/N",
-        (WIDTH as i32 - 30, (PLOT_T + PLOT_B) / 2),
-        axis_font
-            .transform(FontTransform::Rotate90)
-            .pos(Pos::new(HPos::Center, VPos::Center)),
-    ))?;
+        at,
+        FontTransform::Rotate90,
+    )
+}
 
-    // --- Legend of the contour styles, under the x-axis title.
-    let legend_y = PLOT_B + 82;
-    let legend_font = font(15.0);
+/// The legend of the contour styles, under the x-axis title, noting levels that
+/// are not drawn (not reached, or exceeded everywhere).
+fn draw_legend(
+    root: &Area,
+    g: &Grid,
+    styles: &[LevelStyle],
+    contours: &[Vec<Vec<(f64, f64)>>],
+) -> DrawResult {
+    let (legend_y, legend_font) = (PLOT_B + 82, font(15.0));
     let items: Vec<String> = styles
         .iter()
-        .zip(&contours)
+        .zip(contours)
         .map(|(st, lines)| {
             let note = if !lines.is_empty() {
                 ""
-            } else if grid
-                .snr
-                .iter()
-                .flatten()
-                .all(|&v| v.max(SNR_COLOUR_MIN) >= st.level)
-            {
+            } else if g.min.max(SNR_COLOUR_MIN) >= st.level {
                 " (exceeded everywhere)"
             } else {
                 " (not reached)"
             };
-            format!("S/N = {}{note}", fmt_snr(st.level))
+            format!("S/N = {}{note}", ticks::format(st.level))
         })
         .collect();
     let mut widths = Vec::with_capacity(items.len());
@@ -719,33 +539,18 @@ fn render(grid: &Grid, map: &SnrMap, rgb: &mut [u8]) -> DrawResult {
     let total: i32 =
         widths.iter().map(|w| sample + 8 + w).sum::<i32>() + gap * (items.len() as i32 - 1);
     let mut x = (PLOT_L + PLOT_R) / 2 - total / 2;
-    let swatch = viridis(0.4);
     for ((st, text), w) in styles.iter().zip(&items).zip(&widths) {
         root.draw(&Rectangle::new(
             [(x, legend_y - 9), (x + sample, legend_y + 9)],
-            swatch.filled(),
+            viridis(0.4).filled(),
         ))?;
         let (a, b) = ((x + 4) as f64, (x + sample - 4) as f64);
-        draw_polyline(&root, &[(a, legend_y as f64), (b, legend_y as f64)], st)?;
-        label(
-            &root,
-            text,
-            (x + sample + 8, legend_y),
-            &legend_font,
-            HPos::Left,
-            VPos::Center,
-        )?;
+        draw_polyline(root, &[(a, legend_y as f64), (b, legend_y as f64)], st)?;
+        let at = (x + sample + 8, legend_y);
+        label(root, text, at, &legend_font, HPos::Left, VPos::Center)?;
         x += sample + 8 + w + gap;
     }
-    root.present()?;
     Ok(())
-}
-
-/// Index `i` with `v[i] <= t <= v[i+1]` (clamped) and the weight of `v[i+1]`.
-fn locate(v: &[f64], t: f64) -> (usize, f64) {
-    let i = v.partition_point(|&a| a <= t).clamp(1, v.len() - 1) - 1;
-    let w = ((t - v[i]) / (v[i + 1] - v[i])).clamp(0.0, 1.0);
-    (i, w)
 }
 
 fn seg_len(a: (f64, f64), b: (f64, f64)) -> f64 {
@@ -769,7 +574,7 @@ fn densify(line: &[(f64, f64)], step: f64) -> Vec<(f64, f64)> {
 }
 
 /// Draws a polyline (pixel coordinates) over a contrasting halo, dashed if the style says so.
-fn draw_polyline(root: &Area, line: &[(f64, f64)], st: &LevelStyle) -> AreaResult {
+fn draw_polyline(root: &Area, line: &[(f64, f64)], st: &LevelStyle) -> DrawResult {
     let pieces = if st.dashed {
         dash(line, 9.0, 6.0)
     } else {
@@ -780,21 +585,14 @@ fn draw_polyline(root: &Area, line: &[(f64, f64)], st: &LevelStyle) -> AreaResul
             .map(|&(x, y)| (x.round() as i32, y.round() as i32))
             .collect::<Vec<_>>()
     };
-    for p in &pieces {
-        root.draw(&PathElement::new(
-            to_i(p),
-            ShapeStyle::from(&st.halo.mix(0.55)).stroke_width(4),
-        ))?;
-    }
-    for p in &pieces {
-        root.draw(&PathElement::new(
-            to_i(p),
-            ShapeStyle::from(&st.colour).stroke_width(2),
-        ))?;
+    for (colour, width) in [(st.halo.mix(0.55), 4), (st.colour.to_rgba(), 2)] {
+        for p in &pieces {
+            let style = ShapeStyle::from(&colour).stroke_width(width);
+            root.draw(&PathElement::new(to_i(p), style))?;
+        }
     }
     Ok(())
 }
-
 /// Splits a polyline into dashes of length `on` separated by gaps `off` (pixels).
 fn dash(line: &[(f64, f64)], on: f64, off: f64) -> Vec<Vec<(f64, f64)>> {
     let mut out = Vec::new();
@@ -840,8 +638,8 @@ fn place_labels(
     st: &LevelStyle,
     others: &[(f64, f64)],
     taken: &mut Vec<Bbox>,
-) -> AreaResult {
-    let text = format!("S/N = {}", fmt_snr(st.level));
+) -> DrawResult {
+    let text = format!("S/N = {}", ticks::format(st.level));
     let style = font(15.0);
     let (tw, th) = root.estimate_text_size(&text, &style)?;
     let (hw, hh) = (tw as i32 / 2 + 5, th as i32 / 2 + 4);
@@ -959,96 +757,6 @@ mod tests {
         std::fs::write(path, png_bytes(map)?).map_err(|e| e.to_string())
     }
 
-    // --- marching squares -------------------------------------------------
-
-    #[test]
-    fn marching_squares_linear_field_is_exact() {
-        let x = [0.0, 0.3, 0.7, 1.2, 2.0];
-        let y = [0.0, 0.5, 1.5, 2.0, 3.0];
-        let f: Vec<Vec<f64>> = y
-            .iter()
-            .map(|&yy| x.iter().map(|&xx| xx + 2.0 * yy).collect())
-            .collect();
-        let lines = marching_squares(&x, &y, &f, 2.5);
-        assert_eq!(lines.len(), 1, "one straight contour expected");
-        assert!(lines[0].len() >= 3);
-        for &(px, py) in &lines[0] {
-            assert!(
-                (px + 2.0 * py - 2.5).abs() < 1e-12,
-                "({px}, {py}) not on x + 2y = 2.5"
-            );
-        }
-        // An open line ends on the grid boundary.
-        for &(px, py) in [lines[0][0], lines[0][lines[0].len() - 1]].iter() {
-            assert!(px == 0.0 || px == 2.0 || py == 0.0 || py == 3.0);
-        }
-    }
-
-    #[test]
-    fn marching_squares_circle_is_one_closed_loop() {
-        let g: Vec<f64> = (0..=40).map(|i| -2.0 + 0.1 * i as f64).collect();
-        let f: Vec<Vec<f64>> = g
-            .iter()
-            .map(|&y| g.iter().map(|&x| x * x + y * y).collect())
-            .collect();
-        let lines = marching_squares(&g, &g, &f, 1.0);
-        assert_eq!(lines.len(), 1);
-        let l = &lines[0];
-        assert!(l.len() > 40);
-        assert_eq!(l[0], l[l.len() - 1], "loop must close");
-        for &(x, y) in l {
-            assert!(
-                ((x * x + y * y).sqrt() - 1.0).abs() < 0.01,
-                "({x}, {y}) off the unit circle"
-            );
-        }
-    }
-
-    #[test]
-    fn marching_squares_saddle_uses_centre_value() {
-        let (x, y) = ([0.0, 1.0], [0.0, 1.0]);
-        let f = vec![vec![1.0, 0.0], vec![0.0, 1.0]];
-        let sorted = |mut l: Vec<(f64, f64)>| {
-            l.sort_by(|a, b| a.partial_cmp(b).unwrap());
-            l
-        };
-        // Centre 0.5 >= 0.5: the high corners connect, the low corners are cut off.
-        let lines = marching_squares(&x, &y, &f, 0.5);
-        assert_eq!(lines.len(), 2);
-        let got: Vec<_> = lines.into_iter().map(sorted).collect();
-        assert!(got.contains(&vec![(0.5, 0.0), (1.0, 0.5)]), "{got:?}");
-        assert!(got.contains(&vec![(0.0, 0.5), (0.5, 1.0)]), "{got:?}");
-        // Centre 0.5 < 0.6: the high corners are cut off.
-        let lines = marching_squares(&x, &y, &f, 0.6);
-        assert_eq!(lines.len(), 2);
-        let got: Vec<_> = lines.into_iter().map(sorted).collect();
-        let near = |l: &Vec<(f64, f64)>, want: [(f64, f64); 2]| {
-            l.iter()
-                .zip(want)
-                .all(|(a, b)| (a.0 - b.0).abs() < 1e-12 && (a.1 - b.1).abs() < 1e-12)
-        };
-        assert!(
-            got.iter().any(|l| near(l, [(0.0, 0.4), (0.4, 0.0)])),
-            "{got:?}"
-        );
-        assert!(
-            got.iter().any(|l| near(l, [(0.6, 1.0), (1.0, 0.6)])),
-            "{got:?}"
-        );
-    }
-
-    #[test]
-    fn marching_squares_without_crossing_or_with_bad_shapes_is_empty() {
-        let (x, y) = ([0.0, 1.0, 2.0], [0.0, 1.0]);
-        let f = vec![vec![1.0, 2.0, 3.0], vec![4.0, 5.0, 6.0]];
-        assert!(marching_squares(&x, &y, &f, 10.0).is_empty());
-        assert!(marching_squares(&x, &y, &f, 0.5).is_empty());
-        assert!(marching_squares(&x, &y, &f, f64::NAN).is_empty());
-        assert!(marching_squares(&x[..1], &y, &f, 2.5).is_empty());
-        assert!(marching_squares(&x, &y, &f[..1], 2.5).is_empty());
-        assert!(marching_squares(&x, &y, &[vec![1.0, 2.0], vec![4.0, 5.0]], 2.5).is_empty());
-    }
-
     #[test]
     fn snr_contours_follow_the_analytic_curve() {
         // snr = 30·exp(-z/5)·sqrt(TC) is linear in (log10 TC, z) after log10, so the
@@ -1073,9 +781,9 @@ mod tests {
         };
         let grid = Grid::new(&map).unwrap();
         assert!(grid.y.windows(2).all(|w| w[0] < w[1]));
-        let field = grid.log_field();
         for level in CONTOUR_LEVELS {
-            let lines = marching_squares(&grid.x, &grid.y, &field, level.log10());
+            // the lines the figure draws (before they are mapped to pixels)
+            let lines = grid.contours(level);
             assert_eq!(lines.len(), 1, "level {level}");
             for &(lx, z) in &lines[0] {
                 let want = 5.0 * (30.0 * 10f64.powf(lx).sqrt() / level).ln();
@@ -1097,12 +805,19 @@ mod tests {
     }
 
     #[test]
-    fn altitude_ticks_are_round() {
+    fn axis_ticks_are_round() {
+        // plot's 1-2-5 steps (this file's own had 2.5 too; none of these spans used it)
+        use crate::output::plot::ticks::nice_step;
         assert_eq!(nice_step(30.0, 7.0), 5.0);
         assert_eq!(nice_step(39.9, 7.0), 5.0);
         assert_eq!(nice_step(6.0, 7.0), 1.0);
         assert_eq!(nice_step(0.9, 7.0), 0.1);
         assert_eq!(nice_step(600.0, 7.0), 100.0);
+        // the ticks the figure labels
+        let grid = Grid::new(&synthetic_map()).unwrap();
+        let z: Vec<f64> = (0..=6).map(|k| 5.0 * k as f64).collect();
+        assert_eq!(grid.z_ticks(), z);
+        assert_eq!(grid.tc_ticks(), vec![1.0, 10.0, 100.0, 1000.0]);
     }
 
     #[test]

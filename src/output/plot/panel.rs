@@ -144,6 +144,19 @@ impl ImagePanel {
     where
         DB::ErrorType: 'static,
     {
+        self.draw_with_marks(area, &[])
+    }
+
+    /// [`ImagePanel::draw`], with `marks` — spans `(x0, x1, colour)` along x, in values —
+    /// drawn as a band along the top of the field (day and night along a track).
+    pub fn draw_with_marks<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        marks: &[(f64, f64, RGBColor)],
+    ) -> super::DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
         let (w, _) = area.dim_in_pixel();
         let (main, bar) = area.split_horizontally(w.saturating_sub(BAR_WIDTH));
         let (x, y) = (&self.x, &self.y);
@@ -165,6 +178,14 @@ impl ImagePanel {
             .draw()?;
         self.fill(chart.plotting_area())?;
         let plot = chart.plotting_area();
+        let (cy0, cy1) = (y.coord(y.lo), y.coord(y.hi));
+        let band = (cy1 - cy0) * 0.025;
+        for &(x0, x1, colour) in marks {
+            plot.draw(&Rectangle::new(
+                [(x.coord(x0), cy1 - band), (x.coord(x1), cy1)],
+                colour.filled(),
+            ))?;
+        }
         for iso in &self.isolines {
             let lines = self.isolines_in_pixels(iso.level, plot);
             draw_labelled(&plot.strip_coord_spec(), &lines, &iso.style, &iso.text)?;

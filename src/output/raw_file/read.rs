@@ -498,7 +498,7 @@ fn read_channels(path: &Path, f: &hdf5::File) -> Result<Vec<String>> {
 /// A variable of variable-length strings (UTF-8, or ASCII as older tools write them),
 /// e.g. `channel` or `dead_time_model`; anything else is refused naming the file and
 /// the variable.
-pub fn read_text(path: &Path, f: &hdf5::File, name: &str) -> Result<Vec<String>> {
+pub fn read_text(path: &Path, f: &hdf5::Group, name: &str) -> Result<Vec<String>> {
     let d = f
         .dataset(name)
         .map_err(|_| Error::output(path, format!("has no `{name}`")))?;

@@ -1,0 +1,164 @@
+//! `lidarsim quicklook FILE --png OUT.png [--channel NAME] [--truth]`: the figure every
+//! lidar network publishes — the background-subtracted, range-corrected signal on a
+//! logarithmic colour scale against time (or along-track distance) and altitude, with
+//! the volume depolarization beside it when the file has a ∥/⊥ pair, and with
+//! `--truth` the truth on the same scale. For a raw file, a merged file or an onboard
+//! product (its regions stitched at their own resolutions).
+//!
+//! **What is drawn.** Each profile's counts per shot, minus its background, over the
+//! channel's lidar constant, `range_weight` (`∫η/r² dr`, so the range correction and
+//! the overlap) and the profile's pulse energy over the nominal:
+//! `β'_est = (N/M − B)/(C·w·E/E₀)`, in m⁻¹ sr⁻¹ — the attenuated backscatter the counts
+//! measure, so that the truth's `attenuated_backscatter` is on the same scale. The
+//! background `B` is the mean of the profile's own signal-free bins (the pre-trigger
+//! bins, or the bins whose expected signal is below 1 % of their background, as
+//! `export-scc`); an onboard product keeps no signal-free bin, so there it is the
+//! product's `expected_background + expected_dark` (the title says which). The volume
+//! depolarization is `β'_⊥/β'_∥` of the pair's calibrated signals, where `β'_∥` is above
+//! the colour scale's floor.
+//!
+//! **Memory and time.** The file is read a block of profiles at a time and averaged into
+//! a grid of the figure's pixels ([`grid::Grid`]); memory is the grid's and one block's,
+//! not the file's (`docs/figures.md` has the measured numbers).
+
+mod draw;
+pub mod grid;
+mod product;
+mod raw;
+
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::output::safe_file::{Outputs, Stream};
+use grid::Grid;
+
+/// The figure's grid: pixel columns and rows of one panel's field.
+pub const COLUMNS: usize = 1150;
+/// See [`COLUMNS`].
+pub const ROWS: usize = 330;
+/// The highest altitude shown, km: above it a lidar sees only the background and the
+/// air's faint return (a window that ends lower ends the figure there).
+pub const TOP_KM: f64 = 40.0;
+/// Profiles read at once.
+const BLOCK_PROFILES: usize = 256;
+
+/// What the figure shows, on its grid.
+#[derive(Debug, Clone)]
+pub struct Quicklook {
+    /// The file and channel.
+    pub title: String,
+    /// How the background was taken.
+    pub background_note: String,
+    /// Label of the horizontal axis, with its unit.
+    pub x_label: String,
+    /// The estimated attenuated backscatter, [`Grid::means`] layout.
+    pub signal: Grid,
+    /// The channel's name.
+    pub channel: String,
+    /// The ∥/⊥ pair's calibrated signals, when the file has one.
+    pub pair: Option<(Grid, Grid, String)>,
+    /// The truth's attenuated backscatter, with `--truth`.
+    pub truth: Option<Grid>,
+    /// Day (true) and night along x: `(x0, x1, day)`.
+    pub day: Vec<(f64, f64, bool)>,
+}
+
+/// One channel's calibration: counts per shot to attenuated backscatter.
+#[derive(Debug, Clone, Copy)]
+pub struct Calibration {
+    /// The lidar constant `C`, m² sr (per unit of pulse energy at `nominal_energy_j`).
+    pub lidar_constant: f64,
+    /// The nominal pulse energy `E₀`, J.
+    pub nominal_energy_j: f64,
+    /// Codes per photoelectron of an analog channel, 1 for a photon counter.
+    pub codes_per_photoelectron: f64,
+}
+
+/// A profile's background per shot and bin.
+pub enum Background<'a> {
+    /// The mean of these bins' counts per shot.
+    Bins(&'a [usize]),
+    /// Known.
+    Value(f64),
+}
+
+/// Adds one profile of one channel to `grid`: `(N/M − B)/(C·w·E/E₀)` per bin, each bin
+/// over its rows (`bin_rows`), the profile over `columns`.
+#[allow(clippy::too_many_arguments)]
+pub fn add_profile(
+    grid: &mut Grid,
+    columns: &[(usize, f64)],
+    bin_rows: &[Vec<(usize, f64)>],
+    counts: &[u64],
+    shots: f64,
+    background: &Background,
+    range_weight: &[f64],
+    cal: &Calibration,
+    pulse_energy_j: f64,
+) {
+    if columns.is_empty() || !(shots > 0.0) {
+        return;
+    }
+    let per_shot = 1.0 / shots;
+    let b = match background {
+        Background::Bins(bins) if !bins.is_empty() => {
+            bins.iter().map(|&i| counts[i] as f64).sum::<f64>() * per_shot / bins.len() as f64
+        }
+        Background::Bins(_) => 0.0,
+        Background::Value(v) => *v,
+    };
+    let energy = if cal.nominal_energy_j > 0.0 && pulse_energy_j > 0.0 {
+        pulse_energy_j / cal.nominal_energy_j
+    } else {
+        1.0
+    };
+    let scale = 1.0 / (cal.lidar_constant * cal.codes_per_photoelectron * energy);
+    if !scale.is_finite() {
+        return;
+    }
+    let values = counts.iter().zip(range_weight).map(|(&n, &w)| {
+        if w > 0.0 {
+            (n as f64 * per_shot - b) * scale / w
+        } else {
+            f64::NAN
+        }
+    });
+    grid.add_profile(columns, bin_rows, values);
+}
+
+/// The horizontal axis from the file's profile coordinate: its values scaled to the
+/// shown unit and the label.
+pub fn x_axis(along_track: bool, span: f64) -> (f64, String) {
+    if along_track {
+        (1e-3, "along-track distance (km)".into())
+    } else if span < 600.0 {
+        (1.0, "time since start (s)".into())
+    } else if span < 6.0 * 3600.0 {
+        (1.0 / 60.0, "time since start (min)".into())
+    } else {
+        (1.0 / 3600.0, "time since start (h)".into())
+    }
+}
+
+/// `lidarsim quicklook FILE --png OUT.png`: reads `file` (raw, merged or onboard
+/// product) and writes the figure.
+pub fn run(file: &Path, png: &Path, channel: Option<&str>, truth: bool) -> Result<()> {
+    let mut outputs = Outputs::new([file]);
+    let id = outputs.add("--png", png, Stream::Binary)?;
+    let q = read(file, channel, truth)?;
+    let bytes = draw::png_bytes(&q).map_err(|r| Error::output(outputs.shown_path(id), r))?;
+    outputs.write(id, |w| w.write_all(&bytes))?;
+    outputs.commit()
+}
+
+/// Reads what the figure shows from a raw file or an onboard product.
+pub fn read(file: &Path, channel: Option<&str>, truth: bool) -> Result<Quicklook> {
+    crate::input_file::check("FILE", file)?;
+    let f = hdf5::File::open(file)
+        .map_err(|_| Error::output(file, "not a lidarsim raw file or product (not HDF5)"))?;
+    if f.attr(crate::onboard::run::PRODUCT_ATTRIBUTE).is_ok() {
+        product::read(file, &f, channel, truth)
+    } else {
+        raw::read(file, &f, channel, truth)
+    }
+}

@@ -1,0 +1,320 @@
+//! The quicklook of an onboard product: every region group stitched on one grid at
+//! its own resolution (its bins over the rows they cover, its profiles over the
+//! columns), the background from the product's expected background and dark counts.
+
+use std::path::Path;
+
+use hdf5::Dataset;
+use ndarray::{Axis, Ix1, Ix2, Ix3, s};
+
+use super::grid::Grid;
+use super::raw::{Vars, calibration, day_night, pair, start_unix_s};
+use super::{
+    BLOCK_PROFILES, Background, COLUMNS, Calibration, Quicklook, ROWS, TOP_KM, add_profile, x_axis,
+};
+use crate::error::Result;
+use crate::output::plot::panel::{edges, widen};
+use crate::output::raw_file::read::read_text;
+
+/// One region group as the quicklook reads it.
+struct Region {
+    group: hdf5::Group,
+    channels: Vec<String>,
+    n_profiles: usize,
+    /// Bin edges, km.
+    z_edges: Vec<f64>,
+    /// First and last profile coordinate (m or s).
+    x_ends: (f64, f64),
+    /// Native bins per region bin.
+    merged: f64,
+}
+
+/// The product's region groups (`region_0`, …), checked enough to draw.
+fn regions(path: &Path, f: &hdf5::File, xname: &str) -> Result<Vec<Region>> {
+    let fail = |why: String| crate::error::Error::output(path, why);
+    let mut names: Vec<String> = f
+        .member_names()
+        .map_err(|_| fail("cannot list the product's groups".into()))?
+        .into_iter()
+        .filter(|n| n.starts_with("region_"))
+        .collect();
+    names.sort_by_key(|n| n[7..].parse::<usize>().unwrap_or(usize::MAX));
+    let mut out = Vec::new();
+    for name in names {
+        let group = f
+            .group(&name)
+            .map_err(|_| fail(format!("`{name}` is not a group")))?;
+        let v = Vars { path, f: &group };
+        let channels = read_text(path, &group, "channel")?;
+        let altitude_km: Vec<f64> = v.f64s("altitude")?.iter().map(|z| z / 1e3).collect();
+        let n_profiles = v.ds("n_shots")?.shape().first().copied().unwrap_or(0);
+        if n_profiles == 0 || altitude_km.is_empty() || altitude_km.iter().any(|z| !z.is_finite()) {
+            continue;
+        }
+        let x0 = v.f64_range(xname, 0, 1)?[0];
+        let x1 = v.f64_range(xname, n_profiles - 1, n_profiles)?[0];
+        let merged = group
+            .attr("native_bins_merged")
+            .ok()
+            .and_then(|a| a.read_scalar::<u32>().ok())
+            .unwrap_or(1) as f64;
+        out.push(Region {
+            z_edges: edges(&altitude_km),
+            group,
+            channels,
+            n_profiles,
+            x_ends: (x0, x1),
+            merged,
+        });
+    }
+    if out.is_empty() {
+        return Err(fail(
+            "an onboard product with no region group holding profiles".into(),
+        ));
+    }
+    Ok(out)
+}
+
+/// Reads the quicklook of an onboard product.
+pub(super) fn read(
+    path: &Path,
+    f: &hdf5::File,
+    channel: Option<&str>,
+    truth: bool,
+) -> Result<Quicklook> {
+    let fail = |why: String| crate::error::Error::output(path, why);
+    let first = f
+        .member_names()
+        .ok()
+        .and_then(|n| n.into_iter().find(|n| n.starts_with("region_")))
+        .and_then(|n| f.group(&n).ok())
+        .ok_or_else(|| fail("an onboard product with no region group".into()))?;
+    let along_track = first.dataset("along_track_distance").is_ok();
+    let xname = if along_track {
+        "along_track_distance"
+    } else {
+        "time"
+    };
+    let regions = regions(path, f, xname)?;
+    let all: Vec<&String> = regions.iter().flat_map(|r| &r.channels).collect();
+    let name = match channel {
+        Some(c) => all
+            .iter()
+            .find(|n| n.as_str() == c)
+            .map(|n| n.to_string())
+            .ok_or_else(|| fail(format!("has no channel `{c}`")))?,
+        None => regions[0]
+            .channels
+            .first()
+            .cloned()
+            .ok_or_else(|| fail("a region without channels".into()))?,
+    };
+    let span = regions
+        .iter()
+        .map(|r| (r.x_ends.1 - r.x_ends.0).abs())
+        .fold(0.0, f64::max);
+    let (x_scale, x_label) = x_axis(along_track, span);
+    let (mut xlo, mut xhi, mut zlo, mut zhi) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for r in &regions {
+        let dx = spacing(r);
+        xlo = xlo.min(r.x_ends.0.min(r.x_ends.1) - 0.5 * dx.abs());
+        xhi = xhi.max(r.x_ends.0.max(r.x_ends.1) + 0.5 * dx.abs());
+        for &z in &r.z_edges {
+            zlo = zlo.min(z);
+            zhi = zhi.max(z);
+        }
+    }
+    let empty = Grid::new(
+        COLUMNS,
+        ROWS,
+        widen(xlo * x_scale, xhi * x_scale),
+        widen(zlo, zhi.min(TOP_KM)),
+    );
+    let mut signal = empty.clone();
+    let (mut par, mut perp) = (empty.clone(), empty.clone());
+    let mut has_pair = false;
+    let mut truth_grid = truth.then(|| empty.clone());
+    let mut day = Vec::new();
+    let t0 = start_unix_s(f, first.dataset("time").ok().as_ref());
+    for r in &regions {
+        let v = Vars { path, f: &r.group };
+        let polarization = read_text(path, &r.group, "polarization").unwrap_or_default();
+        let wavelength = v.f64s("wavelength").unwrap_or_default();
+        let c = r.channels.iter().position(|n| *n == name);
+        let p = c
+            .and_then(|c| pair(&r.channels, &polarization, &wavelength, c))
+            .or_else(|| {
+                // a region without the channel may still hold a pair of the same wavelength
+                let k = r.channels.iter().position(|n| n.ends_with("parallel"))?;
+                pair(&r.channels, &polarization, &wavelength, k)
+            });
+        let bin_rows: Vec<Vec<(usize, f64)>> = r
+            .z_edges
+            .windows(2)
+            .map(|w| empty.rows_of(w[0], w[1]))
+            .collect();
+        let range_weight = v.f64s("range_weight")?;
+        let dx = spacing(r);
+        let mut jobs: Vec<(usize, &mut Grid)> = Vec::new();
+        if let Some(c) = c {
+            jobs.push((c, &mut signal));
+        }
+        if let Some((a, b)) = p {
+            has_pair = true;
+            jobs.push((a, &mut par));
+            jobs.push((b, &mut perp));
+        }
+        let cals: Vec<Calibration> = jobs
+            .iter()
+            .map(|(k, _)| calibration(&v, *k))
+            .collect::<Result<_>>()?;
+        let counts = v.ds("counts")?;
+        let atb = match (truth, c) {
+            (true, Some(_)) => Some(v.ds("attenuated_backscatter")?),
+            _ => None,
+        };
+        for p0 in (0..r.n_profiles).step_by(BLOCK_PROFILES) {
+            let p1 = (p0 + BLOCK_PROFILES).min(r.n_profiles);
+            let x = v.f64_range(xname, p0, p1)?;
+            let shots: Vec<u64> = v
+                .ds("n_shots")?
+                .read_slice::<u64, _, Ix1>(s![p0..p1])
+                .map_err(|e| v.unreadable("n_shots", e))?
+                .to_vec();
+            let energy = v
+                .f64_range("pulse_energy", p0, p1)
+                .unwrap_or_else(|_| vec![0.0; p1 - p0]);
+            let columns: Vec<Vec<(usize, f64)>> = x
+                .iter()
+                .map(|&x| empty.columns((x - 0.5 * dx) * x_scale, (x + 0.5 * dx) * x_scale))
+                .collect();
+            for ((k, grid), cal) in jobs.iter_mut().zip(&cals) {
+                let bkg = noise_block(&v, *k, p0, p1)?;
+                let block = counts
+                    .read_slice::<u64, _, Ix3>(s![p0..p1, *k..*k + 1, ..])
+                    .map_err(|e| v.unreadable("counts", e))?;
+                let block = block.index_axis(Axis(1), 0);
+                for (i, row) in block.outer_iter().enumerate() {
+                    let row = row.to_vec();
+                    add_profile(
+                        grid,
+                        &columns[i],
+                        &bin_rows,
+                        &row,
+                        shots[i] as f64,
+                        &Background::Value(bkg[i] * r.merged),
+                        &range_weight,
+                        cal,
+                        energy[i],
+                    );
+                }
+            }
+            if let (Some(t), Some(d), Some(c)) = (truth_grid.as_mut(), atb.as_ref(), c) {
+                add_column_truth(&v, t, d, c, p0, p1, &columns, &bin_rows)?;
+            }
+            if let (Some(t0), true) = (t0, std::ptr::eq(r, &regions[0])) {
+                if let (Ok(time), Ok(lat), Ok(lon)) = (
+                    v.f64_range("time", p0, p1),
+                    v.f64_range("latitude", p0, p1),
+                    v.f64_range("longitude", p0, p1),
+                ) {
+                    let scaled: Vec<f64> = x.iter().map(|x| x * x_scale).collect();
+                    for s in day_night(t0, &scaled, &time, &lat, &lon) {
+                        match day.last_mut() {
+                            Some((_, x1, d)) if *d == s.2 => *x1 = s.1,
+                            _ => day.push(s),
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Ok(Quicklook {
+        title: path.file_name().map_or_else(
+            || path.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        ),
+        background_note: format!(
+            "{} regions; background: the product's expected background and dark counts",
+            regions.len()
+        ),
+        x_label,
+        signal,
+        channel: name,
+        pair: has_pair.then(|| (par, perp, "perpendicular / parallel".to_string())),
+        truth: truth_grid,
+        day,
+    })
+}
+
+/// The spacing of a region's profiles along x (1 for a single profile).
+fn spacing(r: &Region) -> f64 {
+    if r.n_profiles > 1 {
+        (r.x_ends.1 - r.x_ends.0) / (r.n_profiles - 1) as f64
+    } else {
+        1.0
+    }
+}
+
+/// `expected_background + expected_dark` per shot and native bin, profiles `p0..p1`.
+fn noise_block(v: &Vars, c: usize, p0: usize, p1: usize) -> Result<Vec<f64>> {
+    let read = |name: &str| -> Result<Vec<f64>> {
+        Ok(v.ds(name)?
+            .read_slice::<f64, _, Ix1>(s![p0..p1, c])
+            .map_err(|e| v.unreadable(name, e))?
+            .to_vec())
+    };
+    Ok(read("expected_background")?
+        .iter()
+        .zip(read("expected_dark")?)
+        .map(|(b, d)| b + d)
+        .collect())
+}
+
+/// Adds the truth of profiles `p0..p1`: each profile's columns' attenuated backscatter
+/// weighted by the share of its shots that saw them.
+#[allow(clippy::too_many_arguments)]
+fn add_column_truth(
+    v: &Vars,
+    grid: &mut Grid,
+    d: &Dataset,
+    c: usize,
+    p0: usize,
+    p1: usize,
+    columns: &[Vec<(usize, f64)>],
+    bin_rows: &[Vec<(usize, f64)>],
+) -> Result<()> {
+    let n_columns = d.shape().first().copied().unwrap_or(0);
+    let per_column: Vec<Vec<f64>> = (0..n_columns)
+        .map(|k| {
+            Ok(d.read_slice::<f64, _, Ix1>(s![k, c, ..])
+                .map_err(|e| v.unreadable("attenuated_backscatter", e))?
+                .to_vec())
+        })
+        .collect::<Result<_>>()?;
+    let col = v
+        .ds("profile_column")?
+        .read_slice::<i32, _, Ix2>(s![p0..p1, ..])
+        .map_err(|e| v.unreadable("profile_column", e))?;
+    let w = v
+        .ds("profile_column_weight")?
+        .read_slice::<f64, _, Ix2>(s![p0..p1, ..])
+        .map_err(|e| v.unreadable("profile_column_weight", e))?;
+    for (i, cols) in columns.iter().enumerate() {
+        for (b, rows) in bin_rows.iter().enumerate() {
+            let mut sum = 0.0;
+            for (k, &ck) in col.row(i).iter().enumerate() {
+                if let Some(truth) = usize::try_from(ck).ok().and_then(|ck| per_column.get(ck)) {
+                    sum += w[[i, k]] * truth.get(b).copied().unwrap_or(0.0);
+                }
+            }
+            grid.add_covered(cols, rows, sum);
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,393 @@
+//! The quicklook of a raw (or merged) file: its profiles in blocks.
+
+use std::path::Path;
+
+use hdf5::Dataset;
+use ndarray::{Axis, Ix1, Ix3, s};
+
+use super::grid::Grid;
+use super::{
+    BLOCK_PROFILES, Background, COLUMNS, Calibration, Quicklook, ROWS, TOP_KM, add_profile, x_axis,
+};
+use crate::error::{Error, Result};
+use crate::output::plot::panel::{edges, widen};
+use crate::output::raw_file::read::{check, read_text};
+use crate::output::safe_file::describe_hdf5_error;
+use crate::output::scc::signal_free;
+
+/// The file's variables the quicklook reads, opened.
+pub(super) struct Vars<'a> {
+    pub path: &'a Path,
+    pub f: &'a hdf5::Group,
+}
+
+impl Vars<'_> {
+    pub fn fail(&self, why: String) -> Error {
+        Error::output(self.path, why)
+    }
+
+    pub fn ds(&self, name: &str) -> Result<Dataset> {
+        self.f
+            .dataset(name)
+            .map_err(|_| self.fail(format!("has no `{name}`")))
+    }
+
+    pub fn unreadable(&self, name: &str, e: hdf5::Error) -> Error {
+        self.fail(format!(
+            "cannot read `{name}`: {}",
+            describe_hdf5_error(&e.to_string())
+        ))
+    }
+
+    pub fn f64s(&self, name: &str) -> Result<Vec<f64>> {
+        self.ds(name)?
+            .read_raw::<f64>()
+            .map_err(|e| self.unreadable(name, e))
+    }
+
+    /// Values `a..b` of a 1-D variable.
+    pub fn f64_range(&self, name: &str, a: usize, b: usize) -> Result<Vec<f64>> {
+        Ok(self
+            .ds(name)?
+            .read_slice::<f64, _, Ix1>(s![a..b])
+            .map_err(|e| self.unreadable(name, e))?
+            .to_vec())
+    }
+
+    /// Row `c` of a (channel, bin) variable, or of profile `p` of a (profile, channel,
+    /// bin) one.
+    pub fn channel_row(&self, name: &str, c: usize, p: usize) -> Result<Vec<f64>> {
+        let d = self.ds(name)?;
+        let v = match d.ndim() {
+            2 => d.read_slice::<f64, _, Ix1>(s![c, ..]),
+            3 => d.read_slice::<f64, _, Ix1>(s![p, c, ..]),
+            n => return Err(self.fail(format!("`{name}` has {n} dimensions, not 2 or 3"))),
+        };
+        Ok(v.map_err(|e| self.unreadable(name, e))?.to_vec())
+    }
+}
+
+/// A channel's calibration from the file.
+pub(super) fn calibration(v: &Vars, c: usize) -> Result<Calibration> {
+    let at = |name: &str| -> Result<f64> { Ok(v.f64s(name)?.get(c).copied().unwrap_or(f64::NAN)) };
+    let analog = read_text(v.path, v.f, "acquisition_mode")
+        .map(|m| m.get(c).is_some_and(|m| m == "analog"))
+        .unwrap_or(false);
+    Ok(Calibration {
+        lidar_constant: at("lidar_constant")?,
+        nominal_energy_j: at("nominal_pulse_energy")?,
+        codes_per_photoelectron: if analog {
+            at("analog_counts_per_photoelectron")?
+        } else {
+            1.0
+        },
+    })
+}
+
+/// The ∥/⊥ partner of channel `c` at its wavelength: `(parallel, perpendicular)`.
+pub(super) fn pair(
+    names: &[String],
+    polarization: &[String],
+    wavelength: &[f64],
+    c: usize,
+) -> Option<(usize, usize)> {
+    let find = |pol: &str| {
+        (0..names.len()).find(|&k| {
+            polarization.get(k).is_some_and(|p| p == pol) && wavelength.get(k) == wavelength.get(c)
+        })
+    };
+    match polarization.get(c).map(String::as_str) {
+        Some("parallel") | Some("perpendicular") | Some("total") => {
+            Some((find("parallel")?, find("perpendicular")?))
+        }
+        _ => None,
+    }
+}
+
+/// The channel's index: `channel` by name, or the first.
+pub(super) fn channel_index(v: &Vars, names: &[String], channel: Option<&str>) -> Result<usize> {
+    match channel {
+        None => Ok(0),
+        Some(name) => names.iter().position(|n| n == name).ok_or_else(|| {
+            v.fail(format!(
+                "has no channel `{name}` (channels: {})",
+                names.join(", ")
+            ))
+        }),
+    }
+}
+
+/// The bins of channel `c` that hold no signal: the pre-trigger bins, else those whose
+/// expected signal (in the first and the last profile) is below 1 % of their expected
+/// background and dark.
+fn background_bins(v: &Vars, c: usize, n_profiles: usize, n_bins: usize) -> Result<Vec<usize>> {
+    if let Ok(a) = v.f.attr("pretrigger_bins") {
+        let n: i64 = a.read_scalar().unwrap_or(0);
+        if n > 0 {
+            return Ok((0..(n as usize).min(n_bins)).collect());
+        }
+    }
+    let last = n_profiles.saturating_sub(1);
+    let (s0, s1) = (
+        v.channel_row("expected_signal", c, 0)?,
+        v.channel_row("expected_signal", c, last)?,
+    );
+    let noise: Vec<f64> = v
+        .channel_row("expected_background", c, 0)?
+        .iter()
+        .zip(v.channel_row("expected_dark", c, 0)?)
+        .map(|(b, d)| b + d)
+        .collect();
+    Ok((0..n_bins.min(noise.len()).min(s0.len()).min(s1.len()))
+        .filter(|&i| signal_free(s0[i].max(s1[i]), noise[i]))
+        .collect())
+}
+
+/// The origin of `time` (Unix seconds): the root attribute `start_time`, else the
+/// `units` of `time` ("seconds since …").
+pub(super) fn start_unix_s(root: &hdf5::Group, time: Option<&Dataset>) -> Option<f64> {
+    let text = |a: hdf5::Attribute| {
+        a.read_scalar::<hdf5::types::VarLenUnicode>()
+            .map(|s| s.as_str().to_string())
+            .or_else(|_| {
+                a.read_scalar::<hdf5::types::VarLenAscii>()
+                    .map(|s| s.as_str().to_string())
+            })
+            .ok()
+    };
+    let start = root.attr("start_time").ok().and_then(text).or_else(|| {
+        time.and_then(|t| t.attr("units").ok())
+            .and_then(text)
+            .and_then(|u| u.strip_prefix("seconds since ").map(str::to_string))
+    })?;
+    let t = humantime::parse_rfc3339(start.trim()).ok()?;
+    Some(t.duration_since(std::time::UNIX_EPOCH).ok()?.as_secs_f64())
+}
+
+/// Day and night spans along the profiles' x, from the sun's zenith angle at each
+/// profile's time (after `t0`, Unix seconds) and place.
+pub(super) fn day_night(
+    t0: f64,
+    x: &[f64],
+    time: &[f64],
+    lat: &[f64],
+    lon: &[f64],
+) -> Vec<(f64, f64, bool)> {
+    let mut spans: Vec<(f64, f64, bool)> = Vec::new();
+    let e = edges(x);
+    for k in 0..x.len().min(time.len()).min(lat.len()).min(lon.len()) {
+        let day = crate::scene::sun::solar_zenith_deg(t0 + time[k], lat[k], lon[k]) < 90.0;
+        match spans.last_mut() {
+            Some(last) if last.2 == day => last.1 = e[k + 1],
+            _ => spans.push((e[k], e[k + 1], day)),
+        }
+    }
+    spans
+}
+
+/// Reads the quicklook of a raw file.
+pub(super) fn read(
+    path: &Path,
+    f: &hdf5::File,
+    channel: Option<&str>,
+    truth: bool,
+) -> Result<Quicklook> {
+    let header = check(path, f)?;
+    let v = Vars { path, f };
+    let names = header.channels.clone();
+    let c = channel_index(&v, &names, channel)?;
+    let (n_profiles, n_bins) = (header.n_profiles, header.n_bins);
+    header.require_memory(
+        path,
+        "the quicklook",
+        8.0 * (4 * COLUMNS * ROWS) as f64 * 2.0 + 8.0 * 4.0 * (BLOCK_PROFILES * n_bins) as f64,
+    )?;
+    let polarization = read_text(path, f, "polarization").unwrap_or_default();
+    let wavelength = v.f64s("wavelength").unwrap_or_default();
+    let pair = pair(&names, &polarization, &wavelength, c);
+
+    // the axes: profiles along x, bins along z
+    let xname = if header.along_track {
+        "along_track_distance"
+    } else {
+        "time"
+    };
+    let (x_first, x_last) = (
+        v.f64_range(xname, 0, 1)?[0],
+        v.f64_range(xname, n_profiles - 1, n_profiles)?[0],
+    );
+    let (x_scale, x_label) = x_axis(header.along_track, (x_last - x_first).abs());
+    let dx = if n_profiles > 1 {
+        (x_last - x_first) / (n_profiles - 1) as f64
+    } else {
+        1.0
+    };
+    let altitude_km: Vec<f64> = v.f64s("altitude")?.iter().map(|z| z / 1e3).collect();
+    let z_edges = edges(&altitude_km);
+    let zspan = widen(
+        z_edges.iter().copied().fold(f64::INFINITY, f64::min),
+        z_edges
+            .iter()
+            .copied()
+            .fold(f64::NEG_INFINITY, f64::max)
+            .min(TOP_KM),
+    );
+    let xspan = widen(
+        (x_first - 0.5 * dx).min(x_last + 0.5 * dx) * x_scale,
+        (x_first - 0.5 * dx).max(x_last + 0.5 * dx) * x_scale,
+    );
+    let empty = Grid::new(COLUMNS, ROWS, xspan, zspan);
+    let bin_rows: Vec<Vec<(usize, f64)>> = z_edges
+        .windows(2)
+        .map(|w| empty.rows_of(w[0], w[1]))
+        .collect();
+    let range_weight = v.f64s("range_weight")?;
+
+    let channels: Vec<usize> = match pair {
+        Some((a, b)) => vec![c, a, b],
+        None => vec![c],
+    };
+    let cals: Vec<Calibration> = channels
+        .iter()
+        .map(|&k| calibration(&v, k))
+        .collect::<Result<_>>()?;
+    let bkg: Vec<Vec<usize>> = channels
+        .iter()
+        .map(|&k| background_bins(&v, k, n_profiles, n_bins))
+        .collect::<Result<_>>()?;
+    let mut grids = vec![empty.clone(); channels.len()];
+    let mut truth_grid = truth.then(|| empty.clone());
+    let atb = if truth {
+        Some(v.ds("attenuated_backscatter")?)
+    } else {
+        None
+    };
+    let counts = v.ds("counts")?;
+    let t0 = start_unix_s(f, f.dataset("time").ok().as_ref());
+    let geolocated = f.dataset("latitude").is_ok() && f.dataset("longitude").is_ok();
+    let mut day = Vec::new();
+    for p0 in (0..n_profiles).step_by(BLOCK_PROFILES) {
+        let p1 = (p0 + BLOCK_PROFILES).min(n_profiles);
+        let x: Vec<f64> = v.f64_range(xname, p0, p1)?;
+        let shots: Vec<u64> = counts_shots(&v, p0, p1)?;
+        let energy = v
+            .f64_range("pulse_energy", p0, p1)
+            .unwrap_or_else(|_| vec![0.0; p1 - p0]);
+        let columns: Vec<Vec<(usize, f64)>> = x
+            .iter()
+            .map(|&x| empty.columns((x - 0.5 * dx) * x_scale, (x + 0.5 * dx) * x_scale))
+            .collect();
+        for (g, (&k, (cal, bins))) in grids
+            .iter_mut()
+            .zip(channels.iter().zip(cals.iter().zip(&bkg)))
+        {
+            let block = counts
+                .read_slice::<u64, _, Ix3>(s![p0..p1, k..k + 1, ..])
+                .map_err(|e| v.unreadable("counts", e))?;
+            // (a selection that keeps the channel axis reads 6 times faster in HDF5)
+            let block = block.index_axis(Axis(1), 0);
+            for (i, row) in block.outer_iter().enumerate() {
+                let row = row.as_slice().map_or_else(|| row.to_vec(), <[u64]>::to_vec);
+                add_profile(
+                    g,
+                    &columns[i],
+                    &bin_rows,
+                    &row,
+                    shots[i] as f64,
+                    &Background::Bins(bins),
+                    &range_weight,
+                    cal,
+                    energy[i],
+                );
+            }
+        }
+        if let (Some(t), Some(d)) = (truth_grid.as_mut(), atb.as_ref()) {
+            add_truth(&v, t, d, c, p0, p1, &columns, &bin_rows)?;
+        }
+        if let (true, Some(t0)) = (geolocated, t0) {
+            let scaled: Vec<f64> = x.iter().map(|x| x * x_scale).collect();
+            let (time, lat, lon) = (
+                v.f64_range("time", p0, p1)?,
+                v.f64_range("latitude", p0, p1)?,
+                v.f64_range("longitude", p0, p1)?,
+            );
+            for s in day_night(t0, &scaled, &time, &lat, &lon) {
+                match day.last_mut() {
+                    Some((_, x1, d)) if *d == s.2 => *x1 = s.1,
+                    _ => day.push(s),
+                }
+            }
+        }
+    }
+    let background_note = if bkg[0].is_empty() {
+        "no signal-free bin: background not subtracted".to_string()
+    } else {
+        format!("background from {} signal-free bins", bkg[0].len())
+    };
+    let mut grids = grids.into_iter();
+    let signal = grids.next().expect("one channel");
+    let pair = match (pair, grids.next(), grids.next()) {
+        (Some(_), Some(a), Some(b)) => Some((
+            a,
+            b,
+            format!("{} / {}", names[channels[2]], names[channels[1]]),
+        )),
+        _ => None,
+    };
+    Ok(Quicklook {
+        title: path.file_name().map_or_else(
+            || path.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        ),
+        background_note,
+        x_label,
+        signal,
+        channel: names[c].clone(),
+        pair,
+        truth: truth_grid,
+        day,
+    })
+}
+
+/// `n_shots` of profiles `p0..p1`.
+fn counts_shots(v: &Vars, p0: usize, p1: usize) -> Result<Vec<u64>> {
+    Ok(v.ds("n_shots")?
+        .read_slice::<u64, _, Ix1>(s![p0..p1])
+        .map_err(|e| v.unreadable("n_shots", e))?
+        .to_vec())
+}
+
+/// Adds the truth's attenuated backscatter of profiles `p0..p1` (a (channel, bin)
+/// variable in a static scene, (profile, channel, bin) in a changing one).
+#[allow(clippy::too_many_arguments)]
+fn add_truth(
+    v: &Vars,
+    grid: &mut Grid,
+    d: &Dataset,
+    c: usize,
+    p0: usize,
+    p1: usize,
+    columns: &[Vec<(usize, f64)>],
+    bin_rows: &[Vec<(usize, f64)>],
+) -> Result<()> {
+    let name = "attenuated_backscatter";
+    match d.ndim() {
+        2 => {
+            let r = v.channel_row(name, c, 0)?;
+            for cols in &columns[..p1 - p0] {
+                grid.add_profile(cols, bin_rows, r.iter().copied());
+            }
+        }
+        3 => {
+            let block = d
+                .read_slice::<f64, _, Ix3>(s![p0..p1, c..c + 1, ..])
+                .map_err(|e| v.unreadable(name, e))?;
+            let block = block.index_axis(Axis(1), 0);
+            for (row, cols) in block.outer_iter().zip(columns) {
+                grid.add_profile(cols, bin_rows, row.iter().copied());
+            }
+        }
+        n => return Err(v.fail(format!("`{name}` has {n} dimensions, not 2 or 3"))),
+    }
+    Ok(())
+}
