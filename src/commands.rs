@@ -353,7 +353,7 @@ pub fn sweep(
         Ok(())
     })?;
     if let Some(id) = png_id {
-        let bytes = crate::output::sweep_plot::png_bytes(&axes, &metrics[0], &rows)
+        let bytes = crate::output::sweep_plot::png_bytes(&axes, metrics, &rows)
             .map_err(|r| Error::output(outputs.shown_path(id), r))?;
         outputs.write(id, |w| w.write_all(&bytes))?;
     }

@@ -1,19 +1,21 @@
 //! The curtain plot (`lidarsim curtain RAW.h5 --png OUT.png`): one channel's counts per
 //! shot against along-track distance (or time) and altitude, on a logarithmic colour
-//! scale (`colorous` viridis), as a PNG through `plotters`.
+//! scale (viridis) with its colour bar, as a PNG through `plot::ImagePanel`.
 //!
-//! The plot area is filled pixel by pixel: each pixel shows the profile and bin nearest
-//! its centre, so a run of any length draws in time proportional to the image, not to the
-//! file.
+//! The panel is filled pixel by pixel from at most one cell per pixel: each shows the
+//! profile and bin nearest its centre, so a run of any length draws in time proportional
+//! to the image, not to the file.
 
 use std::path::Path;
 
 use ndarray::{Ix2, s};
 use plotters::prelude::*;
 
+use super::plot::panel::{Axis, ImagePanel, edges};
+use super::plot::text::{encode_png, ensure_font};
+use super::plot::{ColourScale, DrawResult};
 use super::raw_file;
 use super::safe_file::describe_hdf5_error;
-use super::snr_map::{FONT, encode_png, ensure_font};
 use crate::error::{Error, Result};
 use crate::resources::try_vec;
 
@@ -134,60 +136,119 @@ pub fn read(path: &Path, channel: Option<&str>) -> Result<Curtain> {
     })
 }
 
-/// The PNG of a curtain.
+/// The PNG of a curtain: the counts per shot against the profiles' coordinate and
+/// altitude, with a colour bar of counts per shot ([`ImagePanel`], log scale).
 pub fn png_bytes(c: &Curtain) -> std::result::Result<Vec<u8>, String> {
     ensure_font()?;
+    let panel = panel(c);
     let mut rgb = vec![0u8; (WIDTH * HEIGHT * 3) as usize];
-    draw(c, &mut rgb).map_err(|e| format!("drawing failed: {e}"))?;
+    draw(&panel, &mut rgb).map_err(|e| format!("drawing failed: {e}"))?;
     encode_png(&rgb, WIDTH, HEIGHT).map_err(|e| format!("PNG encoding failed: {e}"))
 }
 
-fn draw(c: &Curtain, rgb: &mut [u8]) -> std::result::Result<(), Box<dyn std::error::Error>> {
+fn draw(panel: &ImagePanel, rgb: &mut [u8]) -> DrawResult {
     let root = BitMapBackend::with_buffer(rgb, (WIDTH, HEIGHT)).into_drawing_area();
     root.fill(&WHITE)?;
-    let (x0, x1) = bounds(&c.x);
-    let (z0, z1) = bounds(&c.altitude_km);
-    let mut chart = ChartBuilder::on(&root)
-        .caption(&c.title, (FONT, 16))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(55)
-        .build_cartesian_2d(x0..x1, z0..z1)?;
-    chart
-        .configure_mesh()
-        .disable_mesh()
-        .x_desc(c.x_label.as_str())
-        .y_desc("altitude (km)")
-        .label_style((FONT, 13))
-        .draw()?;
-    let peak = c.counts_per_shot.iter().fold(0.0f64, |m, &v| m.max(v));
-    let top = peak.max(1e-300).log10();
-    let area = chart.plotting_area();
-    let (px, py) = area.get_pixel_range();
-    let (w, h) = (px.end - px.start, py.end - py.start);
-    // the data point at the centre of each pixel column and row, and its nearest profile and bin
-    let xs: Vec<f64> = (0..w)
-        .map(|i| x0 + (x1 - x0) * (f64::from(i) + 0.5) / f64::from(w))
-        .collect();
-    let zs: Vec<f64> = (0..h)
-        .map(|j| z1 - (z1 - z0) * (f64::from(j) + 0.5) / f64::from(h))
-        .collect();
-    let profiles: Vec<usize> = xs.iter().map(|&x| nearest(&c.x, x)).collect();
-    let bins: Vec<usize> = zs.iter().map(|&z| nearest(&c.altitude_km, z)).collect();
-    for (x, &p) in xs.iter().zip(&profiles) {
-        for (z, &b) in zs.iter().zip(&bins) {
-            let v = c.counts_per_shot[p * c.n_bins + b];
-            let t = if v > 0.0 {
-                ((v.log10() - top) / DECADES + 1.0).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let col = colorous::VIRIDIS.eval_continuous(t);
-            area.draw_pixel((*x, *z), &RGBColor(col.r, col.g, col.b))?;
-        }
-    }
+    panel.draw(&root)?;
     root.present()?;
     Ok(())
+}
+
+/// The curtain as an image panel. Its cells are the profiles and bins themselves when
+/// there are no more of them than pixels (edges halfway between neighbours), else one
+/// cell per pixel or so showing the profile (bin) nearest its centre: the panel holds
+/// at most [`WIDTH`] × [`HEIGHT`] cells however long the run. Zero counts are drawn in
+/// the scale's darkest colour (a log scale has no zero).
+fn panel(c: &Curtain) -> ImagePanel {
+    let scale = colour_scale(&c.counts_per_shot);
+    let (profiles, x_edges) = cells(&c.x, WIDTH as usize);
+    let (bins, z_edges) = cells(&c.altitude_km, HEIGHT as usize);
+    let values: Vec<f64> = bins
+        .iter()
+        .flat_map(|&b| profiles.iter().map(move |&p| (p, b)))
+        .map(|(p, b)| {
+            let v = if b < c.n_bins {
+                c.counts_per_shot.get(p * c.n_bins + b).copied()
+            } else {
+                None
+            };
+            match v.unwrap_or(f64::NAN) {
+                0.0 => scale.lo,
+                v => v,
+            }
+        })
+        .collect();
+    let ends = |e: &[f64]| match e {
+        [] => (0.0, 1.0),
+        [first, .., last] => (first.min(*last), first.max(*last)),
+        [only] => (*only - 0.5, *only + 0.5),
+    };
+    let (x0, x1) = ends(&x_edges);
+    let (z0, z1) = ends(&z_edges);
+    ImagePanel {
+        title: c.title.clone(),
+        x: Axis::linear(c.x_label.clone(), x0, x1),
+        y: Axis::linear("altitude (km)", z0, z1),
+        x_edges,
+        y_edges: z_edges,
+        values,
+        scale,
+        bar_label: "counts per shot (zero: darkest)".into(),
+        isolines: vec![],
+    }
+}
+
+/// The log colour scale of counts per shot: up to the brightest value, down to a decade
+/// below the faintest non-zero one (where zero is drawn, so that one count stands out
+/// from none) but at most [`DECADES`] below the brightest.
+fn colour_scale(v: &[f64]) -> ColourScale {
+    let finite = v.iter().copied().filter(|x| x.is_finite());
+    let peak = finite.clone().fold(f64::NEG_INFINITY, f64::max);
+    let faintest = finite.filter(|&x| x > 0.0).fold(f64::INFINITY, f64::min);
+    if peak > 0.0 && faintest.is_finite() {
+        let lo = (faintest / 10.0).max(peak * 10f64.powf(-DECADES));
+        ColourScale {
+            lo,
+            hi: peak,
+            log: true,
+        }
+    } else {
+        ColourScale::over(v.iter().copied(), true, DECADES)
+    }
+}
+
+/// The cells of a coordinate `v` drawn on about `n` pixels: the indices of `v` each
+/// cell shows and the cells' edges (one more). All of `v`, edges halfway between
+/// neighbours, when it is finite, strictly monotonic and no longer than `n`; else `n`
+/// equal cells over its range, each showing the element nearest its centre (neighbours
+/// showing the same element merged).
+fn cells(v: &[f64], n: usize) -> (Vec<usize>, Vec<f64>) {
+    if v.is_empty() || n == 0 {
+        return (vec![], vec![]);
+    }
+    let finite = v.iter().all(|x| x.is_finite());
+    let ascending = v.windows(2).all(|w| w[1] > w[0]);
+    let descending = v.windows(2).all(|w| w[1] < w[0]);
+    let sorted = finite && (ascending || descending);
+    if sorted && v.len() <= n {
+        return ((0..v.len()).collect(), edges(v));
+    }
+    let (lo, hi) = bounds(v);
+    let at = |k: usize| lo + (hi - lo) * k as f64 / n as f64;
+    let mut shown: Vec<usize> = Vec::with_capacity(n);
+    let mut e = vec![at(0)];
+    for k in 0..n {
+        let i = nearest(v, lo + (hi - lo) * (k as f64 + 0.5) / n as f64, sorted);
+        if shown.last() == Some(&i) {
+            if let Some(last) = e.last_mut() {
+                *last = at(k + 1);
+            }
+        } else {
+            shown.push(i);
+            e.push(at(k + 1));
+        }
+    }
+    (shown, e)
 }
 
 /// `(min, max)` of the finite values of `v`, widened when they coincide; `(0, 1)` when
@@ -206,9 +267,49 @@ fn bounds(v: &[f64]) -> (f64, f64) {
     }
 }
 
-/// Index of the element of `v` nearest `x` (v monotonic, either way).
-fn nearest(v: &[f64], x: f64) -> usize {
+/// Index of the element of `v` nearest `x`: by bisection when `v` is `sorted`
+/// (strictly monotonic, either way), else by looking at every element.
+fn nearest(v: &[f64], x: f64, sorted: bool) -> usize {
+    let distance = |i: usize| (v[i] - x).abs();
+    if sorted && !v.is_empty() {
+        let ascending = v[v.len() - 1] >= v[0];
+        let p = v.partition_point(|&a| if ascending { a < x } else { a > x });
+        let (a, b) = (p.saturating_sub(1), p.min(v.len() - 1));
+        return if distance(b) < distance(a) { b } else { a };
+    }
     (0..v.len())
-        .min_by(|&a, &b| (v[a] - x).abs().total_cmp(&(v[b] - x).abs()))
+        .min_by(|&a, &b| distance(a).total_cmp(&distance(b)))
         .unwrap_or(0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nearest_by_bisection_agrees_with_the_scan() {
+        let up: Vec<f64> = (0..50).map(|i| (i as f64).powf(1.3)).collect();
+        let down: Vec<f64> = up.iter().rev().copied().collect();
+        for k in 0..400 {
+            let x = -5.0 + 0.4 * k as f64;
+            for v in [&up, &down] {
+                let (a, b) = (nearest(v, x, true), nearest(v, x, false));
+                assert!((v[a] - x).abs() == (v[b] - x).abs(), "{x}: {a} {b}");
+            }
+        }
+    }
+
+    #[test]
+    fn cells_are_the_elements_or_one_per_pixel() {
+        let (i, e) = cells(&[10.0, 8.0, 6.0], 100);
+        assert_eq!((i, e), (vec![0, 1, 2], vec![11.0, 9.0, 7.0, 5.0]));
+        let long: Vec<f64> = (0..10_000).map(f64::from).collect();
+        let (i, e) = cells(&long, 100);
+        assert_eq!((i.len(), e.len()), (100, 101));
+        assert!(i.windows(2).all(|w| w[1] > w[0]));
+        // not monotonic (a NaN): equal cells, each the nearest finite element
+        let (i, e) = cells(&[0.0, f64::NAN, 2.0], 4);
+        assert_eq!(i, vec![0, 2]);
+        assert_eq!(e, vec![0.0, 1.0, 2.0]);
+    }
 }

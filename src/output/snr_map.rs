@@ -17,10 +17,7 @@ use super::plot::isolines::isolines;
 use super::plot::text::{font, label};
 use super::plot::{DrawResult, ticks};
 
-// Kept for `curtain.rs` and `sweep_plot.rs` until they import these from `plot`
-// (both now do: this re-export can go, leaving a private `encode_png, ensure_font`).
-#[allow(unused_imports)]
-pub(crate) use super::plot::text::{FONT, encode_png, ensure_font};
+use super::plot::text::{encode_png, ensure_font};
 
 /// S/N against altitude and accumulation time, ready to be drawn.
 #[derive(Debug, Clone)]

@@ -96,7 +96,7 @@ pub fn add_profile(
     cal: &Calibration,
     pulse_energy_j: f64,
 ) {
-    if columns.is_empty() || !(shots > 0.0) {
+    if columns.is_empty() || shots.is_nan() || shots <= 0.0 {
         return;
     }
     let per_shot = 1.0 / shots;

@@ -8,7 +8,7 @@ use hdf5::Dataset;
 use ndarray::{Axis, Ix1, Ix2, Ix3, s};
 
 use super::grid::Grid;
-use super::raw::{Vars, calibration, day_night, pair, start_unix_s};
+use super::raw::{Vars, calibration, day_night, extend_spans, pair, start_unix_s};
 use super::{
     BLOCK_PROFILES, Background, COLUMNS, Calibration, Quicklook, ROWS, TOP_KM, add_profile, x_axis,
 };
@@ -143,8 +143,23 @@ pub(super) fn read(
     let t0 = start_unix_s(f, first.dataset("time").ok().as_ref());
     for r in &regions {
         let v = Vars { path, f: &r.group };
-        let polarization = read_text(path, &r.group, "polarization").unwrap_or_default();
-        let wavelength = v.f64s("wavelength").unwrap_or_default();
+        // a product's groups name their channels only: `<wavelength>_<polarization>`
+        // (the default names, docs/config.md) tell the pair
+        let polarization: Vec<String> = r
+            .channels
+            .iter()
+            .map(|n| n.rsplit('_').next().unwrap_or("").to_string())
+            .collect();
+        let wavelength: Vec<f64> = r
+            .channels
+            .iter()
+            .map(|n| {
+                n.split('_')
+                    .next()
+                    .and_then(|w| w.parse().ok())
+                    .unwrap_or(f64::NAN)
+            })
+            .collect();
         let c = r.channels.iter().position(|n| *n == name);
         let p = c
             .and_then(|c| pair(&r.channels, &polarization, &wavelength, c))
@@ -217,20 +232,16 @@ pub(super) fn read(
             if let (Some(t), Some(d), Some(c)) = (truth_grid.as_mut(), atb.as_ref(), c) {
                 add_column_truth(&v, t, d, c, p0, p1, &columns, &bin_rows)?;
             }
-            if let (Some(t0), true) = (t0, std::ptr::eq(r, &regions[0])) {
-                if let (Ok(time), Ok(lat), Ok(lon)) = (
-                    v.f64_range("time", p0, p1),
-                    v.f64_range("latitude", p0, p1),
-                    v.f64_range("longitude", p0, p1),
-                ) {
-                    let scaled: Vec<f64> = x.iter().map(|x| x * x_scale).collect();
-                    for s in day_night(t0, &scaled, &time, &lat, &lon) {
-                        match day.last_mut() {
-                            Some((_, x1, d)) if *d == s.2 => *x1 = s.1,
-                            _ => day.push(s),
-                        }
-                    }
-                }
+            // day and night from the first region's profiles
+            if let (Some(t0), true, Ok(time), Ok(lat), Ok(lon)) = (
+                t0,
+                std::ptr::eq(r, &regions[0]),
+                v.f64_range("time", p0, p1),
+                v.f64_range("latitude", p0, p1),
+                v.f64_range("longitude", p0, p1),
+            ) {
+                let scaled: Vec<f64> = x.iter().map(|x| x * x_scale).collect();
+                extend_spans(&mut day, day_night(t0, &scaled, &time, &lat, &lon));
             }
         }
     }

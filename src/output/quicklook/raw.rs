@@ -164,6 +164,16 @@ pub(super) fn start_unix_s(root: &hdf5::Group, time: Option<&Dataset>) -> Option
     Some(t.duration_since(std::time::UNIX_EPOCH).ok()?.as_secs_f64())
 }
 
+/// Appends `more` spans to `day`, joining the first to the last when they agree.
+pub(super) fn extend_spans(day: &mut Vec<(f64, f64, bool)>, more: Vec<(f64, f64, bool)>) {
+    for s in more {
+        match day.last_mut() {
+            Some((_, x1, d)) if *d == s.2 => *x1 = s.1,
+            _ => day.push(s),
+        }
+    }
+}
+
 /// Day and night spans along the profiles' x, from the sun's zenith angle at each
 /// profile's time (after `t0`, Unix seconds) and place.
 pub(super) fn day_night(
@@ -311,12 +321,7 @@ pub(super) fn read(
                 v.f64_range("latitude", p0, p1)?,
                 v.f64_range("longitude", p0, p1)?,
             );
-            for s in day_night(t0, &scaled, &time, &lat, &lon) {
-                match day.last_mut() {
-                    Some((_, x1, d)) if *d == s.2 => *x1 = s.1,
-                    _ => day.push(s),
-                }
-            }
+            extend_spans(&mut day, day_night(t0, &scaled, &time, &lat, &lon));
         }
     }
     let background_note = if bkg[0].is_empty() {
