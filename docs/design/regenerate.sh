@@ -63,5 +63,16 @@ cat "$tmp/pulses.txt"
 (cd "$tmp" && "$L" simulate "$root/configs/instruments/caliop_orbit.toml" -o caliop_orbit.h5 &&
   "$L" curtain caliop_orbit.h5 --png "$root/docs/caliop_orbit_curtain.png")
 
+# docs/figures.md: the quicklooks and the S/N map (run beside the files, so that the
+# figures' titles name them)
+mkdir -p docs/figures
+"$L" snr-map configs/paper/scenario1.toml --png docs/figures/snr_map_scenario1.png
+(cd "$tmp" && "$L" quicklook caliop_orbit.h5 --truth --png "$root/docs/figures/quicklook_orbit.png")
+(cd "$tmp" && "$L" simulate "$root/configs/instruments/caliop_3ch.toml" -o caliop_3ch.h5 --profiles 200 &&
+  "$L" quicklook caliop_3ch.h5 --png "$root/docs/figures/quicklook_pair.png")
+(cd "$tmp" && "$L" onboard "$root/configs/instruments/caliop_3ch.toml" --set acquisition.top_altitude_km=40 \
+  --set acquisition.bottom_altitude_km=-2 --set acquisition.profiles=200 --scheme caliop -o caliop_3ch_product.h5 &&
+  "$L" quicklook caliop_3ch_product.h5 --truth --png "$root/docs/figures/quicklook_product.png")
+
 echo "section 4 (onboard report):"
 cat docs/design/caliop_onboard.csv
