@@ -20,33 +20,48 @@ pub const CSV_COLUMNS: [&str; 12] = [
     "snr_bkg_estimated",
 ];
 
-/// Writes one row per bin, SI units, counts per shot per bin; `snr` is Eq. 4 after
-/// `shots` shots; `snr_bkg_estimated` is empty when no signal-free bins exist.
+/// The CSV's columns ([`CSV_COLUMNS`], in that order), one value per bin: SI units,
+/// counts per shot per bin; `snr` is Eq. 4 after `shots` shots; `snr_bkg_estimated`
+/// is NaN throughout when no signal-free bins exist. The CSV and the Python module's
+/// `expect` (docs/python.md) are both these numbers.
+pub fn columns(e: &ExpectedProfile, shots: f64) -> Vec<(&'static str, Vec<f64>)> {
+    let n = e.n_bins();
+    let point = |f: fn(&crate::atmosphere::Optics) -> f64| e.point.iter().map(f).collect();
+    let values: [Vec<f64>; 12] = [
+        e.altitude_m.clone(),
+        e.range_m.clone(),
+        point(|o| o.beta_mol),
+        point(|o| o.beta_aer),
+        point(|o| o.beta_cld),
+        point(|o| o.alpha_total),
+        e.t2.clone(),
+        e.signal.clone(),
+        vec![e.background; n],
+        vec![e.dark; n],
+        e.snr_eq4(shots),
+        e.snr_estimated_background(shots)
+            .unwrap_or_else(|| vec![f64::NAN; n]),
+    ];
+    CSV_COLUMNS.into_iter().zip(values).collect()
+}
+
+/// Writes one row per bin of [`columns`] (`altitude_m` and `range_m` as decimals, the
+/// rest in scientific notation; `snr_bkg_estimated` empty when there is none).
 pub fn write_csv(w: &mut dyn Write, e: &ExpectedProfile, shots: f64) -> io::Result<()> {
     writeln!(w, "{}", CSV_COLUMNS.join(","))?;
-    let snr = e.snr_eq4(shots);
-    let snr_est = e.snr_estimated_background(shots);
+    let cols = columns(e, shots);
+    let estimated = e.snr_estimated_background(shots).is_some();
     for i in 0..e.n_bins() {
-        let est = snr_est
-            .as_ref()
-            .map(|v| format!("{:e}", v[i]))
-            .unwrap_or_default();
-        writeln!(
-            w,
-            "{},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{}",
-            e.altitude_m[i],
-            e.range_m[i],
-            e.point[i].beta_mol,
-            e.point[i].beta_aer,
-            e.point[i].beta_cld,
-            e.point[i].alpha_total,
-            e.t2[i],
-            e.signal[i],
-            e.background,
-            e.dark,
-            snr[i],
-            est
-        )?;
+        let cells: Vec<String> = cols
+            .iter()
+            .enumerate()
+            .map(|(k, (_, v))| match k {
+                0 | 1 => format!("{}", v[i]),
+                11 if !estimated => String::new(),
+                _ => format!("{:e}", v[i]),
+            })
+            .collect();
+        writeln!(w, "{}", cells.join(","))?;
     }
     Ok(())
 }
