@@ -268,16 +268,13 @@ fn memory_stays_bounded_on_a_large_file() {
     let status_path = format!("/proc/{}/status", child.id());
     let mut peak_kb = 0u64;
     let status = loop {
-        if let Ok(s) = std::fs::read_to_string(&status_path) {
-            if let Some(kb) = s
-                .lines()
+        let hwm = std::fs::read_to_string(&status_path).ok().and_then(|s| {
+            s.lines()
                 .find(|l| l.starts_with("VmHWM:"))
                 .and_then(|l| l.split_whitespace().nth(1))
                 .and_then(|v| v.parse::<u64>().ok())
-            {
-                peak_kb = peak_kb.max(kb);
-            }
-        }
+        });
+        peak_kb = peak_kb.max(hwm.unwrap_or(0));
         if let Some(status) = child.try_wait().unwrap() {
             break status;
         }
