@@ -25,7 +25,7 @@ import xarray as xr
 
 from . import _lidarsim
 
-__all__ = ["Config", "load_config", "expect", "simulate"]
+__all__ = ["Config", "load_config", "expect", "simulate", "validate", "validate_file", "sweep"]
 
 
 def _toml_value(key: str, value: Any) -> str:
@@ -116,3 +116,40 @@ def simulate(config: ConfigLike, profiles: Optional[int] = None, seed: Optional[
         out = os.path.join(d, "raw.nc")
         _lidarsim.simulate(os.fspath(cfg.path), cfg.sets(), out, profiles, seed)
         return xr.load_dataset(out, engine="h5netcdf")
+
+
+def validate(config: ConfigLike, realizations: int = 1000, seed: Optional[int] = None) -> dict:
+    """``lidarsim validate CONFIG --json``: draws ``realizations`` profiles and tests
+    them against Eq. 4; the report (``report["consistent"]``, the statistics and every
+    bin) as the CLI's JSON, parsed."""
+    cfg = _config(config)
+    return json.loads(_lidarsim.validate(os.fspath(cfg.path), cfg.sets(), realizations, seed))
+
+
+def validate_file(path: Union[str, os.PathLike]) -> dict:
+    """``lidarsim validate --file RAW --json``: a raw file's counts against the
+    expectation it carries; the report, parsed."""
+    return json.loads(_lidarsim.validate_file(os.fspath(path)))
+
+
+def sweep(config: ConfigLike, vary: Mapping[str, str], metrics: list) -> xr.Dataset:
+    """``lidarsim sweep CONFIG --vary KEY=RANGE ... --metric M ...``: the metrics over
+    the grid of the varied keys, one dimension per key (``vary`` maps a dotted key to
+    its range, ``"0.01..1:log:5"``; the CLI's numbers, read from its CSV)."""
+    import numpy as np
+
+    cfg = _config(config)
+    with tempfile.TemporaryDirectory(prefix="lidarsim-") as d:
+        out = os.path.join(d, "sweep.csv")
+        _lidarsim.sweep(os.fspath(cfg.path), cfg.sets(),
+                        [f"{k}={v}" for k, v in vary.items()], list(metrics), out)
+        with open(out) as f:
+            header = f.readline().strip().split(",")
+        table = np.atleast_2d(np.genfromtxt(out, delimiter=",", skip_header=1))
+    keys = list(vary)
+    axes = [list(dict.fromkeys(table[:, k])) for k in range(len(keys))]
+    shape = tuple(len(a) for a in axes)
+    data = {name: (keys, table[:, len(keys) + m].reshape(shape))
+            for m, name in enumerate(header[len(keys):])}
+    return xr.Dataset(data, coords={k: a for k, a in zip(keys, axes)},
+                      attrs={"config_file": os.fspath(cfg.path)})

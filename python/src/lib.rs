@@ -86,10 +86,63 @@ fn simulate(
     Ok(output)
 }
 
+/// The JSON of a validation report (the CLI's `--json`).
+fn report_json(report: &lidarsim::validate::Report) -> lidarsim::error::Result<String> {
+    serde_json::to_string(report).map_err(|e| Error::Unsupported(format!("validation report: {e}")))
+}
+
+/// `lidarsim validate CONFIG --realizations N [--seed S] --json -`: the report as JSON.
+#[pyfunction]
+#[pyo3(signature = (config, overrides, realizations, seed=None))]
+fn validate(
+    py: Python<'_>,
+    config: PathBuf,
+    overrides: Vec<String>,
+    realizations: usize,
+    seed: Option<u64>,
+) -> PyResult<String> {
+    py.allow_threads(|| {
+        let lidar = lidarsim::scenario::Lidar::load(&config, &overrides)?;
+        let opts = lidarsim::validate::ValidateOptions {
+            realizations,
+            method: None,
+            seed,
+            json: None,
+        };
+        report_json(&lidarsim::validate::run(&lidar, &opts)?)
+    })
+    .map_err(raise)
+}
+
+/// `lidarsim validate --file RAW --json -`: the file's counts against the expectation
+/// it carries; the report as JSON.
+#[pyfunction]
+fn validate_file(py: Python<'_>, path: PathBuf) -> PyResult<String> {
+    py.allow_threads(|| report_json(&lidarsim::validate::file::check_file(&path)?.0))
+        .map_err(raise)
+}
+
+/// `lidarsim sweep CONFIG --vary ... --metric ... --csv CSV`: writes the CSV.
+#[pyfunction]
+fn sweep(
+    py: Python<'_>,
+    config: PathBuf,
+    overrides: Vec<String>,
+    vary: Vec<String>,
+    metrics: Vec<String>,
+    csv: PathBuf,
+) -> PyResult<()> {
+    py.allow_threads(|| lidarsim::commands::sweep(&config, &overrides, &vary, &metrics, &csv, None))
+        .map_err(raise)
+}
+
 #[pymodule]
 fn _lidarsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(check, m)?)?;
     m.add_function(wrap_pyfunction!(expect, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(validate, m)?)?;
+    m.add_function(wrap_pyfunction!(validate_file, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep, m)?)?;
     Ok(())
 }

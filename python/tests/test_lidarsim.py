@@ -87,3 +87,47 @@ def test_bad_input_raises_the_cli_message(tmp_path):
     # a value Python cannot write as TOML
     with pytest.raises(ValueError):
         lidarsim.load_config(SCENARIO1, {"instrument.pulse_energy_j": float("nan")})
+
+
+def test_validate_gives_the_cli_report(tmp_path):
+    ours = lidarsim.validate(SCENARIO1, realizations=200, seed=3)
+    r = cli("validate", SCENARIO1, "--realizations", "200", "--seed", "3",
+            "--json", tmp_path / "v.json")
+    assert r.returncode == 0, r.stderr
+    import json
+
+    theirs = json.loads((tmp_path / "v.json").read_text())
+    assert ours == theirs
+    assert ours["consistent"] is True
+    with pytest.raises(ValueError):
+        lidarsim.validate(SCENARIO1, realizations=5)
+
+
+def test_validate_file_gives_the_cli_report(tmp_path):
+    raw = lidarsim.simulate(SCENARIO1, profiles=200, seed=4, path=tmp_path / "r.nc")
+    ours = lidarsim.validate_file(raw)
+    r = cli("validate", "--file", raw, "--json", tmp_path / "v.json")
+    import json
+
+    theirs = json.loads((tmp_path / "v.json").read_text())
+    assert r.returncode in (0, 1), r.stderr
+    assert ours == theirs
+    with pytest.raises(OSError):
+        lidarsim.validate_file(tmp_path / "missing.nc")
+
+
+def test_sweep_is_the_cli_csv_on_a_grid(tmp_path):
+    vary = {"instrument.pulse_energy_j": "0.01..1:log:3", "instrument.rep_rate_hz": "10..30:3"}
+    ds = lidarsim.sweep(SCENARIO1, vary, ["snr_at:11km", "max_altitude:snr=3"])
+    assert ds["snr_at:11km"].dims == tuple(vary)
+    assert ds["snr_at:11km"].shape == (3, 3)
+    out = tmp_path / "s.csv"
+    args = [a for k, v in vary.items() for a in ("--vary", f"{k}={v}")]
+    r = cli("sweep", SCENARIO1, *args, "--metric", "snr_at:11km",
+            "--metric", "max_altitude:snr=3", "--csv", out)
+    assert r.returncode == 0, r.stderr
+    table = np.genfromtxt(out, delimiter=",", skip_header=1)
+    np.testing.assert_array_equal(ds["snr_at:11km"].values.ravel(), table[:, 2])
+    # the S/N grows with the energy and the rate
+    snr = ds["snr_at:11km"].values
+    assert (np.diff(snr, axis=0) > 0).all() and (np.diff(snr, axis=1) > 0).all()
