@@ -89,7 +89,7 @@ pub fn add_profile(
     grid: &mut Grid,
     columns: &[(usize, f64)],
     bin_rows: &[Vec<(usize, f64)>],
-    counts: &[u64],
+    counts: ndarray::ArrayView1<'_, u64>,
     shots: f64,
     background: &Background,
     range_weight: &[f64],

@@ -215,12 +215,11 @@ pub(super) fn read(
                     .map_err(|e| v.unreadable("counts", e))?;
                 let block = block.index_axis(Axis(1), 0);
                 for (i, row) in block.outer_iter().enumerate() {
-                    let row = row.to_vec();
                     add_profile(
                         grid,
                         &columns[i],
                         &bin_rows,
-                        &row,
+                        row,
                         shots[i] as f64,
                         &Background::Value(bkg[i] * r.merged),
                         &range_weight,

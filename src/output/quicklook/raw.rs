@@ -297,12 +297,11 @@ pub(super) fn read(
             // (a selection that keeps the channel axis reads 6 times faster in HDF5)
             let block = block.index_axis(Axis(1), 0);
             for (i, row) in block.outer_iter().enumerate() {
-                let row = row.as_slice().map_or_else(|| row.to_vec(), <[u64]>::to_vec);
                 add_profile(
                     g,
                     &columns[i],
                     &bin_rows,
-                    &row,
+                    row,
                     shots[i] as f64,
                     &Background::Bins(bins),
                     &range_weight,
