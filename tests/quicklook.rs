@@ -10,17 +10,8 @@ use std::path::Path;
 
 use common::cli::{lidarsim, ok, refused, scratch};
 use common::config_path;
+use common::image::Image;
 use lidarsim::output::quicklook::{self, COLUMNS, ROWS};
-
-/// The PNG's width, height and number of distinct colours.
-fn decode(path: &Path) -> (u32, u32, usize) {
-    let d = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
-    let mut r = d.read_info().unwrap();
-    let mut buf = vec![0; r.output_buffer_size().unwrap()];
-    let info = r.next_frame(&mut buf).unwrap();
-    let colours: std::collections::HashSet<&[u8]> = buf[..info.buffer_size()].chunks(3).collect();
-    (info.width, info.height, colours.len())
-}
 
 /// The CALIOP-like three channels (532 ∥ and ⊥, 1064), 40 profiles up to 40 km, the
 /// 532 nm detectors without dead time (the quicklook shows the counts as recorded: it
@@ -70,7 +61,16 @@ fn a_pair_with_truth_draws_three_panels() {
         &["quicklook", "raw.h5", "--png", "q.png", "--truth"],
         &[],
     ));
-    let (w, h, colours) = decode(&dir.join("q.png"));
+    let img = Image::read(&dir.join("q.png"));
+    let (w, h, colours) = (img.w, img.h, img.distinct());
+    // each panel's colour bar: a column right of the fields running through the scale
+    for k in 0..3 {
+        let y0 = 34 + 430 * k;
+        assert!(
+            img.has_colour_bar(1280, 1310, y0, y0 + 430, 50),
+            "panel {k}'s colour bar"
+        );
+    }
     ok(lidarsim(
         &dir,
         &[
@@ -83,8 +83,11 @@ fn a_pair_with_truth_draws_three_panels() {
         ],
         &[],
     ));
-    let (w1, h1, _) = decode(&dir.join("one.png"));
+    let one = Image::read(&dir.join("one.png"));
+    let (w1, h1) = (one.w, one.h);
     assert_eq!((w, w1), (1400, 1400));
+    let h = h as u32;
+    let h1 = h1 as u32;
     // 1064 nm has no pair and no truth asked: one panel; the 532 nm pair three
     assert_eq!(h - h1, 2 * 430, "{h} {h1}");
     assert!(colours > 200, "{colours} colours");

@@ -3,6 +3,7 @@
 
 pub mod cli;
 pub mod h5;
+pub mod image;
 pub mod reference;
 
 use std::path::{Path, PathBuf};
