@@ -240,6 +240,23 @@ pub fn simulate_as(
     threads: Option<usize>,
     format: OutputFormat,
 ) -> Result<()> {
+    let summary = simulate_quietly(config, overrides, opts, threads, format)?;
+    eprintln!("{summary}");
+    if let Some(w) = &summary.warning {
+        eprintln!("{w}");
+    }
+    Ok(())
+}
+
+/// [`simulate_as`] without its closing lines: what the run did (the Python module's
+/// `simulate`, which raises the warning as a Python warning).
+pub fn simulate_quietly(
+    config: &Path,
+    overrides: &[String],
+    opts: &simulate::RunOptions,
+    threads: Option<usize>,
+    format: OutputFormat,
+) -> Result<simulate::RunSummary> {
     let lidar = Lidar::load(config, overrides)?;
     let first = &lidar.first().loaded;
     if format == OutputFormat::Scc && first.config.platform.kind != PlatformKind::Ground {
@@ -293,11 +310,7 @@ pub fn simulate_as(
             summary
         }
     };
-    eprintln!("{summary}");
-    if let Some(w) = &summary.warning {
-        eprintln!("{w}");
-    }
-    Ok(())
+    Ok(summary)
 }
 
 /// `lidarsim sweep`: the grid of `vary` over the config, the `metrics` of the

@@ -37,6 +37,10 @@ pub enum Error {
     /// on a scene whose expectations vary per shot).
     #[error("{0}")]
     Unsupported(String),
+    /// The caller stopped the run (the run options' cancel flag: the Python module's
+    /// Ctrl-C); its temporary output was removed.
+    #[error("interrupted; partial output removed")]
+    Interrupted,
 }
 
 fn config_message(file: &str, key: &str, reason: &str) -> String {

@@ -336,6 +336,7 @@ fn main() -> ExitCode {
                         std::env::args(),
                     ),
                     shard,
+                    cancel: None,
                 };
                 let mut set = set.clone();
                 set.extend(calibration.map(Calibration::rotation_override));

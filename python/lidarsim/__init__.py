@@ -4,11 +4,11 @@ xarray Datasets (docs/python.md).
     import lidarsim
     cfg = lidarsim.load_config("configs/paper/scenario1.toml",
                                {"instrument.pulse_energy_j": 0.5})
-    model = lidarsim.expect(cfg)                  # per bin: signal, background, S/N, ...
-    raw = lidarsim.simulate(cfg, profiles=100, seed=1)   # the raw file's Dataset
+    model = lidarsim.expect(cfg)                  # every channel per bin: the file's truth
+    raw = lidarsim.simulate(cfg, profiles=100, seed=1)   # the raw file's Dataset, in memory
 
 Bad input raises ``ValueError`` (files: ``OSError``) with the one-line message the CLI
-prints. Long calls release the GIL.
+prints. Long calls release the GIL; Ctrl-C stops them and leaves no file.
 """
 
 from __future__ import annotations
@@ -17,10 +17,12 @@ import json
 import math
 import os
 import tempfile
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping, Optional, Union
 
+import numpy as np
 import xarray as xr
 
 from . import _lidarsim
@@ -47,19 +49,29 @@ def _toml_value(key: str, value: Any) -> str:
 
 @dataclass(frozen=True)
 class Config:
-    """A scenario config file and dotted-key overrides, checked when made."""
+    """A scenario config file and dotted-key overrides, loaded and checked once (on the
+    first call that needs it) and kept for every later call."""
 
     path: Path
     overrides: Mapping[str, Any] = field(default_factory=dict)
+    _loaded: Any = field(default=None, init=False, repr=False, compare=False)
 
     def sets(self) -> list:
         """The overrides as the CLI's ``--set KEY=VALUE`` arguments."""
         return [f"{k}={_toml_value(k, v)}" for k, v in self.overrides.items()]
 
     @property
+    def loaded(self) -> "_lidarsim.Loaded":
+        """The config loaded and checked, every channel built (raises as the CLI refuses)."""
+        if self._loaded is None:
+            object.__setattr__(self, "_loaded",
+                               _lidarsim.Loaded(os.fspath(self.path), self.sets()))
+        return self._loaded
+
+    @property
     def channels(self) -> list:
         """The receiver channels' names."""
-        return _lidarsim.check(os.fspath(self.path), self.sets())
+        return self.loaded.channels
 
 
 ConfigLike = Union[Config, str, os.PathLike]
@@ -73,7 +85,7 @@ def load_config(path: Union[str, os.PathLike], overrides: Optional[Mapping[str, 
     o = dict(overrides or {})
     o.update({k.replace("__", "."): v for k, v in keys.items()})
     cfg = Config(Path(path), o)
-    _ = cfg.channels  # raises as the CLI refuses
+    _ = cfg.loaded  # raises as the CLI refuses
     return cfg
 
 
@@ -81,41 +93,74 @@ def _config(config: ConfigLike) -> Config:
     return config if isinstance(config, Config) else Config(Path(config))
 
 
+_ATTR_TYPES = {"str": str, "u64": np.uint64, "i32": np.int32, "f64": np.float64}
+
+
+def _dataset(variables: list, root: list) -> xr.Dataset:
+    """The raw file's variables and attributes as xarray reads them from the file: the
+    dimensions' own variables as indexes, CF decoding (``time`` as datetime64, the
+    ``coordinates`` attributes as coordinates). The numeric arrays are the run's own
+    buffers, not copies."""
+    def attrs(items):
+        return {k: _ATTR_TYPES[tag](v) for k, (tag, v) in items}
+
+    data = {}
+    for name, dims, values, items in variables:
+        if isinstance(values, list):
+            values = np.array(values, dtype=object)
+        data[name] = xr.Variable(dims, values, attrs=attrs(items))
+    return xr.decode_cf(xr.Dataset(data, attrs=attrs(root)))
+
+
+def _one_channel(ds: xr.Dataset, cfg: Config, channel: Optional[str]) -> xr.Dataset:
+    if channel is None:
+        return ds
+    names = list(ds.channel.values)
+    if channel not in names:
+        raise ValueError(f"{cfg.path}: key `instrument.channels`: has no channel `{channel}` "
+                         f"(channels: {', '.join(names)})")
+    return ds.sel(channel=channel)
+
+
 def expect(config: ConfigLike, channel: Optional[str] = None) -> xr.Dataset:
-    """``lidarsim expect CONFIG --csv``: the deterministic model of one channel (default
-    the first) per bin, the CSV's numbers to the last bit. Dimension ``bin``; altitude
-    and range are coordinates; counts per shot per bin; ``snr`` is Eq. 4 for one
-    profile (``shots_per_profile`` shots)."""
+    """``lidarsim expect``: the deterministic model of every channel per bin, as the raw
+    file holds it before its first profile (the same variables, dimensions and
+    attributes: ``expected_signal``, ``expected_background``, ``snr_eq4``,
+    ``attenuated_backscatter``, the truth of each column, ...), with
+    ``snr_bkg_estimated``, the CSV's S/N with an estimated background. With
+    ``channel``: that channel only. ``expect --csv``'s numbers to the last bit."""
     cfg = _config(config)
-    cols = _lidarsim.expect(os.fspath(cfg.path), cfg.sets(), channel)
-    shots = cols.pop("shots_per_profile")
-    units = {"altitude_m": "m", "range_m": "m", "beta_mol": "m-1 sr-1", "beta_aer": "m-1 sr-1",
-             "beta_cld": "m-1 sr-1", "alpha_total": "m-1", "t2": "1", "signal": "count",
-             "background": "count", "dark": "count", "snr": "1", "snr_bkg_estimated": "1"}
-    coords = {"altitude": ("bin", cols.pop("altitude_m"), {"units": "m"}),
-              "range": ("bin", cols.pop("range_m"), {"units": "m"})}
-    data = {k: ("bin", v, {"units": units[k]}) for k, v in cols.items()}
-    return xr.Dataset(data, coords=coords, attrs={
-        "config_file": os.fspath(cfg.path),
-        "channel": channel or cfg.channels[0],
-        "shots_per_profile": shots,
-    })
+    variables, root, shots = _lidarsim.expect(cfg.loaded)
+    ds = _dataset(variables, root)
+    ds.attrs.update(config_file=os.fspath(cfg.path), shots_per_profile=shots)
+    return _one_channel(ds, cfg, channel)
 
 
 def simulate(config: ConfigLike, profiles: Optional[int] = None, seed: Optional[int] = None,
-             path: Union[str, os.PathLike, None] = None) -> Union[xr.Dataset, Path]:
+             method: Optional[str] = None, path: Union[str, os.PathLike, None] = None,
+             progress: bool = False) -> Union[xr.Dataset, Path]:
     """``lidarsim simulate CONFIG -o PATH``: with ``path``, writes the raw file exactly
     as the CLI does (same seed, same counts and truth) and returns its path; without,
-    returns the raw file's Dataset in memory (written to a temporary file and read
-    back; the file is removed)."""
+    returns the raw file's Dataset built in memory (no file, no compression; the same
+    variables, dimensions and attributes, the counts in the file's integer type).
+    ``method``: ``"auto"``, ``"shot"`` or ``"aggregate"``; ``progress``: the CLI's
+    progress bar on a terminal. Ctrl-C stops the run within a batch of profiles and
+    leaves no file. A scene beyond a photon counter's range gives a ``UserWarning``."""
     cfg = _config(config)
     if path is not None:
-        return Path(_lidarsim.simulate(os.fspath(cfg.path), cfg.sets(), os.fspath(path),
-                                       profiles, seed))
-    with tempfile.TemporaryDirectory(prefix="lidarsim-") as d:
-        out = os.path.join(d, "raw.nc")
-        _lidarsim.simulate(os.fspath(cfg.path), cfg.sets(), out, profiles, seed)
-        return xr.load_dataset(out, engine="h5netcdf")
+        warning = _lidarsim.simulate(cfg.loaded, os.fspath(path), profiles, seed, method,
+                                     progress)
+        _warn(warning)
+        return Path(path)
+    variables, root, warning, _drawing_s = _lidarsim.simulate_in_memory(
+        cfg.loaded, profiles, seed, method, progress)
+    _warn(warning)
+    return _dataset(variables, root)
+
+
+def _warn(warning: Optional[str]) -> None:
+    if warning:
+        warnings.warn(warning, stacklevel=3)
 
 
 def validate(config: ConfigLike, realizations: int = 1000, seed: Optional[int] = None) -> dict:
@@ -123,7 +168,7 @@ def validate(config: ConfigLike, realizations: int = 1000, seed: Optional[int] =
     them against Eq. 4; the report (``report["consistent"]``, the statistics and every
     bin) as the CLI's JSON, parsed."""
     cfg = _config(config)
-    return json.loads(_lidarsim.validate(os.fspath(cfg.path), cfg.sets(), realizations, seed))
+    return json.loads(_lidarsim.validate(cfg.loaded, realizations, seed))
 
 
 def validate_file(path: Union[str, os.PathLike]) -> dict:
@@ -136,13 +181,10 @@ def sweep(config: ConfigLike, vary: Mapping[str, str], metrics: list) -> xr.Data
     """``lidarsim sweep CONFIG --vary KEY=RANGE ... --metric M ...``: the metrics over
     the grid of the varied keys, one dimension per key (``vary`` maps a dotted key to
     its range, ``"0.01..1:log:5"``; the CLI's numbers, read from its CSV)."""
-    import numpy as np
-
     cfg = _config(config)
     with tempfile.TemporaryDirectory(prefix="lidarsim-") as d:
         out = os.path.join(d, "sweep.csv")
-        _lidarsim.sweep(os.fspath(cfg.path), cfg.sets(),
-                        [f"{k}={v}" for k, v in vary.items()], list(metrics), out)
+        _lidarsim.sweep(cfg.loaded, [f"{k}={v}" for k, v in vary.items()], list(metrics), out)
         with open(out) as f:
             header = f.readline().strip().split(",")
         table = np.atleast_2d(np.genfromtxt(out, delimiter=",", skip_header=1))

@@ -1,16 +1,28 @@
 //! The Python module `lidarsim._lidarsim` (docs/python.md): the library's commands,
 //! called in the same process without the GIL, their errors raised as Python
 //! exceptions with the CLI's one-line message (`ValueError` for bad input, `OSError`
-//! for files). `lidarsim/__init__.py` builds the xarray Datasets from what these
-//! return.
+//! for files). The raw file's variables come as numpy arrays that own the run's own
+//! buffers (no copy); `lidarsim/__init__.py` builds the xarray Datasets from them.
+//! A long call runs on a thread of its own while the calling thread waits for it
+//! without the GIL and looks for Ctrl-C every 50 ms: a KeyboardInterrupt stops the run
+//! (its temporary file removed) and is raised within a batch of profiles.
 
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
 
+use lidarsim::config::Method;
 use lidarsim::error::Error;
-use numpy::IntoPyArray;
-use pyo3::exceptions::{PyOSError, PyValueError};
+use lidarsim::output::raw_file::memory::{Array, MemoryFile, MemoryVariable};
+use lidarsim::output::raw_file::AttrValue;
+use lidarsim::scenario::Lidar;
+use lidarsim::simulate::RunOptions;
+use numpy::{IntoPyArray, PyArrayMethods};
+use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyList, PyTuple};
 
 /// The CLI's error as a Python exception: files are `OSError`, the rest `ValueError`.
 fn raise(e: Error) -> PyErr {
@@ -21,69 +33,245 @@ fn raise(e: Error) -> PyErr {
     }
 }
 
-/// Loads and checks `config` with `overrides` (`KEY=VALUE`, as `--set`), as every
-/// command does; returns the channels' names.
-#[pyfunction]
-fn check(py: Python<'_>, config: PathBuf, overrides: Vec<String>) -> PyResult<Vec<String>> {
-    py.allow_threads(|| {
-        let lidar = lidarsim::scenario::Lidar::load(&config, &overrides)?;
-        Ok(lidar.channel_names())
-    })
-    .map_err(raise)
-}
+/// How often the waiting thread looks for Ctrl-C.
+const SIGNAL_POLL: Duration = Duration::from_millis(50);
 
-/// `lidarsim expect CONFIG --csv`: the deterministic model of one channel per bin, as
-/// the CSV's columns (numpy arrays), with the shots of a profile and the channel.
-#[pyfunction]
-#[pyo3(signature = (config, overrides, channel=None))]
-fn expect<'py>(
-    py: Python<'py>,
-    config: PathBuf,
-    overrides: Vec<String>,
-    channel: Option<String>,
-) -> PyResult<Bound<'py, PyDict>> {
-    let (columns, shots) = py
-        .allow_threads(|| -> lidarsim::error::Result<_> {
-            let sc = lidarsim::commands::load_channel(&config, &overrides, channel.as_deref())?;
-            let e = sc.expected()?;
-            let shots = sc.instrument.rep_rate_hz * sc.accumulation_time_s();
-            Ok((lidarsim::output::expect::columns(&e, shots), shots))
-        })
-        .map_err(raise)?;
-    let out = PyDict::new_bound(py);
-    for (name, values) in columns {
-        out.set_item(name, values.into_pyarray_bound(py))?;
-    }
-    out.set_item("shots_per_profile", shots)?;
-    Ok(out)
-}
-
-/// `lidarsim simulate CONFIG -o OUTPUT`: writes the raw file exactly as the CLI does
-/// (same seed, same counts and truth; the `history` attribute names this call).
-#[pyfunction]
-#[pyo3(signature = (config, overrides, output, profiles=None, seed=None))]
-fn simulate(
+/// Runs `work` on a thread of its own, on rayon's global pool as the CLI does, while this
+/// thread waits without the GIL; a Python signal (Ctrl-C: KeyboardInterrupt) sets the
+/// cancel flag `work` is given, waits for `work` to stop and is raised.
+fn interruptible<T: Send>(
     py: Python<'_>,
-    config: PathBuf,
+    work: impl FnOnce(Arc<AtomicBool>) -> lidarsim::error::Result<T> + Send,
+) -> PyResult<T> {
+    let cancel = Arc::new(AtomicBool::new(false));
+    let (done, finished) = mpsc::channel::<()>();
+    let finished = Mutex::new(finished);
+    std::thread::scope(|scope| {
+        let flag = cancel.clone();
+        let worker = scope.spawn(move || {
+            let result = work(flag);
+            let _ = done.send(());
+            result
+        });
+        let mut signal = None;
+        while py
+            .allow_threads(|| match finished.lock() {
+                Ok(f) => f.recv_timeout(SIGNAL_POLL),
+                Err(_) => Err(mpsc::RecvTimeoutError::Disconnected),
+            })
+            .is_err_and(|e| e == mpsc::RecvTimeoutError::Timeout)
+        {
+            if let Err(e) = py.check_signals() {
+                cancel.store(true, Ordering::SeqCst);
+                signal = Some(e);
+                break;
+            }
+        }
+        let result = py.allow_threads(|| worker.join());
+        match (signal, result) {
+            (Some(e), _) => Err(e),
+            (None, Ok(r)) => r.map_err(raise),
+            (None, Err(_)) => Err(PyRuntimeError::new_err("lidarsim: the run panicked")),
+        }
+    })
+}
+
+/// A loaded and checked config: the config file, its overrides (`KEY=VALUE`, as
+/// `--set`) and every channel built, loaded once for every later call.
+#[pyclass(frozen, module = "lidarsim._lidarsim")]
+struct Loaded {
+    path: PathBuf,
     overrides: Vec<String>,
+    lidar: Lidar,
+}
+
+#[pymethods]
+impl Loaded {
+    #[new]
+    fn new(py: Python<'_>, path: PathBuf, overrides: Vec<String>) -> PyResult<Self> {
+        let lidar = py
+            .allow_threads(|| Lidar::load(&path, &overrides))
+            .map_err(raise)?;
+        Ok(Loaded {
+            path,
+            overrides,
+            lidar,
+        })
+    }
+
+    /// The receiver channels' names.
+    #[getter]
+    fn channels(&self) -> Vec<String> {
+        self.lidar.channel_names()
+    }
+}
+
+/// A Python attribute value tagged with its netCDF type, as the file stores it:
+/// `("str" | "u64" | "i32" | "f64", value)`.
+fn attr(py: Python<'_>, value: &AttrValue) -> (&'static str, PyObject) {
+    match value {
+        AttrValue::Str(s) => ("str", s.into_py(py)),
+        AttrValue::U64(v) => ("u64", v.into_py(py)),
+        AttrValue::I32(v) => ("i32", v.into_py(py)),
+        AttrValue::F64(v) => ("f64", v.into_py(py)),
+    }
+}
+
+fn attrs<'py>(py: Python<'py>, list: Vec<(String, AttrValue)>) -> Bound<'py, PyList> {
+    let items: Vec<PyObject> = list
+        .iter()
+        .map(|(k, v)| (k.as_str(), attr(py, v)).into_py(py))
+        .collect();
+    PyList::new_bound(py, items)
+}
+
+/// A variable as `(name, dims, values, attributes)`: the values a numpy array that owns
+/// the variable's buffer (moved, not copied), in its shape; strings a list.
+fn variable(py: Python<'_>, v: MemoryVariable) -> PyResult<PyObject> {
+    let shape = v.shape.clone();
+    let values: PyObject = match v.data {
+        Array::Text(t) => t.into_py(py),
+        Array::I64(a) => a.into_pyarray_bound(py).reshape(shape)?.into_any().unbind(),
+        Array::U16(a) => a.into_pyarray_bound(py).reshape(shape)?.into_any().unbind(),
+        Array::U32(a) => a.into_pyarray_bound(py).reshape(shape)?.into_any().unbind(),
+        Array::U64(a) => a.into_pyarray_bound(py).reshape(shape)?.into_any().unbind(),
+        Array::F64(a) => a.into_pyarray_bound(py).reshape(shape)?.into_any().unbind(),
+        Array::I32(a) => a.into_pyarray_bound(py).reshape(shape)?.into_any().unbind(),
+    };
+    let dims = PyTuple::new_bound(py, v.dims);
+    Ok((v.name, dims, values, attrs(py, v.attributes)).into_py(py))
+}
+
+/// A raw file in memory as `(variables, root attributes)`.
+fn file(py: Python<'_>, f: MemoryFile) -> PyResult<(Vec<PyObject>, Bound<'_, PyList>)> {
+    let vars = f
+        .variables
+        .into_iter()
+        .map(|v| variable(py, v))
+        .collect::<PyResult<_>>()?;
+    Ok((vars, attrs(py, f.root_attributes)))
+}
+
+/// `simulation.method` by name.
+fn method(name: Option<&str>) -> PyResult<Option<Method>> {
+    name.map(|n| match n {
+        "auto" => Ok(Method::Auto),
+        "shot" => Ok(Method::Shot),
+        "aggregate" => Ok(Method::Aggregate),
+        _ => Err(PyValueError::new_err(format!(
+            "method `{n}` is not one of auto, shot, aggregate"
+        ))),
+    })
+    .transpose()
+}
+
+/// The options of a run, as the CLI's `simulate` sets them.
+fn run_options(
+    loaded: &Loaded,
     output: PathBuf,
     profiles: Option<usize>,
     seed: Option<u64>,
-) -> PyResult<PathBuf> {
-    let opts = lidarsim::simulate::RunOptions {
-        output: output.clone(),
+    method_name: Option<&str>,
+    progress: bool,
+) -> PyResult<RunOptions> {
+    Ok(RunOptions {
+        output,
         seed,
         profiles,
-        method: None,
-        tolerance: None,
-        components: None,
-        progress: false,
-        command_line: format!("lidarsim.simulate({})", config.display()),
-        shard: None,
-    };
-    py.allow_threads(|| lidarsim::commands::simulate(&config, &overrides, &opts, None))
+        method: method(method_name)?,
+        progress,
+        command_line: format!("lidarsim.simulate({})", loaded.path.display()),
+        ..RunOptions::default()
+    })
+}
+
+/// `lidarsim expect`, every channel: the variables a raw file of the config holds
+/// before its first profile (coordinates, the truth, the instrument; the file's names,
+/// dimensions and attributes), and `snr_bkg_estimated` (channel, bin), the CSV's S/N
+/// with an estimated background (NaN without signal-free bins). Also the expected
+/// profile's shots.
+#[pyfunction]
+fn expect<'py>(
+    py: Python<'py>,
+    loaded: &Loaded,
+) -> PyResult<(Vec<PyObject>, Bound<'py, PyList>, f64)> {
+    let (fixed, extra, shots) = py
+        .allow_threads(|| -> lidarsim::error::Result<_> {
+            let opts = RunOptions {
+                command_line: format!("lidarsim.expect({})", loaded.path.display()),
+                ..RunOptions::default()
+            };
+            let plan = lidarsim::simulate::plan(&loaded.lidar, &opts, None)?;
+            let mut fixed = lidarsim::output::raw_file::memory::fixed_variables(&plan.spec)?;
+            let first = loaded.lidar.first();
+            let shots = first.instrument.rep_rate_hz * first.accumulation_time_s();
+            let extra =
+                lidarsim::output::expect::estimated_background_snr(&loaded.lidar, &plan.expected);
+            fixed.retain(|v| v.dims.iter().all(|d| *d != "profile"));
+            Ok((fixed, extra, shots))
+        })
         .map_err(raise)?;
-    Ok(output)
+    let mut vars: Vec<PyObject> = fixed
+        .into_iter()
+        .map(|v| variable(py, v))
+        .collect::<PyResult<_>>()?;
+    vars.push(variable(py, extra)?);
+    Ok((vars, attrs(py, Vec::new()), shots))
+}
+
+/// `lidarsim simulate CONFIG -o OUTPUT`: writes the raw file exactly as the CLI does
+/// (same seed, same counts and truth; the `history` attribute names this call);
+/// returns the run's warning, if any.
+#[pyfunction]
+#[pyo3(signature = (loaded, output, profiles=None, seed=None, method=None, progress=false))]
+fn simulate(
+    py: Python<'_>,
+    loaded: &Loaded,
+    output: PathBuf,
+    profiles: Option<usize>,
+    seed: Option<u64>,
+    method: Option<&str>,
+    progress: bool,
+) -> PyResult<Option<String>> {
+    let opts = run_options(loaded, output, profiles, seed, method, progress)?;
+    let summary = interruptible(py, |cancel| {
+        let opts = RunOptions {
+            cancel: Some(cancel),
+            ..opts
+        };
+        lidarsim::commands::simulate_quietly(
+            &loaded.path,
+            &loaded.overrides,
+            &opts,
+            None,
+            lidarsim::commands::OutputFormat::Raw,
+        )
+    })?;
+    Ok(summary.warning)
+}
+
+/// `lidarsim simulate` kept in memory: the raw file's variables and root attributes,
+/// the same counts and truth as the file for the same seed, and the run's warning.
+#[pyfunction]
+#[pyo3(signature = (loaded, profiles=None, seed=None, method=None, progress=false))]
+fn simulate_in_memory<'py>(
+    py: Python<'py>,
+    loaded: &Loaded,
+    profiles: Option<usize>,
+    seed: Option<u64>,
+    method: Option<&str>,
+    progress: bool,
+) -> PyResult<(Vec<PyObject>, Bound<'py, PyList>, Option<String>, f64)> {
+    let opts = run_options(loaded, PathBuf::new(), profiles, seed, method, progress)?;
+    let (memory, summary) = interruptible(py, |cancel| {
+        let opts = RunOptions {
+            cancel: Some(cancel),
+            ..opts
+        };
+        lidarsim::simulate::run_in_memory(&loaded.lidar, &opts)
+    })?;
+    let (vars, root) = file(py, memory)?;
+    Ok((vars, root, summary.warning, summary.drawing.as_secs_f64()))
 }
 
 /// The JSON of a validation report (the CLI's `--json`).
@@ -93,54 +281,53 @@ fn report_json(report: &lidarsim::validate::Report) -> lidarsim::error::Result<S
 
 /// `lidarsim validate CONFIG --realizations N [--seed S] --json -`: the report as JSON.
 #[pyfunction]
-#[pyo3(signature = (config, overrides, realizations, seed=None))]
+#[pyo3(signature = (loaded, realizations, seed=None))]
 fn validate(
     py: Python<'_>,
-    config: PathBuf,
-    overrides: Vec<String>,
+    loaded: &Loaded,
     realizations: usize,
     seed: Option<u64>,
 ) -> PyResult<String> {
-    py.allow_threads(|| {
-        let lidar = lidarsim::scenario::Lidar::load(&config, &overrides)?;
+    interruptible(py, |_| {
         let opts = lidarsim::validate::ValidateOptions {
             realizations,
             method: None,
             seed,
             json: None,
         };
-        report_json(&lidarsim::validate::run(&lidar, &opts)?)
+        report_json(&lidarsim::validate::run(&loaded.lidar, &opts)?)
     })
-    .map_err(raise)
 }
 
 /// `lidarsim validate --file RAW --json -`: the file's counts against the expectation
 /// it carries; the report as JSON.
 #[pyfunction]
 fn validate_file(py: Python<'_>, path: PathBuf) -> PyResult<String> {
-    py.allow_threads(|| report_json(&lidarsim::validate::file::check_file(&path)?.0))
-        .map_err(raise)
+    interruptible(py, |_| {
+        report_json(&lidarsim::validate::file::check_file(&path)?.0)
+    })
 }
 
 /// `lidarsim sweep CONFIG --vary ... --metric ... --csv CSV`: writes the CSV.
 #[pyfunction]
 fn sweep(
     py: Python<'_>,
-    config: PathBuf,
-    overrides: Vec<String>,
+    loaded: &Loaded,
     vary: Vec<String>,
     metrics: Vec<String>,
     csv: PathBuf,
 ) -> PyResult<()> {
-    py.allow_threads(|| lidarsim::commands::sweep(&config, &overrides, &vary, &metrics, &csv, None))
-        .map_err(raise)
+    interruptible(py, |_| {
+        lidarsim::commands::sweep(&loaded.path, &loaded.overrides, &vary, &metrics, &csv, None)
+    })
 }
 
 #[pymodule]
 fn _lidarsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_function(wrap_pyfunction!(check, m)?)?;
+    m.add_class::<Loaded>()?;
     m.add_function(wrap_pyfunction!(expect, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate_in_memory, m)?)?;
     m.add_function(wrap_pyfunction!(validate, m)?)?;
     m.add_function(wrap_pyfunction!(validate_file, m)?)?;
     m.add_function(wrap_pyfunction!(sweep, m)?)?;

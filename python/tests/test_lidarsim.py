@@ -21,6 +21,15 @@ def cli(*args, cwd=None):
     return subprocess.run([str(CLI), *map(str, args)], capture_output=True, text=True, cwd=cwd)
 
 
+# the CSV's columns in expect's Dataset: the raw file's names (the point truth of the
+# scene's one column)
+CSV_IN_DATASET = {"altitude_m": "altitude", "range_m": "range", "signal": "expected_signal",
+                  "background": "expected_background", "dark": "expected_dark",
+                  "snr": "snr_eq4"}
+# root attributes that name the moment and the call, not the run
+OF_THE_CALL = ("history", "date_created")
+
+
 def test_expect_equals_the_cli_csv_to_the_last_bit(tmp_path):
     cfg = lidarsim.load_config(CALIOP, {"instrument.pulse_energy_j": 0.05})
     ds = lidarsim.expect(cfg, channel="532_perpendicular")
@@ -31,31 +40,114 @@ def test_expect_equals_the_cli_csv_to_the_last_bit(tmp_path):
     header = out.read_text().splitlines()[0].split(",")
     table = np.genfromtxt(out, delimiter=",", skip_header=1)
     for k, name in enumerate(header):
-        ours = {"altitude_m": ds.altitude, "range_m": ds.range}.get(name, ds.get(name))
-        ours = np.asarray(ours)
+        ours = ds[CSV_IN_DATASET.get(name, name)]
+        ours = np.asarray(ours.isel(column=0) if "column" in ours.dims else ours)
         theirs = table[:, k]
         same = (ours == theirs) | (np.isnan(ours) & np.isnan(theirs))
         assert same.all(), f"{name}: {ours[~same][:3]} against {theirs[~same][:3]}"
-    assert ds.attrs["channel"] == "532_perpendicular"
-    assert ds.snr.dims == ("bin",)
+    assert ds.channel.item() == "532_perpendicular"
+    assert ds.snr_eq4.dims == ("bin",)
+    with pytest.raises(ValueError, match="has no channel `1064`"):
+        lidarsim.expect(cfg, channel="1064")
+
+
+def test_expect_is_the_raw_file_before_its_first_profile(tmp_path):
+    """Every channel, the raw file's variables that do not depend on the profile, with
+    the file's values, dimensions and attributes."""
+    import xarray as xr
+
+    model = lidarsim.expect(CALIOP)
+    r = cli("simulate", CALIOP, "-o", tmp_path / "cli.nc", "--profiles", "2")
+    assert r.returncode == 0, r.stderr
+    raw = xr.load_dataset(tmp_path / "cli.nc", engine="h5netcdf")
+    assert list(model.channel.values) == list(raw.channel.values)
+    fixed = [n for n in raw.variables if "profile" not in raw[n].dims]
+    assert set(model.variables) - {"snr_bkg_estimated"} == set(fixed)
+    for name in fixed:
+        xr.testing.assert_identical(model[name].variable, raw[name].variable)
+    assert model.snr_bkg_estimated.dims == ("channel", "bin")
+
+
+def memory_owner(a):
+    """The object at the end of an array's chain of bases."""
+    while getattr(a, "base", None) is not None:
+        a = a.base
+    return a
 
 
 def test_same_seed_same_counts_and_truth_as_the_cli(tmp_path):
+    import xarray as xr
+
     r = cli("simulate", SCENARIO1, "-o", tmp_path / "cli.nc", "--profiles", "5", "--seed", "7")
     assert r.returncode == 0, r.stderr
     written = lidarsim.simulate(SCENARIO1, profiles=5, seed=7, path=tmp_path / "py.nc")
     assert written == tmp_path / "py.nc"
     in_memory = lidarsim.simulate(SCENARIO1, profiles=5, seed=7)
-    import xarray as xr
-
     theirs = xr.load_dataset(tmp_path / "cli.nc", engine="h5netcdf")
     for ours in (xr.load_dataset(written, engine="h5netcdf"), in_memory):
-        assert ours.counts.dims == ("profile", "channel", "bin")
-        for name in ("counts", "attenuated_backscatter", "expected_signal", "t2"):
-            np.testing.assert_array_equal(ours[name].values, theirs[name].values, err_msg=name)
+        for a in OF_THE_CALL:
+            ours.attrs[a] = theirs.attrs[a]
+        # every variable, dimension, coordinate and attribute, every value
+        xr.testing.assert_identical(ours, theirs)
+    assert in_memory.counts.dtype == np.uint16
+    # the counts are the run's own buffer, handed to numpy without a copy
+    assert type(memory_owner(in_memory.counts.values)).__name__ == "PySliceContainer"
     # another seed, other counts
     other = lidarsim.simulate(SCENARIO1, profiles=5, seed=8)
     assert not np.array_equal(other.counts.values, theirs.counts.values)
+
+
+def test_a_changing_scene_in_memory_is_the_file(tmp_path):
+    """An orbit (geolocation, columns, per-profile truth): in memory as in the file."""
+    import xarray as xr
+
+    orbit = ROOT / "configs" / "instruments" / "caliop_orbit.toml"
+    r = cli("simulate", orbit, "-o", tmp_path / "cli.nc", "--profiles", "30", "--seed", "2")
+    assert r.returncode == 0, r.stderr
+    ours = lidarsim.simulate(orbit, profiles=30, seed=2, method="aggregate")
+    theirs = xr.load_dataset(tmp_path / "cli.nc", engine="h5netcdf")
+    for a in OF_THE_CALL:
+        ours.attrs[a] = theirs.attrs[a]
+    xr.testing.assert_identical(ours, theirs)
+    assert "latitude" in ours.counts.coords
+    with pytest.raises(ValueError, match="method `fast` is not one of auto, shot, aggregate"):
+        lidarsim.simulate(orbit, profiles=3, method="fast")
+
+
+INTERRUPTED_RUN = """
+import sys, time, lidarsim
+path = sys.argv[2] if len(sys.argv) > 2 else None
+print("started", flush=True)
+try:
+    lidarsim.simulate(sys.argv[1], profiles=2_000_000, seed=1, method="shot", path=path)
+except KeyboardInterrupt:
+    print("KeyboardInterrupt", time.monotonic(), flush=True)
+    sys.exit(3)
+"""
+
+
+@pytest.mark.parametrize("to_file", [True, False])
+def test_ctrl_c_stops_a_long_run_within_a_second_and_leaves_no_file(tmp_path, to_file):
+    import signal
+    import sys
+    import time
+
+    out = tmp_path / "out"
+    out.mkdir()
+    args = [sys.executable, "-c", INTERRUPTED_RUN, str(SCENARIO1)]
+    if to_file:
+        args.append(str(out / "raw.nc"))
+    p = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert p.stdout.readline().strip() == "started"
+    time.sleep(1.5)  # well into the run (it takes minutes)
+    assert p.poll() is None, p.stderr.read()
+    sent = time.monotonic()
+    p.send_signal(signal.SIGINT)
+    stdout, stderr = p.communicate(timeout=30)
+    assert p.returncode == 3, stderr
+    caught = float(stdout.split()[-1])
+    assert caught - sent < 1.0, f"{caught - sent:.2f} s"
+    assert list(out.iterdir()) == []
 
 
 def refusal(*args):

@@ -45,6 +45,43 @@ pub fn columns(e: &ExpectedProfile, shots: f64) -> Vec<(&'static str, Vec<f64>)>
     CSV_COLUMNS.into_iter().zip(values).collect()
 }
 
+/// The CSV's `snr_bkg_estimated` of every channel of `lidar` (`expected` in its order)
+/// as a (channel, bin) variable beside the raw file's truth (the Python module's
+/// `expect`): each channel's S/N after its own profile's shots, NaN where it has no
+/// signal-free bins.
+pub fn estimated_background_snr(
+    lidar: &crate::scenario::Lidar,
+    expected: &[ExpectedProfile],
+) -> crate::output::raw_file::memory::MemoryVariable {
+    use crate::output::raw_file::{AttrValue, BIN_DIM, CHANNEL_DIM, memory};
+    let n_bins = expected.first().map_or(0, ExpectedProfile::n_bins);
+    let data: Vec<f64> = lidar
+        .channels
+        .iter()
+        .zip(expected)
+        .flat_map(|(sc, e)| {
+            let shots = sc.instrument.rep_rate_hz * sc.accumulation_time_s();
+            e.snr_estimated_background(shots)
+                .unwrap_or_else(|| vec![f64::NAN; n_bins])
+        })
+        .collect();
+    let text = |k: &str, v: &str| (k.to_string(), AttrValue::Str(v.to_string()));
+    memory::MemoryVariable {
+        name: CSV_COLUMNS[11].into(),
+        dims: vec![CHANNEL_DIM, BIN_DIM],
+        shape: vec![expected.len(), n_bins],
+        attributes: vec![
+            text(
+                "long_name",
+                "signal-to-noise ratio of one profile with the background estimated from the signal-free bins",
+            ),
+            text("units", "1"),
+            text("coordinates", "altitude range"),
+        ],
+        data: memory::Array::F64(data),
+    }
+}
+
 /// Writes one row per bin of [`columns`] (`altitude_m` and `range_m` as decimals, the
 /// rest in scientific notation; `snr_bkg_estimated` empty when there is none).
 pub fn write_csv(w: &mut dyn Write, e: &ExpectedProfile, shots: f64) -> io::Result<()> {

@@ -21,7 +21,10 @@ use crate::detector::{Analog, DeadTime, DetectedShots, analog, dead_time};
 use crate::error::{Error, Result};
 use crate::laser::PulseEnergy;
 use crate::output::raw_file::content::{self, RunInfo};
-use crate::output::raw_file::{AttrValue, CountWidth, ProfileRecord, RawFileSpec, RawFileWriter};
+use crate::output::raw_file::memory::{MemoryFile, MemoryWriter};
+use crate::output::raw_file::{
+    AttrValue, CountWidth, ProfileRecord, ProfileSink, RawFileSpec, RawFileWriter,
+};
 use crate::output::safe_file::{OutputId, Outputs};
 use crate::sampling::approx;
 use crate::sampling::jitter::ModulatedShots;
@@ -180,6 +183,9 @@ pub struct RunOptions {
     pub command_line: String,
     /// Write this shard of the run only (`--shard K/N`, [`crate::shard`]).
     pub shard: Option<crate::shard::Shard>,
+    /// Stops the run when set (the Python module's Ctrl-C): [`run`] then returns
+    /// [`Error::Interrupted`] within a batch of profiles, its temporary file removed.
+    pub cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
 /// What a run did, for the closing summary.
@@ -744,53 +750,124 @@ pub fn run(
     raw: OutputId,
 ) -> Result<RunSummary> {
     let start = Instant::now();
+    let planned = plan(lidar, opts, None)?;
+    // --- shards: this process writes `rows` of the run (all of them without --shard)
+    let (rows, shard_spec) = match opts.shard {
+        Some(shard) => {
+            let rows = shard.rows_of(planned.profiles, "profiles")?;
+            let spec = crate::shard::shard_spec(planned.spec.clone(), shard, rows.clone());
+            (rows, Some(spec))
+        }
+        None => (0..planned.profiles, None),
+    };
+    let spec = shard_spec.as_ref().unwrap_or(&planned.spec);
+    check_sizes(lidar, &planned, rows.len(), opts, true)?;
+    let mut writer = RawFileWriter::create(outputs.temp_path(raw)?, &opts.output, spec)?;
+    let (total_counts, drawing) = draw_into(lidar, &planned, rows.clone(), opts, &mut writer)?;
+    writer.finish()?;
+    outputs.commit()?;
+    Ok(summary(
+        lidar,
+        &planned,
+        opts,
+        rows,
+        start,
+        total_counts,
+        drawing,
+    ))
+}
+
+/// Runs the Monte Carlo as [`run`] does (the same counts and truth for the same seed) and
+/// keeps the raw file in memory, its variables as arrays ([`MemoryFile`]): for the Python
+/// module's in-memory `simulate`. Refuses a shard, and a run whose arrays cannot fit in
+/// memory.
+pub fn run_in_memory(lidar: &Lidar, opts: &RunOptions) -> Result<(MemoryFile, RunSummary)> {
+    let start = Instant::now();
+    if opts.shard.is_some() {
+        return Err(Error::Unsupported(
+            "a shard is written to a file: give a path".into(),
+        ));
+    }
+    let planned = plan(lidar, opts, None)?;
+    let rows = 0..planned.profiles;
+    check_sizes(lidar, &planned, rows.len(), opts, false)?;
+    crate::resources::require_memory(
+        &format!("holding {} profiles in memory", rows.len()),
+        crate::output::raw_file::memory::memory_bytes(&planned.spec),
+    )?;
+    let mut sink = MemoryWriter::new(&planned.spec)?;
+    let (total_counts, drawing) = draw_into(lidar, &planned, rows.clone(), opts, &mut sink)?;
+    let file = sink.finish()?;
+    Ok((
+        file,
+        summary(lidar, &planned, opts, rows, start, total_counts, drawing),
+    ))
+}
+
+/// What a run did, for its closing line.
+fn summary(
+    lidar: &Lidar,
+    planned: &RunPlan,
+    opts: &RunOptions,
+    rows: std::ops::Range<usize>,
+    start: Instant,
+    total_counts: u64,
+    drawing: Duration,
+) -> RunSummary {
+    let first = lidar.first();
+    RunSummary {
+        output: opts.output.clone(),
+        profiles: rows.len(),
+        shard: opts.shard.map(|s| (s, rows, planned.profiles)),
+        bins: first.geometry.n_bins,
+        shots_per_profile: first.shots_per_profile(),
+        total_counts,
+        method: planned.method,
+        seed: planned.seed,
+        elapsed: start.elapsed(),
+        drawing,
+        warning: lidar.run_notes(&planned.expected),
+    }
+}
+
+/// Whether the caller asked the run to stop ([`RunOptions::cancel`]).
+fn cancelled(opts: &RunOptions) -> bool {
+    opts.cancel
+        .as_ref()
+        .is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed))
+}
+
+/// Draws profiles `rows` of a planned run and hands them to `sink` in order, profile by
+/// profile; returns the sum of their counts and the time spent drawing. Stops with
+/// [`Error::Interrupted`] between batches (and skips the rest of a batch's profiles)
+/// once [`RunOptions::cancel`] is set.
+fn draw_into<S: ProfileSink>(
+    lidar: &Lidar,
+    planned: &RunPlan,
+    rows: std::ops::Range<usize>,
+    opts: &RunOptions,
+    sink: &mut S,
+) -> Result<(u64, Duration)> {
     let first = lidar.first();
     let cfg = &first.loaded.config;
     let RunPlan {
         seed,
-        profiles,
         components,
         method,
-        expected,
+        ref expected,
         energy,
-        scene,
-        totals,
-        spec,
-    } = plan(lidar, opts, None)?;
+        ref scene,
+        ..
+    } = *planned;
     let shots = first.shots_per_profile();
     let profile_time_s = shots as f64 / first.instrument.rep_rate_hz;
     let n_bins = first.geometry.n_bins;
-    // --- shards: this process writes `rows` of the run (all of them without --shard)
-    let (rows, spec) = match opts.shard {
-        Some(shard) => {
-            let rows = shard.rows_of(profiles, "profiles")?;
-            let spec = crate::shard::shard_spec(spec, shard, rows.clone());
-            (rows, spec)
-        }
-        None => (0..profiles, spec),
-    };
-    // the dead-time detector's cost per shot (ns), from its channels' means
-    let dead_time_ns: f64 = lidar
-        .channels
-        .iter()
-        .zip(&expected)
-        .filter(|_| method == ResolvedMethod::Shot)
-        .filter_map(|(c, e)| Some(c.instrument.dead_time?.ns_per_shot(&e.total_per_shot())))
-        .sum();
-    let sizes = RunSizes {
-        shots,
-        profiles: rows.len(),
-        components,
-        dead_time_ns,
-    };
-    check_sizes(&totals, method, &sizes, opts)?;
-    let mut writer = RawFileWriter::create(outputs.temp_path(raw)?, &opts.output, &spec)?;
     let orbit = orbit_of(lidar)?;
 
     let channels: Vec<Vec<(StreamSampler, u64)>> = lidar
         .channels
         .iter()
-        .zip(&expected)
+        .zip(expected)
         .enumerate()
         .map(|(k, (c, e))| {
             let seed = channel_seed(seed, lidar.photon_source(k));
@@ -807,27 +884,32 @@ pub fn run(
     // Batch k is drawn while batch k − 1 is handed to the writer (whose chunk compression
     // runs on the same pool): the writer gets the profiles in order whatever the thread
     // count, so the file's bytes do not depend on it.
-    let draw_batch = |first_profile: usize| {
+    let draw_batch = |first_profile: usize| -> Option<Batch> {
         let last = (first_profile + batch).min(rows.end);
         let draw_start = Instant::now();
         let n_channels = lidar.channels.len();
         let mut drawn: Vec<(DrawnProfile, Option<SceneDraw>)> = (first_profile..last)
             .into_par_iter()
-            .map(|p| match &scene {
-                Some(sc) => {
-                    let (d, draw) =
-                        draw_scene_counts(sc, seed, n_channels, p as u64, n_bins, &energy);
-                    (d, Some(draw))
+            .map(|p| {
+                if cancelled(opts) {
+                    return None;
                 }
-                None => (
-                    draw_profile(&channels, p as u64, shots, n_bins, components, &energy),
-                    None,
-                ),
+                Some(match scene {
+                    Some(sc) => {
+                        let (d, draw) =
+                            draw_scene_counts(sc, seed, n_channels, p as u64, n_bins, &energy);
+                        (d, Some(draw))
+                    }
+                    None => (
+                        draw_profile(&channels, p as u64, shots, n_bins, components, &energy),
+                        None,
+                    ),
+                })
             })
-            .collect();
+            .collect::<Option<_>>()?;
         let took = draw_start.elapsed();
         // the truth of a changing scene's profiles (the model, not the draw)
-        if let Some(sc) = &scene {
+        if let Some(sc) = scene {
             drawn.par_iter_mut().for_each(|(d, draw)| {
                 if let Some(draw) = draw {
                     d.values = scene_profile_values(sc, n_bins, draw);
@@ -840,7 +922,7 @@ pub fn run(
             .map(|(d, _)| d.counts.iter().sum::<u64>())
             .sum();
         let drawn: Vec<DrawnProfile> = drawn.into_iter().map(|(d, _)| d).collect();
-        (first_profile, drawn, took, counted)
+        Some((first_profile, drawn, took, counted))
     };
     let mut write_batch = |(first_profile, drawn, took, counted): Batch| {
         drawing += took;
@@ -857,7 +939,7 @@ pub fn run(
                 .map(Vec::as_slice)
                 .chain(place.iter().flat_map(|p| p.iter().map(|v| &v[..])))
                 .collect();
-            writer.write_profile(&ProfileRecord {
+            sink.write_profile(&ProfileRecord {
                 index: index - rows.start,
                 time_s: index as f64 * profile_time_s + 0.5 * profile_time_s,
                 n_shots: shots,
@@ -882,27 +964,16 @@ pub fn run(
             || pending.take().map_or(Ok(()), &mut write_batch),
         );
         written?;
-        pending = Some(drawn);
+        match drawn {
+            Some(drawn) if !cancelled(opts) => pending = Some(drawn),
+            _ => return Err(Error::Interrupted),
+        }
     }
     if let Some(last) = pending {
         write_batch(last)?;
     }
-    writer.finish()?;
-    outputs.commit()?;
     progress.finish_and_clear();
-    Ok(RunSummary {
-        output: opts.output.clone(),
-        profiles: rows.len(),
-        shard: opts.shard.map(|s| (s, rows, profiles)),
-        bins: n_bins,
-        shots_per_profile: shots,
-        total_counts,
-        method,
-        seed,
-        elapsed: start.elapsed(),
-        drawing,
-        warning: lidar.run_notes(&expected),
-    })
+    Ok((total_counts, drawing))
 }
 
 /// A drawn batch: its first profile, its profiles, the time their counts took to draw,
@@ -1309,35 +1380,26 @@ pub fn estimated_file_bytes(totals: &[f64], shots: u64, profiles: usize, streams
         + profiles as f64 * (per_profile * streams as f64 + FILE_BYTES_PER_PROFILE)
 }
 
-/// What [`check_sizes`] weighs of a run besides its per-bin means.
-#[derive(Debug, Clone, Copy)]
-struct RunSizes {
-    /// Shots per profile.
-    shots: u64,
-    /// Profiles this process writes.
-    profiles: usize,
-    /// Component-resolved counts.
-    components: bool,
-    /// The dead-time detector's cost per shot, ns (`DeadTime::ns_per_shot` summed over
-    /// its channels; 0 without dead time or in the aggregate path).
-    dead_time_ns: f64,
-}
-
-/// Refuses a run whose memory or file cannot fit, and announces a long one
-/// (docs/outputs.md: sizes checked before work starts). `totals` are the per-shot means of
-/// every bin of every channel.
+/// Refuses a run of `profiles` profiles of `planned` whose memory or file (`to_disk`)
+/// cannot fit, and announces a long one (docs/outputs.md: sizes checked before work
+/// starts).
 fn check_sizes(
-    totals: &[f64],
-    method: ResolvedMethod,
-    sizes: &RunSizes,
+    lidar: &Lidar,
+    planned: &RunPlan,
+    profiles: usize,
     opts: &RunOptions,
+    to_disk: bool,
 ) -> Result<()> {
-    let RunSizes {
-        shots,
-        profiles,
-        components,
-        dead_time_ns,
-    } = *sizes;
+    let (totals, method, components) = (&planned.totals, planned.method, planned.components);
+    let shots = lidar.first().shots_per_profile();
+    // the dead-time detector's cost per shot (ns), from its channels' means
+    let dead_time_ns: f64 = lidar
+        .channels
+        .iter()
+        .zip(&planned.expected)
+        .filter(|_| method == ResolvedMethod::Shot)
+        .filter_map(|(c, e)| Some(c.instrument.dead_time?.ns_per_shot(&e.total_per_shot())))
+        .sum();
     let streams = if components { 4 } else { 1 };
     let bins = totals.len() as f64;
     // one bit per profile (written yet?), the batch of drawn rows, the samplers' tables,
@@ -1348,8 +1410,10 @@ fn check_sizes(
     let tables = streams as f64 * sampling::table_bytes_bound(bins as usize);
     let memory = profiles as f64 / 8.0 + 64.0 * bins * 8.0 * 2.0 * streams as f64 + tables + writer;
     crate::resources::require_memory(&format!("simulating {profiles} profiles"), memory)?;
-    let file = estimated_file_bytes(totals, shots, profiles, streams);
-    crate::resources::require_disk("-o", &opts.output, file)?;
+    if to_disk {
+        let file = estimated_file_bytes(totals, shots, profiles, streams);
+        crate::resources::require_disk("-o", &opts.output, file)?;
+    }
     let draw_ns_per_profile = match method {
         ResolvedMethod::Shot => ShotSampler::new(totals).strategy().est_ns_per_shot * shots as f64,
         _ => bins * cost::AGGREGATE_LARGE_NS,

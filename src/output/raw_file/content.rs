@@ -24,13 +24,13 @@ pub struct RunInfo<'a> {
     /// The command line, recorded in `history`.
     pub command_line: &'a str,
     /// The resolved config with the run's values written in (`config`,
-    /// [`crate::simulate::RunValues::stored_config`]).
+    /// `RunValues::stored_config` of the simulate module).
     pub config: String,
 }
 
 /// Options of `simulate` that do not change the file's content, left out of `history`
 /// with their values: the output path, the shard and the thread count. So the whole run
-/// and the merge of its shards ([`crate::shard::merge`]) record the same history, and a
+/// and the merge of its shards (`lidarsim merge`) record the same history, and a
 /// run gives the same bytes whatever its output name (docs/file-format.md).
 pub const HISTORY_OMITS: [&str; 4] = ["-o", "--output", "--shard", "--threads"];
 

@@ -20,11 +20,9 @@ use hdf5::types::VarLenUnicode;
 use hdf5::{Dataset, File, Group, H5Type};
 
 use super::chunk;
-use super::hdf5_ds::{attach_scales, set_scale, write_attr, write_str_attr};
-use super::{
-    BIN_DIM, CHANNEL_DIM, COLUMN_DIM, COMPONENT_NAMES, CountWidth, Dims, PROFILE_COLUMN_NAMES,
-    PROFILE_DIM, RESERVED_NAMES, RawFileSpec, SLOT_DIM,
-};
+use super::hdf5_ds::{attach_scales, set_scale, write_attr};
+use super::schema::{Element, PerProfile, Storage, Values, schema};
+use super::{CountWidth, Dims, RESERVED_NAMES, RawFileSpec};
 
 /// Target size of one chunk of a (profile, channel, bin) variable, in bytes, for that
 /// variable's own element size (u16 counts get four times the rows of f64 truth). Within
@@ -34,9 +32,6 @@ use super::{
 pub const TARGET_CHUNK_BYTES: usize = 512 * 1024;
 /// Rows of the `profile` coordinate written per call at creation (bounds memory).
 const COORD_BLOCK: usize = 64 * 1024;
-/// The auxiliary coordinates of (profile, channel, bin) and (bin) data variables.
-const COORDS_PROFILE_BIN: &str = "time altitude range";
-const COORDS_BIN: &str = "altitude range";
 
 /// A (profile, channel, bin) variable, chunked along profiles, shuffled and deflated;
 /// the writer fills and writes it a whole chunk at a time.
@@ -165,20 +160,6 @@ pub fn chunk_rows(spec: &RawFileSpec, elem_bytes: usize) -> usize {
     (TARGET_CHUNK_BYTES / row_bytes.max(1)).clamp(1, spec.n_profiles)
 }
 
-/// Creates an empty (profile, channel, bin) count variable at the file's width, its
-/// chunks encoded by planes.
-fn create_count_var(file: &File, name: &str, spec: &RawFileSpec) -> hdf5::Result<RowVar> {
-    let var = match spec.count_width {
-        CountWidth::U16 => create_rows::<u16>(file, name, spec),
-        CountWidth::U32 => create_rows::<u32>(file, name, spec),
-        CountWidth::U64 => create_rows::<u64>(file, name, spec),
-    }?;
-    Ok(RowVar {
-        by_planes: true,
-        ..var
-    })
-}
-
 /// Creates a (profile, channel, bin) variable of `T`, chunked along profiles with the
 /// filters shuffle then deflate declared (the writer stores chunks it encoded itself
 /// exactly as these filters would, `chunk.rs`, and readers decode them through them).
@@ -231,11 +212,6 @@ pub(crate) fn write_index(ds: &Dataset, first: usize, n: usize) -> hdf5::Result<
     Ok(())
 }
 
-/// Writes text attributes on a variable.
-fn write_attrs(ds: &Dataset, attrs: &[(&str, &str)]) -> hdf5::Result<()> {
-    attrs.iter().try_for_each(|(k, v)| write_str_attr(ds, k, v))
-}
-
 /// A new HDF5 file at `path` (truncating it) with the choices of the module docs: the
 /// 1.8 file format, links and attributes in creation order, no modification times.
 pub(crate) fn create_file(path: &Path) -> hdf5::Result<File> {
@@ -261,213 +237,72 @@ pub(crate) fn create_group(parent: &Group, name: &str) -> hdf5::Result<Group> {
         .create(name)
 }
 
-/// Creates the whole layout in a new HDF5 file at `path` (truncating it).
+/// Creates the whole layout in a new HDF5 file at `path` (truncating it): every
+/// variable of [`schema`], in its order, with its attributes; the values known up front
+/// written, dimensions made scales and attached.
 pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> {
     let file = create_file(path)?;
-
     for (name, value) in &spec.root_attributes {
         write_attr(&file, name, value)?;
     }
-
-    // the coordinates of (profile, …) variables: time, and latitude/longitude where given
-    let extra: String = spec
-        .profile_coordinates
-        .iter()
-        .map(|c| format!(" {c}"))
-        .collect();
-    let coords_profile_bin = format!("{COORDS_PROFILE_BIN}{extra}");
-    let coords_profile = format!("time{extra}");
-    let coords_profile_bin = coords_profile_bin.as_str();
-    let coords_profile = coords_profile.as_str();
-
-    // Dimensions: coordinate variables marked as dimension scales.
-    let profile = create_var::<i64>(&file, PROFILE_DIM, &[spec.n_profiles])?;
-    write_index(&profile, spec.first_profile, spec.n_profiles)?;
-    write_attrs(&profile, &[("long_name", "profile index"), ("units", "1")])?;
-    set_scale(&profile, PROFILE_DIM)?;
-
-    let channel = create_var::<VarLenUnicode>(&file, CHANNEL_DIM, &[spec.channels.len()])?;
-    let names: Vec<VarLenUnicode> = spec
-        .channels
-        .iter()
-        .map(|c| {
-            c.parse()
-                .map_err(|_| hdf5::Error::from("channel name contains NUL"))
-        })
-        .collect::<hdf5::Result<_>>()?;
-    channel.write(&names[..])?;
-    write_attrs(&channel, &[("long_name", "receiver channel")])?;
-    set_scale(&channel, CHANNEL_DIM)?;
-
-    let bin = create_var::<i64>(&file, BIN_DIM, &[spec.n_bins])?;
-    write_index(&bin, 0, spec.n_bins)?;
-    write_attrs(&bin, &[("long_name", "range bin index"), ("units", "1")])?;
-    set_scale(&bin, BIN_DIM)?;
-
-    for text in &spec.channel_text {
-        write_channel_text(&file, text, &channel)?;
-    }
-    let column = match spec.n_columns {
-        0 => None,
-        n => {
-            let column = create_var::<i64>(&file, COLUMN_DIM, &[n])?;
-            write_index(&column, 0, n)?;
-            write_attrs(
-                &column,
-                &[
-                    (
-                        "long_name",
-                        "distinct column of the scene (segment and cloud cells present)",
-                    ),
-                    ("units", "1"),
-                ],
-            )?;
-            set_scale(&column, COLUMN_DIM)?;
-            Some(column)
-        }
-    };
-    let profile_columns = match spec.column_slots {
-        0 => None,
-        k => Some(create_profile_columns(
-            &file,
-            spec,
-            k,
-            &profile,
-            coords_profile,
-        )?),
-    };
-
-    let dims3 = [&profile, &channel, &bin];
-    let counts = create_count_var(&file, "counts", spec)?;
-    write_attrs(
-        &counts.ds,
-        &[
-            (
-                "long_name",
-                "accumulated raw photon counts (signal + background + dark)",
-            ),
-            ("units", "count"),
-            ("coordinates", coords_profile_bin),
-        ],
-    )?;
-    attach_scales(&counts.ds, &dims3)?;
-    let mut rows = vec![counts];
-
-    if spec.components {
-        let long_names = [
-            "accumulated photon counts from the backscattered laser signal",
-            "accumulated photon counts from the sky background",
-            "accumulated detector dark counts",
-        ];
-        for (name, long_name) in COMPONENT_NAMES.iter().zip(long_names) {
-            let var = create_count_var(&file, name, spec)?;
-            write_attrs(
-                &var.ds,
-                &[
-                    ("long_name", long_name),
-                    ("units", "count"),
-                    ("coordinates", coords_profile_bin),
-                ],
-            )?;
-            attach_scales(&var.ds, &dims3)?;
-            rows.push(var);
-        }
-    }
-
-    let time = create_var::<f64>(&file, "time", &[spec.n_profiles])?;
-    write_attrs(
-        &time,
-        &[
-            ("long_name", "profile centre time"),
-            ("standard_name", "time"),
-            ("units", &spec.time_units),
-            ("calendar", "standard"),
-            ("axis", "T"),
-        ],
-    )?;
-    attach_scales(&time, &[&profile])?;
-
-    let n_shots = create_var::<u64>(&file, "n_shots", &[spec.n_profiles])?;
-    write_attrs(
-        &n_shots,
-        &[
-            ("long_name", "laser shots accumulated in the profile"),
-            ("units", "1"),
-            ("coordinates", coords_profile),
-        ],
-    )?;
-    attach_scales(&n_shots, &[&profile])?;
-
-    let pulse_energy = create_var::<f64>(&file, "pulse_energy", &[spec.n_profiles])?;
-    write_attrs(
-        &pulse_energy,
-        &[
-            (
-                "long_name",
-                "mean emitted pulse energy of the profile's shots (energy monitor)",
-            ),
-            ("units", "J"),
-            ("coordinates", coords_profile),
-        ],
-    )?;
-    attach_scales(&pulse_energy, &[&profile])?;
-
-    let mut columns = Vec::new();
-    for var in &spec.variables {
-        let (c, b, n) = (spec.channels.len(), spec.n_bins, spec.n_columns);
-        let (shape, scales, coords): (Vec<usize>, Vec<&Dataset>, Option<&str>) = match var.dims {
-            Dims::ColumnBin | Dims::ColumnChannelBin => {
-                let col = column.as_ref().ok_or("a column variable without columns")?;
-                match var.dims {
-                    Dims::ColumnBin => (vec![n, b], vec![col, &bin], Some(COORDS_BIN)),
-                    _ => (vec![n, c, b], vec![col, &channel, &bin], Some(COORDS_BIN)),
-                }
+    let mut scales: Vec<(&str, Dataset)> = Vec::new();
+    let mut rows = Vec::new();
+    let mut singles: Vec<(PerProfile, Dataset)> = Vec::new();
+    for var in schema(spec) {
+        let ds = match var.storage {
+            Storage::Rows { by_planes } => {
+                let row = match var.element {
+                    Element::Count(CountWidth::U16) => create_rows::<u16>(&file, var.name, spec),
+                    Element::Count(CountWidth::U32) => create_rows::<u32>(&file, var.name, spec),
+                    Element::Count(CountWidth::U64) => create_rows::<u64>(&file, var.name, spec),
+                    _ => create_rows::<f64>(&file, var.name, spec),
+                }?;
+                let ds = row.ds.clone();
+                rows.push(RowVar { by_planes, ..row });
+                ds
             }
-            Dims::Bin => (vec![spec.n_bins], vec![&bin], Some(COORDS_BIN)),
-            Dims::Channel => (vec![spec.channels.len()], vec![&channel], None),
-            Dims::ChannelBin => (
-                vec![spec.channels.len(), spec.n_bins],
-                vec![&channel, &bin],
-                Some(COORDS_BIN),
-            ),
-            Dims::Profile => (vec![spec.n_profiles], vec![&profile], Some(coords_profile)),
-            Dims::ProfileChannelBin => (
-                vec![spec.n_profiles, spec.channels.len(), spec.n_bins],
-                vec![&profile, &channel, &bin],
-                Some(coords_profile_bin),
-            ),
+            Storage::Deflated => create_deflated(&file, var.name, &var.shape)?,
+            Storage::Contiguous => match var.element {
+                Element::I64 => create_var::<i64>(&file, var.name, &var.shape)?,
+                Element::Text => create_var::<VarLenUnicode>(&file, var.name, &var.shape)?,
+                Element::U64 => create_var::<u64>(&file, var.name, &var.shape)?,
+                Element::I32 => create_var::<i32>(&file, var.name, &var.shape)?,
+                Element::F64 | Element::Count(_) => create_var::<f64>(&file, var.name, &var.shape)?,
+            },
         };
-        let (ds, row_var) = match var.dims {
-            Dims::ProfileChannelBin => {
-                let v = create_rows::<f64>(&file, &var.name, spec)?;
-                (v.ds.clone(), Some(v))
-            }
-            Dims::ColumnBin | Dims::ColumnChannelBin => {
-                (create_deflated(&file, &var.name, &shape)?, None)
-            }
-            _ => (create_var::<f64>(&file, &var.name, &shape)?, None),
-        };
-        if !var.dims.per_profile() {
-            ds.write_raw(&var.data[..])?;
+        match var.values {
+            Values::Index { first } => write_index(&ds, first, var.len())?,
+            Values::Text(values) => write_text(&ds, values)?,
+            Values::F64(values) => ds.write_raw(values)?,
+            Values::PerProfile(PerProfile::Row) => {}
+            Values::PerProfile(per) => singles.push((per, ds.clone())),
         }
-        write_attrs(&ds, &[("long_name", &var.long_name), ("units", &var.units)])?;
         for (k, v) in &var.attributes {
             write_attr(&ds, k, v)?;
         }
-        // a coordinate itself (altitude, range, latitude, ...) lists no coordinates
-        let is_coordinate = matches!(var.name.as_str(), "altitude" | "range")
-            || spec.profile_coordinates.contains(&var.name);
-        if let Some(c) = coords.filter(|_| !is_coordinate) {
-            write_str_attr(&ds, "coordinates", c)?;
-        }
-        attach_scales(&ds, &scales)?;
-        match (row_var, var.dims) {
-            (Some(v), _) => rows.push(v),
-            (None, Dims::Profile) => columns.push(ds),
-            _ => {}
+        if var.is_dimension {
+            set_scale(&ds, var.name)?;
+            scales.push((var.name, ds));
+        } else {
+            let dims = var
+                .dims
+                .iter()
+                .map(|d| scales.iter().find(|(n, _)| n == d).map(|(_, s)| s))
+                .collect::<Option<Vec<&Dataset>>>()
+                .ok_or("a variable's dimension is not yet a scale")?;
+            attach_scales(&ds, &dims)?;
         }
     }
-
+    let mut take = |per: PerProfile| {
+        let at = singles.iter().position(|(p, _)| *p == per);
+        at.map(|k| singles.remove(k).1)
+    };
+    let missing = || hdf5::Error::from("the schema lacks time, n_shots or pulse_energy");
+    let time = take(PerProfile::Time).ok_or_else(missing)?;
+    let n_shots = take(PerProfile::NShots).ok_or_else(missing)?;
+    let pulse_energy = take(PerProfile::PulseEnergy).ok_or_else(missing)?;
+    let profile_columns = take(PerProfile::Columns).zip(take(PerProfile::ColumnWeights));
+    let columns = singles.into_iter().map(|(_, ds)| ds).collect();
     Ok(OpenFile {
         file,
         rows,
@@ -479,69 +314,16 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
     })
 }
 
-/// A string variable of the channel dimension.
-fn write_channel_text(
-    file: &File,
-    text: &super::TextVariable,
-    channel: &Dataset,
-) -> hdf5::Result<()> {
-    let ds = create_var::<VarLenUnicode>(file, &text.name, &[text.values.len()])?;
-    let values: Vec<VarLenUnicode> = text
-        .values
+/// Writes a string variable.
+fn write_text(ds: &Dataset, values: &[String]) -> hdf5::Result<()> {
+    let values: Vec<VarLenUnicode> = values
         .iter()
         .map(|v| {
             v.parse()
                 .map_err(|_| hdf5::Error::from("a text value holds NUL"))
         })
         .collect::<hdf5::Result<_>>()?;
-    ds.write(&values[..])?;
-    write_attrs(&ds, &[("long_name", &text.long_name)])?;
-    attach_scales(&ds, &[channel])
-}
-
-/// The `k` dimension and the (profile, k) variables `profile_column` (i32, −1 unused)
-/// and `profile_column_weight` (f64), filled as profiles come.
-fn create_profile_columns(
-    file: &File,
-    spec: &RawFileSpec,
-    k: usize,
-    profile: &Dataset,
-    coords_profile: &str,
-) -> hdf5::Result<(Dataset, Dataset)> {
-    let slot = create_var::<i64>(file, SLOT_DIM, &[k])?;
-    write_index(&slot, 0, k)?;
-    write_attrs(
-        &slot,
-        &[("long_name", "slot of a profile's columns"), ("units", "1")],
-    )?;
-    set_scale(&slot, SLOT_DIM)?;
-    let columns = create_var::<i32>(file, PROFILE_COLUMN_NAMES[0], &[spec.n_profiles, k])?;
-    write_attrs(
-        &columns,
-        &[
-            (
-                "long_name",
-                "columns the profile's shots saw (index of the column dimension; -1 = unused slot)",
-            ),
-            ("units", "1"),
-            ("coordinates", coords_profile),
-        ],
-    )?;
-    let weights = create_var::<f64>(file, PROFILE_COLUMN_NAMES[1], &[spec.n_profiles, k])?;
-    write_attrs(
-        &weights,
-        &[
-            (
-                "long_name",
-                "share of the profile's shots that saw the column (sums to 1 over k)",
-            ),
-            ("units", "1"),
-            ("coordinates", coords_profile),
-        ],
-    )?;
-    attach_scales(&columns, &[profile, &slot])?;
-    attach_scales(&weights, &[profile, &slot])?;
-    Ok((columns, weights))
+    ds.write(&values[..])
 }
 
 /// A (column, …) f64 variable: chunked along columns (about [`TARGET_CHUNK_BYTES`] a

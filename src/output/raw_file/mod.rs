@@ -15,12 +15,14 @@
 //! | `column` | (column) | i64 index coordinate of the scene's distinct columns, with [`RawFileSpec::n_columns`] |
 //! | `profile_column`, `profile_column_weight` | (profile, k) | i32, f64: the columns each profile's shots saw and their shares, with [`RawFileSpec::column_slots`] |
 //!
-//! The modules: [`layout`] creates the file and everything known up front,
+//! The modules: [`schema`] describes every variable (name, dimensions, type,
+//! attributes), [`layout`] creates them in the file with everything known up front,
 //! [`writer`] streams the profiles, [`check`] checks a profile record before it is
 //! buffered, [`chunk`] fills and encodes whole chunks as HDF5's shuffle and deflate
 //! filters would ([`planes`] the counts' chunks, byte plane by byte plane, their noise
 //! planes stored), [`content`] decides what a simulation puts in the
-//! file ([`truth`] the truth beside the counts), `hdf5_ds` makes the HDF5 calls the `hdf5` crate does not.
+//! file ([`truth`] the truth beside the counts), `hdf5_ds` makes the HDF5 calls the `hdf5` crate does not;
+//! [`memory`] holds the same variables in memory instead of a file.
 //!
 //! The writer creates the file at exactly the path it is given: where the file goes, its
 //! temporary name, the final rename, locks and signals are decided by
@@ -32,8 +34,10 @@ pub mod content;
 pub mod detection;
 pub(crate) mod hdf5_ds;
 pub mod layout;
+pub mod memory;
 pub mod planes;
 pub mod read;
+pub mod schema;
 pub mod truth;
 pub mod writer;
 
@@ -227,7 +231,7 @@ pub struct RawFileSpec {
     pub n_profiles: usize,
     /// Index in the run of the file's first profile: the `profile` coordinate holds
     /// `first_profile .. first_profile + n_profiles` (0 but in a shard file,
-    /// [`crate::shard`]); [`ProfileRecord::index`] stays the row in the file.
+    /// docs/architecture.md's shards); [`ProfileRecord::index`] stays the row in the file.
     pub first_profile: usize,
     /// Channel names (the `channel` coordinate), at least one.
     pub channels: Vec<String>,
@@ -260,6 +264,19 @@ impl RawFileSpec {
     /// Counts per profile: channels × bins.
     pub fn counts_per_profile(&self) -> usize {
         self.channels.len() * self.n_bins
+    }
+}
+
+/// Where a run's profiles go: the file ([`RawFileWriter`]) or memory
+/// ([`memory::MemoryWriter`]); each checks a record before it keeps any of it.
+pub trait ProfileSink: Send {
+    /// Takes one profile (in any order, each once).
+    fn write_profile(&mut self, rec: &ProfileRecord) -> Result<()>;
+}
+
+impl ProfileSink for RawFileWriter {
+    fn write_profile(&mut self, rec: &ProfileRecord) -> Result<()> {
+        RawFileWriter::write_profile(self, rec)
     }
 }
 

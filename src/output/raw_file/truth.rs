@@ -13,7 +13,7 @@ pub(crate) type Truth = fn(&ExpectedProfile, usize) -> f64;
 
 /// The point truth at the bin centre by species (model.md §8), each (column, channel,
 /// bin): name, long name, units, value. The onboard product averages the same table over
-/// each region bin's native bins (`crate::onboard::truth`).
+/// each region bin's native bins (the onboard module's truth).
 pub(crate) const COLUMN_TRUTH: [(&str, &str, &str, Truth); 21] = [
     (
         "alpha_mol",
