@@ -273,6 +273,14 @@ pub fn announce_duration(what: &str, seconds: f64) {
 /// A vector of `n` copies of `value`, or a clear error naming `what` where the memory
 /// cannot be had (never an allocation abort).
 pub fn try_vec<T: Clone>(what: &str, n: usize, value: T) -> Result<Vec<T>> {
+    let mut v = try_with_capacity(what, n)?;
+    v.resize(n, value);
+    Ok(v)
+}
+
+/// An empty vector with room for `n` elements (none written yet: its pages are touched
+/// as it fills), or a clear error naming `what` where the memory cannot be had.
+pub fn try_with_capacity<T>(what: &str, n: usize) -> Result<Vec<T>> {
     let mut v = Vec::new();
     let reserved = {
         let _fallible = FallibleAllocation::begin();
@@ -284,7 +292,6 @@ pub fn try_vec<T: Clone>(what: &str, n: usize, value: T) -> Result<Vec<T>> {
             human_bytes(n as f64 * std::mem::size_of::<T>() as f64)
         ))
     })?;
-    v.resize(n, value);
     Ok(v)
 }
 

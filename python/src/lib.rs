@@ -7,6 +7,9 @@
 //! without the GIL and looks for Ctrl-C every 50 ms: a KeyboardInterrupt stops the run
 //! (its temporary file removed) and is raised within a batch of profiles.
 
+// PyO3 0.22's #[pyfunction] expansion converts each PyResult's error into itself
+#![allow(clippy::useless_conversion)]
+
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
@@ -187,9 +190,8 @@ fn run_options(
 
 /// `lidarsim expect`, every channel: the variables a raw file of the config holds
 /// before its first profile (coordinates, the truth, the instrument; the file's names,
-/// dimensions and attributes), and `snr_bkg_estimated` (channel, bin), the CSV's S/N
-/// with an estimated background (NaN without signal-free bins). Also the expected
-/// profile's shots.
+/// dimensions and attributes), and the CSV's `snr` and `snr_bkg_estimated` (channel,
+/// bin; [`lidarsim::output::expect::snr_variables`]). Also the CSV's shots per profile.
 #[pyfunction]
 fn expect<'py>(
     py: Python<'py>,
@@ -202,11 +204,10 @@ fn expect<'py>(
                 ..RunOptions::default()
             };
             let plan = lidarsim::simulate::plan(&loaded.lidar, &opts, None)?;
-            let mut fixed = lidarsim::output::raw_file::memory::fixed_variables(&plan.spec)?;
+            let extra = lidarsim::output::expect::snr_variables(&loaded.lidar, &plan.expected);
+            let mut fixed = lidarsim::output::raw_file::memory::fixed_variables(plan.spec)?;
             let first = loaded.lidar.first();
             let shots = first.instrument.rep_rate_hz * first.accumulation_time_s();
-            let extra =
-                lidarsim::output::expect::estimated_background_snr(&loaded.lidar, &plan.expected);
             fixed.retain(|v| v.dims.iter().all(|d| *d != "profile"));
             Ok((fixed, extra, shots))
         })
@@ -215,7 +216,9 @@ fn expect<'py>(
         .into_iter()
         .map(|v| variable(py, v))
         .collect::<PyResult<_>>()?;
-    vars.push(variable(py, extra)?);
+    for v in extra {
+        vars.push(variable(py, v)?);
+    }
     Ok((vars, attrs(py, Vec::new()), shots))
 }
 
@@ -250,8 +253,17 @@ fn simulate(
     Ok(summary.warning)
 }
 
+/// An in-memory run: variables, root attributes, warning, (drawing, whole) times in s.
+type InMemory<'py> = (
+    Vec<PyObject>,
+    Bound<'py, PyList>,
+    Option<String>,
+    (f64, f64),
+);
+
 /// `lidarsim simulate` kept in memory: the raw file's variables and root attributes,
-/// the same counts and truth as the file for the same seed, and the run's warning.
+/// the same counts and truth as the file for the same seed, the run's warning, and its
+/// drawing and whole times (s).
 #[pyfunction]
 #[pyo3(signature = (loaded, profiles=None, seed=None, method=None, progress=false))]
 fn simulate_in_memory<'py>(
@@ -261,7 +273,7 @@ fn simulate_in_memory<'py>(
     seed: Option<u64>,
     method: Option<&str>,
     progress: bool,
-) -> PyResult<(Vec<PyObject>, Bound<'py, PyList>, Option<String>, f64)> {
+) -> PyResult<InMemory<'py>> {
     let opts = run_options(loaded, PathBuf::new(), profiles, seed, method, progress)?;
     let (memory, summary) = interruptible(py, |cancel| {
         let opts = RunOptions {
@@ -271,7 +283,8 @@ fn simulate_in_memory<'py>(
         lidarsim::simulate::run_in_memory(&loaded.lidar, &opts)
     })?;
     let (vars, root) = file(py, memory)?;
-    Ok((vars, root, summary.warning, summary.drawing.as_secs_f64()))
+    let times = (summary.drawing.as_secs_f64(), summary.elapsed.as_secs_f64());
+    Ok((vars, root, summary.warning, times))
 }
 
 /// The JSON of a validation report (the CLI's `--json`).

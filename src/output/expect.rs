@@ -45,41 +45,52 @@ pub fn columns(e: &ExpectedProfile, shots: f64) -> Vec<(&'static str, Vec<f64>)>
     CSV_COLUMNS.into_iter().zip(values).collect()
 }
 
-/// The CSV's `snr_bkg_estimated` of every channel of `lidar` (`expected` in its order)
-/// as a (channel, bin) variable beside the raw file's truth (the Python module's
-/// `expect`): each channel's S/N after its own profile's shots, NaN where it has no
-/// signal-free bins.
-pub fn estimated_background_snr(
+/// The CSV's two S/N columns of every channel of `lidar` (`expected` in its order) as
+/// (channel, bin) variables beside the raw file's truth (the Python module's `expect`):
+/// `snr`, Eq. 4 with M = rep_rate · accumulation_time shots as the paper writes it (the
+/// file's `snr_eq4` takes the profile's whole number of shots), and `snr_bkg_estimated`,
+/// NaN where a channel has no signal-free bins.
+pub fn snr_variables(
     lidar: &crate::scenario::Lidar,
     expected: &[ExpectedProfile],
-) -> crate::output::raw_file::memory::MemoryVariable {
+) -> [crate::output::raw_file::memory::MemoryVariable; 2] {
     use crate::output::raw_file::{AttrValue, BIN_DIM, CHANNEL_DIM, memory};
     let n_bins = expected.first().map_or(0, ExpectedProfile::n_bins);
-    let data: Vec<f64> = lidar
-        .channels
-        .iter()
-        .zip(expected)
-        .flat_map(|(sc, e)| {
-            let shots = sc.instrument.rep_rate_hz * sc.accumulation_time_s();
-            e.snr_estimated_background(shots)
-                .unwrap_or_else(|| vec![f64::NAN; n_bins])
-        })
-        .collect();
+    let per_channel = |f: &dyn Fn(&ExpectedProfile, f64) -> Vec<f64>| -> Vec<f64> {
+        lidar
+            .channels
+            .iter()
+            .zip(expected)
+            .flat_map(|(sc, e)| f(e, sc.instrument.rep_rate_hz * sc.accumulation_time_s()))
+            .collect()
+    };
     let text = |k: &str, v: &str| (k.to_string(), AttrValue::Str(v.to_string()));
-    memory::MemoryVariable {
-        name: CSV_COLUMNS[11].into(),
+    let variable = |name: &str, long_name: &str, data| memory::MemoryVariable {
+        name: name.into(),
         dims: vec![CHANNEL_DIM, BIN_DIM],
         shape: vec![expected.len(), n_bins],
         attributes: vec![
-            text(
-                "long_name",
-                "signal-to-noise ratio of one profile with the background estimated from the signal-free bins",
-            ),
+            text("long_name", long_name),
             text("units", "1"),
             text("coordinates", "altitude range"),
         ],
         data: memory::Array::F64(data),
-    }
+    };
+    [
+        variable(
+            CSV_COLUMNS[10],
+            "Eq. 4 signal-to-noise ratio of rep_rate x accumulation_time shots (expect --csv)",
+            per_channel(&|e, shots| e.snr_eq4(shots)),
+        ),
+        variable(
+            CSV_COLUMNS[11],
+            "signal-to-noise ratio with the background estimated from the signal-free bins (expect --csv)",
+            per_channel(&|e, shots| {
+                e.snr_estimated_background(shots)
+                    .unwrap_or_else(|| vec![f64::NAN; n_bins])
+            }),
+        ),
+    ]
 }
 
 /// Writes one row per bin of [`columns`] (`altitude_m` and `range_m` as decimals, the

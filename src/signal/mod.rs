@@ -356,7 +356,16 @@ fn inverse_vandermonde() -> &'static [[f64; NODES]; NODES] {
 /// Weights `W_m(t) = Σ_j V⁻¹[j][m]·μ_j(t)`: `∫₀¹ p(y)·e^{−ty} dy = Σ_m W_m·p(y_m)` for the
 /// interpolant p through the nodes.
 fn product_weights(t: f64) -> [f64; NODES] {
-    let mu = exponential_moments(t);
+    if t == 0.0 {
+        // the plain interpolatory weights, which every range weight takes: once
+        static NO_DECAY: OnceLock<[f64; NODES]> = OnceLock::new();
+        return *NO_DECAY.get_or_init(|| weights_of_moments(exponential_moments(0.0)));
+    }
+    weights_of_moments(exponential_moments(t))
+}
+
+/// `W_m = Σ_j V⁻¹[j][m]·μ_j` of the moments `mu`.
+fn weights_of_moments(mu: [f64; NODES]) -> [f64; NODES] {
     let inv = inverse_vandermonde();
     std::array::from_fn(|m| (0..NODES).map(|j| inv[j][m] * mu[j]).sum())
 }

@@ -43,48 +43,71 @@ pub struct MemoryFile {
     pub root_attributes: Vec<(String, AttrValue)>,
 }
 
-/// An empty array of `var`'s element type and length (its values where known up front).
+/// `var`'s array: its values where known up front, else empty with room for `n`
+/// elements (filled profile by profile, in order).
 fn array(var: &VarSchema, n: usize) -> Result<Array> {
     let what = format!("the in-memory `{}`", var.name);
-    let zeros = |n| crate::resources::try_vec(&what, n, 0.0f64);
+    let what = what.as_str();
+    use crate::resources::try_with_capacity as room;
     Ok(match (var.values, var.element) {
         (Values::Index { first }, _) => Array::I64((0..n).map(|i| (first + i) as i64).collect()),
         (Values::Text(t), _) => Array::Text(t.to_vec()),
         (Values::F64(v), _) => Array::F64(v.to_vec()),
-        (Values::PerProfile(_), Element::Count(CountWidth::U16)) => {
-            Array::U16(crate::resources::try_vec(&what, n, 0)?)
-        }
-        (Values::PerProfile(_), Element::Count(CountWidth::U32)) => {
-            Array::U32(crate::resources::try_vec(&what, n, 0)?)
-        }
+        (Values::PerProfile(_), Element::Count(CountWidth::U16)) => Array::U16(room(what, n)?),
+        (Values::PerProfile(_), Element::Count(CountWidth::U32)) => Array::U32(room(what, n)?),
         (Values::PerProfile(_), Element::Count(CountWidth::U64) | Element::U64) => {
-            Array::U64(crate::resources::try_vec(&what, n, 0)?)
+            Array::U64(room(what, n)?)
         }
-        (Values::PerProfile(_), Element::I32) => {
-            Array::I32(crate::resources::try_vec(&what, n, -1)?)
-        }
-        (Values::PerProfile(_), _) => Array::F64(zeros(n)?),
+        (Values::PerProfile(_), Element::I32) => Array::I32(room(what, n)?),
+        (Values::PerProfile(_), _) => Array::F64(room(what, n)?),
     })
 }
 
 /// The variables of `spec`'s file that are known before the first profile (the
 /// coordinates, the truth, the instrument), as the file holds them: what `expect`
-/// returns in Python.
-pub fn fixed_variables(spec: &RawFileSpec) -> Result<Vec<MemoryVariable>> {
-    schema(spec)
-        .iter()
-        .filter(|v| !matches!(v.values, Values::PerProfile(_)))
-        .map(|v| variable(v))
-        .collect()
+/// returns in Python. Takes the spec: its values move into the variables, uncopied.
+pub fn fixed_variables(mut spec: RawFileSpec) -> Result<Vec<MemoryVariable>> {
+    // the spec's own values (Values::F64) are moved in below, once the schema is done
+    let mut fixed = Vec::new();
+    for v in schema(&spec).iter() {
+        match v.values {
+            Values::PerProfile(_) => {}
+            Values::F64(_) => fixed.push((
+                true,
+                variable(
+                    &VarSchema {
+                        values: Values::F64(&[]),
+                        ..v.clone()
+                    },
+                    0,
+                )?,
+            )),
+            _ => fixed.push((false, variable(v, v.len())?)),
+        }
+    }
+    Ok(fixed
+        .into_iter()
+        .map(|(of_spec, mut m)| {
+            let source = spec
+                .variables
+                .iter_mut()
+                .find(|v| of_spec && v.name == m.name);
+            if let Some(v) = source {
+                m.data = Array::F64(std::mem::take(&mut v.data));
+            }
+            m
+        })
+        .collect())
 }
 
-fn variable(v: &VarSchema) -> Result<MemoryVariable> {
+/// `v` with its values known up front, else room for `n` elements.
+fn variable(v: &VarSchema, n: usize) -> Result<MemoryVariable> {
     Ok(MemoryVariable {
         name: v.name.to_string(),
         dims: v.dims.clone(),
         shape: v.shape.clone(),
         attributes: v.attributes.clone(),
-        data: array(v, v.len())?,
+        data: array(v, n)?,
     })
 }
 
@@ -104,19 +127,20 @@ pub fn memory_bytes(spec: &RawFileSpec) -> f64 {
         .sum()
 }
 
-/// Fills a [`MemoryFile`] profile by profile, as [`super::RawFileWriter`] fills a file.
+/// Fills a [`MemoryFile`] profile by profile, in order, as [`super::RawFileWriter`]
+/// fills a file: each per-profile array grows by a profile's row (no array is written
+/// twice, none zeroed first).
 pub struct MemoryWriter {
     shape: RecordShape,
     file: MemoryFile,
     /// Indices in `file.variables` of each [`PerProfile`] field's variables, in order.
     slots: Vec<(PerProfile, usize)>,
-    written: Vec<bool>,
     n_written: usize,
 }
 
 impl MemoryWriter {
-    /// Every variable of `spec`'s file, the per-profile ones zero (columns −1) until their
-    /// profiles come. Errors, naming the variable, if the memory cannot be allocated.
+    /// Every variable of `spec`'s file, the per-profile ones empty until their profiles
+    /// come. Errors, naming the variable, if the memory cannot be had.
     pub fn new(spec: &RawFileSpec) -> Result<Self> {
         super::layout::validate_spec(spec).map_err(Error::Unsupported)?;
         let vars = schema(spec);
@@ -128,7 +152,10 @@ impl MemoryWriter {
                 _ => None,
             })
             .collect();
-        let variables = vars.iter().map(variable).collect::<Result<_>>()?;
+        let variables = vars
+            .iter()
+            .map(|v| variable(v, v.len()))
+            .collect::<Result<_>>()?;
         Ok(MemoryWriter {
             shape: RecordShape::of(spec),
             file: MemoryFile {
@@ -136,73 +163,59 @@ impl MemoryWriter {
                 root_attributes: spec.root_attributes.clone(),
             },
             slots,
-            written: crate::resources::try_vec(
-                "the record of written profiles",
-                spec.n_profiles,
-                false,
-            )?,
             n_written: 0,
         })
     }
 
-    /// Takes one profile: checked first as the file writer checks it (a refused record
-    /// changes nothing), then copied into every per-profile array at its row.
+    /// Takes the next profile: checked first as the file writer checks it (a refused
+    /// record changes nothing), then appended to every per-profile array. Profiles come
+    /// in order (`index` 0, 1, 2, …), as `simulate` sends them.
     pub fn write_profile(&mut self, rec: &ProfileRecord) -> Result<()> {
         let refused = |reason: String| Error::Unsupported(format!("in-memory run: {reason}"));
         self.shape.check(rec).map_err(refused)?;
-        let i = rec.index;
-        if self.written[i] {
-            return Err(refused(format!("profile {i} written twice")));
+        if rec.index != self.n_written {
+            return Err(refused(format!(
+                "profile {} came after {} profiles: an in-memory run takes them in order",
+                rec.index, self.n_written
+            )));
         }
         let (rows, values) = self.shape.split(rec);
         let (mut rows, mut values) = (rows.into_iter(), values.into_iter());
-        let n = self.shape.n_per_profile;
-        let k = self.shape.column_slots;
         for &(per, at) in &self.slots {
             let data = &mut self.file.variables[at].data;
             match (per, data) {
                 (PerProfile::Row, data) => match (rows.next(), data) {
-                    (Some(Row::Counts(c)), Array::U16(a)) => put(&mut a[i * n..][..n], c),
-                    (Some(Row::Counts(c)), Array::U32(a)) => put(&mut a[i * n..][..n], c),
-                    (Some(Row::Counts(c)), Array::U64(a)) => a[i * n..][..n].copy_from_slice(c),
-                    (Some(Row::Floats(f)), Array::F64(a)) => a[i * n..][..n].copy_from_slice(f),
-                    _ => return Err(refused("a row does not match its variable".into())),
+                    // narrowed: the check found every count within the width
+                    (Some(Row::Counts(c)), Array::U16(a)) => a.extend(c.iter().map(|&n| n as u16)),
+                    (Some(Row::Counts(c)), Array::U32(a)) => a.extend(c.iter().map(|&n| n as u32)),
+                    (Some(Row::Counts(c)), Array::U64(a)) => a.extend_from_slice(c),
+                    (Some(Row::Floats(f)), Array::F64(a)) => a.extend_from_slice(f),
+                    _ => return Err(refused("internal: a row unlike its variable".into())),
                 },
-                (PerProfile::Time, Array::F64(a)) => a[i] = rec.time_s,
-                (PerProfile::NShots, Array::U64(a)) => a[i] = rec.n_shots,
-                (PerProfile::PulseEnergy, Array::F64(a)) => a[i] = rec.pulse_energy_j,
-                (PerProfile::Value, Array::F64(a)) => a[i] = values.next().unwrap_or(f64::NAN),
-                (PerProfile::Columns, Array::I32(a)) => {
-                    a[i * k..][..k].copy_from_slice(rec.columns);
-                }
+                (PerProfile::Time, Array::F64(a)) => a.push(rec.time_s),
+                (PerProfile::NShots, Array::U64(a)) => a.push(rec.n_shots),
+                (PerProfile::PulseEnergy, Array::F64(a)) => a.push(rec.pulse_energy_j),
+                (PerProfile::Value, Array::F64(a)) => a.extend(values.next()),
+                (PerProfile::Columns, Array::I32(a)) => a.extend_from_slice(rec.columns),
                 (PerProfile::ColumnWeights, Array::F64(a)) => {
-                    a[i * k..][..k].copy_from_slice(rec.column_weights);
+                    a.extend_from_slice(rec.column_weights);
                 }
-                _ => return Err(refused("a value does not match its variable".into())),
+                _ => return Err(refused("internal: a value unlike its variable".into())),
             }
         }
-        self.written[i] = true;
         self.n_written += 1;
         Ok(())
     }
 
     /// The whole file, once every profile has come.
     pub fn finish(self) -> Result<MemoryFile> {
-        if self.n_written != self.written.len() {
+        if self.n_written != self.shape.n_profiles {
             return Err(Error::Unsupported(format!(
                 "in-memory run incomplete: {} of {} profiles",
-                self.n_written,
-                self.written.len()
+                self.n_written, self.shape.n_profiles
             )));
         }
         Ok(self.file)
-    }
-}
-
-/// Narrows checked counts (each fits the width: [`RecordShape::check`]).
-fn put<T: TryFrom<u64> + Default>(to: &mut [T], from: &[u64]) {
-    for (t, &c) in to.iter_mut().zip(from) {
-        *t = T::try_from(c).unwrap_or_default();
     }
 }
 
