@@ -165,7 +165,7 @@ def simulate(config: ConfigLike, profiles: Optional[int] = None, seed: Optional[
     returns the raw file's Dataset built in memory (no file, no compression; the same
     variables, dimensions and attributes, the counts in the file's integer type).
     ``method``: ``"auto"``, ``"shot"`` or ``"aggregate"``; ``progress``: the CLI's
-    progress bar on a terminal. Ctrl-C stops the run within a batch of profiles and
+    progress bar on a terminal. Ctrl-C stops the run before its next profile and
     leaves no file. A scene beyond a photon counter's range gives a ``UserWarning``."""
     cfg = _config(config)
     if path is not None:

@@ -4,8 +4,9 @@
 //! for files). The raw file's variables come as numpy arrays that own the run's own
 //! buffers (no copy); `lidarsim/__init__.py` builds the xarray Datasets from them.
 //! A long call runs on a thread of its own while the calling thread waits for it
-//! without the GIL and looks for Ctrl-C every 50 ms: a KeyboardInterrupt stops the run
-//! (its temporary file removed) and is raised within a batch of profiles.
+//! without the GIL and looks for Ctrl-C every 50 ms: a KeyboardInterrupt stops a
+//! `simulate` before its next profile (its temporary file removed) and is raised; the
+//! other calls take no cancel flag and finish first.
 
 // PyO3 0.22's #[pyfunction] expansion converts each PyResult's error into itself
 #![allow(clippy::useless_conversion)]

@@ -184,7 +184,7 @@ pub struct RunOptions {
     /// Write this shard of the run only (`--shard K/N`, [`crate::shard`]).
     pub shard: Option<crate::shard::Shard>,
     /// Stops the run when set (the Python module's Ctrl-C): [`run`] then returns
-    /// [`Error::Interrupted`] within a batch of profiles, its temporary file removed.
+    /// [`Error::Interrupted`] before its next profile, its temporary file removed.
     pub cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 

@@ -224,3 +224,153 @@ impl super::ProfileSink for MemoryWriter {
         MemoryWriter::write_profile(self, rec)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::output::raw_file::{Dims, Variable};
+
+    /// Two channels of three bins, four profiles, u16 counts with components, a
+    /// per-profile latitude and expected signal, one column of truth.
+    fn spec() -> RawFileSpec {
+        let var = |name: &str, dims, data: Vec<f64>| Variable {
+            name: name.into(),
+            dims,
+            long_name: name.into(),
+            units: "1".into(),
+            attributes: vec![],
+            data,
+        };
+        RawFileSpec {
+            n_bins: 3,
+            n_profiles: 4,
+            first_profile: 0,
+            channels: vec!["a".into(), "b".into()],
+            count_width: CountWidth::U16,
+            components: true,
+            time_units: "seconds since 2000-01-01 00:00:00".into(),
+            variables: vec![
+                var("altitude", Dims::Bin, vec![1.0, 2.0, 3.0]),
+                var("latitude", Dims::Profile, vec![]),
+                var("expected_signal", Dims::ProfileChannelBin, vec![]),
+                var("t2", Dims::ColumnChannelBin, vec![0.5; 6]),
+            ],
+            channel_text: vec![],
+            n_columns: 1,
+            column_slots: 1,
+            root_attributes: vec![("title".into(), AttrValue::Str("t".into()))],
+            profile_coordinates: vec!["latitude".into()],
+        }
+    }
+
+    /// Profile `i`'s counts (components summing to them) and values.
+    fn write(w: &mut MemoryWriter, i: usize) -> Result<()> {
+        let signal: Vec<u64> = (0..6).map(|b| (1000 * i + b) as u64 * 10).collect();
+        let background = vec![1u64; 6];
+        let dark = vec![65_000 - 10 * 6006; 6];
+        let counts: Vec<u64> = (0..6)
+            .map(|b| signal[b] + background[b] + dark[b])
+            .collect();
+        let latitude = [i as f64];
+        let expected: Vec<f64> = (0..6).map(|b| b as f64 + 0.25).collect();
+        w.write_profile(&ProfileRecord {
+            index: i,
+            time_s: 10.0 * i as f64,
+            n_shots: 7,
+            pulse_energy_j: 0.1,
+            counts: &counts,
+            components: Some([&signal, &background, &dark]),
+            values: &[&latitude, &expected],
+            columns: &[0],
+            column_weights: &[1.0],
+        })
+    }
+
+    fn data<'a>(f: &'a MemoryFile, name: &str) -> &'a Array {
+        &f.variables.iter().find(|v| v.name == name).unwrap().data
+    }
+
+    #[test]
+    fn a_file_in_memory_holds_each_record_at_its_row() {
+        let mut w = MemoryWriter::new(&spec()).unwrap();
+        for i in 0..4 {
+            write(&mut w, i).unwrap();
+        }
+        let f = w.finish().unwrap();
+        let names: Vec<&str> = f.variables.iter().map(|v| v.name.as_str()).collect();
+        let spec = spec();
+        let described: Vec<&str> = schema(&spec).iter().map(|v| v.name).collect();
+        assert_eq!(names, described);
+        let Array::U16(counts) = data(&f, "counts") else {
+            panic!("counts are the file's u16")
+        };
+        // profile 3, channel b, bin 2: signal 30,050, background 1, dark 4,940
+        assert_eq!(counts.len(), 4 * 6);
+        assert_eq!(counts[3 * 6 + 5], 30_050 + 1 + 4_940);
+        assert_eq!(counts[0], 1 + 4_940);
+        let Array::U16(signal) = data(&f, "signal_counts") else {
+            panic!()
+        };
+        assert_eq!(signal[2 * 6 + 4], 20_040);
+        assert_eq!(data(&f, "time"), &Array::F64(vec![0.0, 10.0, 20.0, 30.0]));
+        assert_eq!(data(&f, "n_shots"), &Array::U64(vec![7; 4]));
+        assert_eq!(data(&f, "latitude"), &Array::F64(vec![0.0, 1.0, 2.0, 3.0]));
+        assert_eq!(data(&f, "profile_column"), &Array::I32(vec![0; 4]));
+        assert_eq!(data(&f, "t2"), &Array::F64(vec![0.5; 6]));
+        assert_eq!(data(&f, "profile"), &Array::I64(vec![0, 1, 2, 3]));
+        let Array::F64(expected) = data(&f, "expected_signal") else {
+            panic!()
+        };
+        assert_eq!(expected[6 + 1], 1.25);
+        assert_eq!(f.root_attributes, spec.root_attributes);
+    }
+
+    #[test]
+    fn records_out_of_order_too_wide_or_missing_are_refused() {
+        let mut w = MemoryWriter::new(&spec()).unwrap();
+        let e = write(&mut w, 1).unwrap_err().to_string();
+        assert!(e.contains("an in-memory run takes them in order"), "{e}");
+        write(&mut w, 0).unwrap();
+        let e = write(&mut w, 0).unwrap_err().to_string();
+        assert!(e.contains("profile 0 came after 1"), "{e}");
+        // a count beyond u16: refused, nothing kept
+        let wide = vec![70_000u64; 6];
+        let none = vec![0u64; 6];
+        let rec = ProfileRecord {
+            index: 1,
+            time_s: 0.0,
+            n_shots: 1,
+            pulse_energy_j: 0.1,
+            counts: &wide,
+            components: Some([&wide, &none, &none]),
+            values: &[&[0.0], &[0.0; 6]],
+            columns: &[0],
+            column_weights: &[1.0],
+        };
+        assert!(w.write_profile(&rec).is_err());
+        write(&mut w, 1).unwrap();
+        let e = w.finish().unwrap_err().to_string();
+        assert!(e.contains("incomplete: 2 of 4 profiles"), "{e}");
+    }
+
+    #[test]
+    fn the_fixed_variables_are_the_schemas_known_values_moved_not_copied() {
+        let spec = spec();
+        let t2 = spec.variables[3].data.as_ptr();
+        let fixed = fixed_variables(spec).unwrap();
+        let names: Vec<&str> = fixed.iter().map(|v| v.name.as_str()).collect();
+        assert_eq!(
+            names,
+            ["profile", "channel", "bin", "column", "k", "altitude", "t2"]
+        );
+        let Array::F64(moved) = &fixed[6].data else {
+            panic!()
+        };
+        assert_eq!(moved.as_ptr(), t2);
+        assert_eq!(fixed[6].shape, [1, 2, 3]);
+        assert_eq!(
+            memory_bytes(&self::spec()),
+            (4.0 * 6.0 * 2.0) * 4.0 + 4.0 * 8.0 * 4.0 + 4.0 * 6.0 * 8.0 + 4.0 * (4.0 + 8.0)
+        );
+    }
+}
