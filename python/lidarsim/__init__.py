@@ -168,6 +168,7 @@ def simulate(config: ConfigLike, profiles: Optional[int] = None, seed: Optional[
     progress bar on a terminal. Ctrl-C stops the run before its next profile and
     leaves no file. A scene beyond a photon counter's range gives a ``UserWarning``."""
     cfg = _config(config)
+    profiles, seed = _whole("profiles", profiles), _whole("seed", seed)
     if path is not None:
         warning = _lidarsim.simulate(cfg.loaded, os.fspath(path), profiles, seed, method,
                                      progress)
@@ -177,6 +178,16 @@ def simulate(config: ConfigLike, profiles: Optional[int] = None, seed: Optional[
         cfg.loaded, profiles, seed, method, progress)
     _warn(warning)
     return _dataset(variables, root)
+
+
+def _whole(name: str, value: Optional[int], bits: int = 64) -> Optional[int]:
+    """An optional whole-number argument, refused as ``ValueError`` (not Python's
+    OverflowError or TypeError) when it is not an integer from 0 to 2**bits - 1."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2**bits:
+        raise ValueError(f"{name} = {value!r}: must be a whole number from 0 to 2**{bits} - 1")
+    return value
 
 
 def _warn(warning: Optional[str]) -> None:
@@ -189,6 +200,7 @@ def validate(config: ConfigLike, realizations: int = 1000, seed: Optional[int] =
     them against Eq. 4; the report (``report["consistent"]``, the statistics and every
     bin) as the CLI's JSON, parsed."""
     cfg = _config(config)
+    realizations, seed = _whole("realizations", realizations), _whole("seed", seed)
     return json.loads(_lidarsim.validate(cfg.loaded, realizations, seed))
 
 

@@ -184,6 +184,16 @@ def test_bad_input_raises_the_cli_message(tmp_path):
     # a value Python cannot write as TOML
     with pytest.raises(ValueError):
         lidarsim.load_config(SCENARIO1, {"instrument.pulse_energy_j": float("nan")})
+    # whole numbers out of range or of another type: ValueError, not Python's own
+    # OverflowError or TypeError
+    for bad in (-1, 2**64, 2.5, True):
+        with pytest.raises(ValueError, match="must be a whole number from 0 to 2\\*\\*64 - 1"):
+            lidarsim.simulate(SCENARIO1, profiles=bad)
+    with pytest.raises(ValueError, match="must be a whole number"):
+        lidarsim.validate(SCENARIO1, realizations=200, seed=-3)
+    # an in-memory run larger than the memory: refused before anything is allocated
+    with pytest.raises(ValueError, match="in memory needs about .* of memory"):
+        lidarsim.simulate(SCENARIO1, profiles=10**9)
 
 
 def test_validate_gives_the_cli_report(tmp_path):

@@ -790,11 +790,11 @@ pub fn run_in_memory(lidar: &Lidar, opts: &RunOptions) -> Result<(MemoryFile, Ru
     }
     let planned = plan(lidar, opts, None)?;
     let rows = 0..planned.profiles;
-    check_sizes(lidar, &planned, rows.len(), opts, false)?;
     crate::resources::require_memory(
         &format!("holding {} profiles in memory", rows.len()),
         crate::output::raw_file::memory::memory_bytes(&planned.spec),
     )?;
+    check_sizes(lidar, &planned, rows.len(), opts, false)?;
     let mut sink = MemoryWriter::new(&planned.spec)?;
     let (total_counts, drawing) = draw_into(lidar, &planned, rows.clone(), opts, &mut sink)?;
     let file = sink.finish()?;

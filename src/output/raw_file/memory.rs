@@ -228,40 +228,7 @@ impl super::ProfileSink for MemoryWriter {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::output::raw_file::{Dims, Variable};
-
-    /// Two channels of three bins, four profiles, u16 counts with components, a
-    /// per-profile latitude and expected signal, one column of truth.
-    fn spec() -> RawFileSpec {
-        let var = |name: &str, dims, data: Vec<f64>| Variable {
-            name: name.into(),
-            dims,
-            long_name: name.into(),
-            units: "1".into(),
-            attributes: vec![],
-            data,
-        };
-        RawFileSpec {
-            n_bins: 3,
-            n_profiles: 4,
-            first_profile: 0,
-            channels: vec!["a".into(), "b".into()],
-            count_width: CountWidth::U16,
-            components: true,
-            time_units: "seconds since 2000-01-01 00:00:00".into(),
-            variables: vec![
-                var("altitude", Dims::Bin, vec![1.0, 2.0, 3.0]),
-                var("latitude", Dims::Profile, vec![]),
-                var("expected_signal", Dims::ProfileChannelBin, vec![]),
-                var("t2", Dims::ColumnChannelBin, vec![0.5; 6]),
-            ],
-            channel_text: vec![],
-            n_columns: 1,
-            column_slots: 1,
-            root_attributes: vec![("title".into(), AttrValue::Str("t".into()))],
-            profile_coordinates: vec!["latitude".into()],
-        }
-    }
+    use crate::output::raw_file::schema::example_spec as spec;
 
     /// Profile `i`'s counts (components summing to them) and values.
     fn write(w: &mut MemoryWriter, i: usize) -> Result<()> {
