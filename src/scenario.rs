@@ -3,6 +3,8 @@
 
 use std::path::Path;
 
+use rayon::prelude::*;
+
 use crate::atmosphere::multiple_scattering::{self, Footprint};
 use crate::atmosphere::{Atmosphere, MolecularState, Optics};
 use crate::config::{self, MultipleScatteringModel};
@@ -115,6 +117,20 @@ impl Lidar {
             .collect();
         (!lines.is_empty()).then(|| lines.join("\n"))
     }
+}
+
+/// One bin of [`Scenario::expected`]'s model, before multiple scattering and the
+/// detector.
+struct ModelBin {
+    altitude_m: f64,
+    range_m: f64,
+    point: Optics,
+    state: MolecularState,
+    overlap: f64,
+    t2: f64,
+    signal: f64,
+    range_weight: f64,
+    attenuated_backscatter: f64,
 }
 
 /// Expected counts per shot per bin and the atmosphere's truth at bin centres.
@@ -432,35 +448,24 @@ impl Scenario {
         for i in 0..g.pretrigger_bins {
             self.push_pretrigger_bin(&mut e, g.bin_centre_range_m(i));
         }
-        for i in g.pretrigger_bins..n {
-            let (ra, rb) = g.bin_range_bounds(i);
-            let r = g.bin_centre_range_m(i);
-            let z = g.altitude_at_range(r);
-            // below the surface the beam does not go: no optics there (t2 stays the
-            // surface's), the molecular state that of the atmosphere continued
-            let o = if r <= self.path.end_range_m() {
-                self.atmosphere.optics_at(z)
-            } else {
-                self.atmosphere.no_optics()
-            };
-            let integral = self.path.bin_integral(ra, rb)?;
-            let signal = self.instrument.signal_constant * integral;
-            let weight = self.path.range_weight(ra, rb);
-            if !signal.is_finite() {
-                return Err(Error::Unsupported(format!(
-                    "bin {i} (altitude {z:.0} m): the signal is not finite"
-                )));
-            }
-            e.altitude_m.push(z);
-            e.range_m.push(r);
-            e.point.push(o);
-            e.state.push(self.atmosphere.state_at(z));
-            e.overlap.push(self.path.overlap().eta(r));
-            e.t2.push(self.path.two_way_transmission(r));
-            e.signal.push(signal);
-            e.range_weight.push(weight);
-            e.attenuated_backscatter
-                .push(if weight > 0.0 { integral / weight } else { 0.0 });
+        // the bins are independent: computed in parallel, taken in order (the first
+        // bad bin's error, as a loop would give it)
+        let bins: Vec<Result<ModelBin>> = (g.pretrigger_bins..n)
+            .into_par_iter()
+            .with_min_len(256)
+            .map(|i| self.model_bin(i))
+            .collect();
+        for bin in bins {
+            let b = bin?;
+            e.altitude_m.push(b.altitude_m);
+            e.range_m.push(b.range_m);
+            e.point.push(b.point);
+            e.state.push(b.state);
+            e.overlap.push(b.overlap);
+            e.t2.push(b.t2);
+            e.signal.push(b.signal);
+            e.range_weight.push(b.range_weight);
+            e.attenuated_backscatter.push(b.attenuated_backscatter);
         }
         self.add_multiple_scattering(&mut e);
         let detector = self.loaded.config.instrument.detector.as_ref();
@@ -506,6 +511,41 @@ impl Scenario {
         e.background_bin_indices = self.background_bin_indices();
         e.background_bins = e.background_bin_indices.len();
         Ok(e)
+    }
+
+    /// The model of bin `i` (past the pre-trigger bins): Eq. 2's bin integral and the
+    /// truth at the bin centre.
+    fn model_bin(&self, i: usize) -> Result<ModelBin> {
+        let g = &self.geometry;
+        let (ra, rb) = g.bin_range_bounds(i);
+        let r = g.bin_centre_range_m(i);
+        let z = g.altitude_at_range(r);
+        // below the surface the beam does not go: no optics there (t2 stays the
+        // surface's), the molecular state that of the atmosphere continued
+        let point = if r <= self.path.end_range_m() {
+            self.atmosphere.optics_at(z)
+        } else {
+            self.atmosphere.no_optics()
+        };
+        let integral = self.path.bin_integral(ra, rb)?;
+        let signal = self.instrument.signal_constant * integral;
+        let weight = self.path.range_weight(ra, rb);
+        if !signal.is_finite() {
+            return Err(Error::Unsupported(format!(
+                "bin {i} (altitude {z:.0} m): the signal is not finite"
+            )));
+        }
+        Ok(ModelBin {
+            altitude_m: z,
+            range_m: r,
+            point,
+            state: self.atmosphere.state_at(z),
+            overlap: self.path.overlap().eta(r),
+            t2: self.path.two_way_transmission(r),
+            signal,
+            range_weight: weight,
+            attenuated_backscatter: if weight > 0.0 { integral / weight } else { 0.0 },
+        })
     }
 
     /// Multiplies each bin's signal and attenuated backscatter by its multiple-scattering
