@@ -113,6 +113,42 @@ impl RecordShape {
     /// in range, its slices have the file's lengths, its numbers are finite, its counts
     /// fit the file's width and its components sum to its counts.
     pub fn check(&self, rec: &ProfileRecord) -> Result<(), String> {
+        self.check_but_widths(rec)?;
+        let parts = rec.components.iter().flatten().copied();
+        let names = COMPONENT_NAMES.iter().copied();
+        std::iter::once(("counts", rec.counts))
+            .chain(names.zip(parts))
+            .try_for_each(|(what, data)| self.check_width(rec.index, what, data))
+    }
+
+    /// Whether every count of `data` fits the file's width; the error names the first
+    /// that does not (profile `i`, variable `what`).
+    pub fn check_width(&self, i: usize, what: &str, data: &[u64]) -> Result<(), String> {
+        let max = self.count_width.max_value();
+        // `max` is 2^k − 1, so every count fits when their bitwise OR does: one
+        // vectorized pass; the position is searched only on failure
+        if data.iter().fold(0, |acc, &c| acc | c) <= max {
+            return Ok(());
+        }
+        self.width_error(i, what, data)
+    }
+
+    /// The error of a `data` with a count beyond the file's width (none: `Ok`).
+    pub fn width_error(&self, i: usize, what: &str, data: &[u64]) -> Result<(), String> {
+        let max = self.count_width.max_value();
+        match data.iter().position(|&c| c > max) {
+            None => Ok(()),
+            Some(b) => Err(format!(
+                "profile {i}, value {b}: {what} {} exceeds the file's {} range (max {max})",
+                data[b],
+                self.count_width.name()
+            )),
+        }
+    }
+
+    /// [`RecordShape::check`] but whether the counts fit the file's width (for a caller
+    /// that checks them as it narrows them: [`super::memory`]).
+    pub fn check_but_widths(&self, rec: &ProfileRecord) -> Result<(), String> {
         let i = rec.index;
         if i >= self.n_profiles {
             return Err(format!(
@@ -146,7 +182,6 @@ impl RecordShape {
         }
         self.check_columns(rec)?;
         let n = self.n_per_profile;
-        let max = self.count_width.max_value();
         let check = |what: &str, data: &[u64]| {
             if data.len() != n {
                 return Err(format!(
@@ -154,19 +189,7 @@ impl RecordShape {
                     data.len()
                 ));
             }
-            // `max` is 2^k − 1, so every count fits when their bitwise OR does: one
-            // vectorized pass; the position is searched only on failure
-            if data.iter().fold(0, |acc, &c| acc | c) <= max {
-                return Ok(());
-            }
-            match data.iter().position(|&c| c > max) {
-                None => Ok(()),
-                Some(b) => Err(format!(
-                    "profile {i}, value {b}: {what} {} exceeds the file's {} range (max {max})",
-                    data[b],
-                    self.count_width.name()
-                )),
-            }
+            Ok(())
         };
         check("counts", rec.counts)?;
         match (self.components, &rec.components) {

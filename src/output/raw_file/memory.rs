@@ -203,7 +203,7 @@ impl MemoryWriter {
     /// in order (`index` 0, 1, 2, …), as `simulate` sends them.
     pub fn write_profile(&mut self, rec: &ProfileRecord) -> Result<()> {
         let refused = |reason: String| Error::Unsupported(format!("in-memory run: {reason}"));
-        self.shape.check(rec).map_err(refused)?;
+        self.shape.check_but_widths(rec).map_err(refused)?;
         if rec.index != self.n_written {
             return Err(refused(format!(
                 "profile {} came after {} profiles: an in-memory run takes them in order",
@@ -211,15 +211,43 @@ impl MemoryWriter {
             )));
         }
         let (rows, values) = self.shape.split(rec);
+        // the counts first, narrowed as their width is checked (one pass over them); a
+        // count too wide leaves every array as it was
+        let names = std::iter::once("counts").chain(super::COMPONENT_NAMES);
+        let count_rows: Vec<usize> = (self.slots.iter())
+            .filter(|(p, _)| *p == PerProfile::Row)
+            .map(|(_, at)| *at)
+            .collect();
+        for (k, (&at, what)) in count_rows.iter().zip(names).enumerate() {
+            let Some(&Row::Counts(c)) = rows.get(k) else {
+                break;
+            };
+            let fits = match &mut self.file.variables[at].data {
+                Array::U16(a) => narrow(a, c, u16::MAX),
+                Array::U32(a) => narrow(a, c, u32::MAX),
+                Array::U64(a) => {
+                    a.extend_from_slice(c);
+                    true
+                }
+                _ => false,
+            };
+            if !fits {
+                for &v in &count_rows[..=k] {
+                    truncate(&mut self.file.variables[v].data, self.n_written * c.len());
+                }
+                let e = self.shape.width_error(rec.index, what, c);
+                return Err(refused(
+                    e.err()
+                        .unwrap_or_else(|| "internal: a count unlike its variable".into()),
+                ));
+            }
+        }
         let (mut rows, mut values) = (rows.into_iter(), values.into_iter());
         for &(per, at) in &self.slots {
             let data = &mut self.file.variables[at].data;
             match (per, data) {
                 (PerProfile::Row, data) => match (rows.next(), data) {
-                    // narrowed: the check found every count within the width
-                    (Some(Row::Counts(c)), Array::U16(a)) => a.extend(c.iter().map(|&n| n as u16)),
-                    (Some(Row::Counts(c)), Array::U32(a)) => a.extend(c.iter().map(|&n| n as u32)),
-                    (Some(Row::Counts(c)), Array::U64(a)) => a.extend_from_slice(c),
+                    (Some(Row::Counts(_)), Array::U16(_) | Array::U32(_) | Array::U64(_)) => {}
                     (Some(Row::Floats(f)), Array::F64(a)) => a.extend_from_slice(f),
                     _ => return Err(refused("internal: a row unlike its variable".into())),
                 },
@@ -247,6 +275,45 @@ impl MemoryWriter {
             )));
         }
         Ok(self.file)
+    }
+}
+
+/// Appends `from` narrowed to `T`, and whether every count fit (`max`, 2^k − 1, holds
+/// them when their bitwise OR does); one pass.
+fn narrow<T: Copy + Into<u64>>(to: &mut Vec<T>, from: &[u64], max: T) -> bool
+where
+    u64: NarrowTo<T>,
+{
+    let mut all = 0u64;
+    to.extend(from.iter().map(|&c| {
+        all |= c;
+        c.narrow()
+    }));
+    all <= max.into()
+}
+
+/// `as` for the count widths.
+trait NarrowTo<T> {
+    fn narrow(self) -> T;
+}
+impl NarrowTo<u16> for u64 {
+    fn narrow(self) -> u16 {
+        self as u16
+    }
+}
+impl NarrowTo<u32> for u64 {
+    fn narrow(self) -> u32 {
+        self as u32
+    }
+}
+
+/// Drops the elements of a per-profile array past `len` (a refused profile's).
+fn truncate(a: &mut Array, len: usize) {
+    match a {
+        Array::U16(v) => v.truncate(len),
+        Array::U32(v) => v.truncate(len),
+        Array::U64(v) => v.truncate(len),
+        _ => {}
     }
 }
 
@@ -345,10 +412,22 @@ mod tests {
             columns: &[0],
             column_weights: &[1.0],
         };
-        assert!(w.write_profile(&rec).is_err());
+        let e = w.write_profile(&rec).unwrap_err().to_string();
+        assert!(e.contains("counts 70000 exceeds the file's u16 range"), "{e}");
         write(&mut w, 1).unwrap();
         let e = w.finish().unwrap_err().to_string();
         assert!(e.contains("incomplete: 2 of 4 profiles"), "{e}");
+        // the refused record left nothing behind: profile 1 is the one written after it
+        let mut w = MemoryWriter::new(&spec()).unwrap();
+        write(&mut w, 0).unwrap();
+        assert!(w.write_profile(&rec).is_err());
+        (1..4).for_each(|i| write(&mut w, i).unwrap());
+        let f = w.finish().unwrap();
+        let Array::U16(counts) = data(&f, "counts") else {
+            panic!()
+        };
+        assert_eq!(counts.len(), 24);
+        assert_eq!(counts[6], 10_000 + 1 + 4_940);
     }
 
     #[test]
