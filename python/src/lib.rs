@@ -5,8 +5,9 @@
 //! buffers (no copy); `lidarsim/__init__.py` builds the xarray Datasets from them.
 //! A long call runs on a thread of its own while the calling thread waits for it
 //! without the GIL and looks for Ctrl-C every 50 ms: a KeyboardInterrupt stops a
-//! `simulate` before its next profile (its temporary file removed) and is raised; the
-//! other calls take no cancel flag and finish first.
+//! `simulate` before its next profile (its temporary file removed) and a `validate`
+//! before its next block of 256 realizations, and is raised; `validate_file` and
+//! `sweep` take no cancel flag and finish first.
 
 // PyO3 0.22's #[pyfunction] expansion converts each PyResult's error into itself
 #![allow(clippy::useless_conversion)]
@@ -302,14 +303,18 @@ fn validate(
     realizations: usize,
     seed: Option<u64>,
 ) -> PyResult<String> {
-    interruptible(py, |_| {
+    interruptible(py, |cancel| {
         let opts = lidarsim::validate::ValidateOptions {
             realizations,
             method: None,
             seed,
             json: None,
         };
-        report_json(&lidarsim::validate::run(&loaded.lidar, &opts)?)
+        report_json(&lidarsim::validate::run_cancellable(
+            &loaded.lidar,
+            &opts,
+            &cancel,
+        )?)
     })
 }
 

@@ -47,7 +47,7 @@ pub mod partial;
 mod run;
 pub mod scene;
 
-pub use run::{Sums, ValidateOptions, Validation, run};
+pub use run::{Sums, ValidateOptions, Validation, run, run_cancellable};
 
 pub use calibration::{BIN_INTERVAL, CHECK_LEVEL, Check, check};
 use calibration::{Shape, check_calibrated};

@@ -244,6 +244,34 @@ pub fn run(lidar: &Lidar, opts: &ValidateOptions) -> Result<Report> {
     v.report(&v.draw(0..opts.realizations))
 }
 
+/// Realizations drawn between two looks at the cancel flag of [`run_cancellable`].
+const CANCEL_BLOCK: usize = 256;
+
+/// [`run`], stopping with [`Error::Interrupted`] between blocks of
+/// [`CANCEL_BLOCK`] realizations once `cancel` is set (the Python module's Ctrl-C).
+/// The same report as [`run`]: the blocks' sums add exactly ([`Sums::add`]).
+pub fn run_cancellable(
+    lidar: &Lidar,
+    opts: &ValidateOptions,
+    cancel: &std::sync::atomic::AtomicBool,
+) -> Result<Report> {
+    let v = Validation::new(lidar, opts)?;
+    v.check_sizes(opts.realizations)?;
+    let n = opts.realizations;
+    let mut sums: Option<Sums> = None;
+    for start in (0..n).step_by(CANCEL_BLOCK) {
+        if cancel.load(std::sync::atomic::Ordering::Relaxed) {
+            return Err(Error::Interrupted);
+        }
+        let block = v.draw(start..(start + CANCEL_BLOCK).min(n));
+        match &mut sums {
+            None => sums = Some(block),
+            Some(all) => all.add(&block).map_err(Error::Unsupported)?,
+        }
+    }
+    v.report(&sums.ok_or_else(|| Error::Unsupported("no realization to validate".into()))?)
+}
+
 /// Profiles of one law: the simulator's samplers, each channel's bins and models.
 fn identical(
     lidar: &Lidar,

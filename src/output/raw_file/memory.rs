@@ -413,7 +413,10 @@ mod tests {
             column_weights: &[1.0],
         };
         let e = w.write_profile(&rec).unwrap_err().to_string();
-        assert!(e.contains("counts 70000 exceeds the file's u16 range"), "{e}");
+        assert!(
+            e.contains("counts 70000 exceeds the file's u16 range"),
+            "{e}"
+        );
         write(&mut w, 1).unwrap();
         let e = w.finish().unwrap_err().to_string();
         assert!(e.contains("incomplete: 2 of 4 profiles"), "{e}");
