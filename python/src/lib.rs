@@ -190,37 +190,24 @@ fn run_options(
     })
 }
 
-/// `lidarsim expect`, every channel: the variables a raw file of the config holds
-/// before its first profile (coordinates, the truth, the instrument; the file's names,
-/// dimensions and attributes), and the CSV's `snr` and `snr_bkg_estimated` (channel,
-/// bin; [`lidarsim::output::expect::snr_variables`]). Also the CSV's shots per profile.
+/// `lidarsim expect`, every channel: [`lidarsim::output::expect::model_variables`]
+/// (the raw file's variables before its first profile, the CSV's two S/N) and the
+/// CSV's shots per profile.
 #[pyfunction]
 fn expect<'py>(
     py: Python<'py>,
     loaded: &Loaded,
 ) -> PyResult<(Vec<PyObject>, Bound<'py, PyList>, f64)> {
-    let (fixed, extra, shots) = py
-        .allow_threads(|| -> lidarsim::error::Result<_> {
-            let opts = RunOptions {
-                command_line: format!("lidarsim.expect({})", loaded.path.display()),
-                ..RunOptions::default()
-            };
-            let plan = lidarsim::simulate::plan(&loaded.lidar, &opts, None)?;
-            let extra = lidarsim::output::expect::snr_variables(&loaded.lidar, &plan.expected);
-            let mut fixed = lidarsim::output::raw_file::memory::fixed_variables(plan.spec)?;
-            let first = loaded.lidar.first();
-            let shots = first.instrument.rep_rate_hz * first.accumulation_time_s();
-            fixed.retain(|v| v.dims.iter().all(|d| *d != "profile"));
-            Ok((fixed, extra, shots))
+    let (fixed, shots) = py
+        .allow_threads(|| {
+            let call = format!("lidarsim.expect({})", loaded.path.display());
+            lidarsim::output::expect::model_variables(&loaded.lidar, &call)
         })
         .map_err(raise)?;
-    let mut vars: Vec<PyObject> = fixed
+    let vars: Vec<PyObject> = fixed
         .into_iter()
         .map(|v| variable(py, v))
         .collect::<PyResult<_>>()?;
-    for v in extra {
-        vars.push(variable(py, v)?);
-    }
     Ok((vars, attrs(py, Vec::new()), shots))
 }
 

@@ -72,6 +72,20 @@ def test_expect_is_the_raw_file_before_its_first_profile(tmp_path):
     assert model.snr_bkg_estimated.dims == ("channel", "bin")
 
 
+def test_expect_of_a_changing_scene_is_its_first_column(tmp_path):
+    """An orbit's file holds its expectations per profile; expect gives the first
+    column's, per channel and bin: the CLI's CSV."""
+    orbit = ROOT / "configs" / "instruments" / "caliop_orbit.toml"
+    model = lidarsim.expect(orbit)
+    r = cli("expect", orbit, "--csv", tmp_path / "e.csv")
+    assert r.returncode == 0, r.stderr
+    table = np.genfromtxt(tmp_path / "e.csv", delimiter=",", skip_header=1)
+    assert model.expected_signal.dims == ("channel", "bin")
+    np.testing.assert_array_equal(model.expected_signal.isel(channel=0), table[:, 7])
+    np.testing.assert_array_equal(model.snr.isel(channel=0), table[:, 10])
+    assert "profile" not in model.dims
+
+
 def memory_owner(a):
     """The object at the end of an array's chain of bases."""
     while getattr(a, "base", None) is not None:

@@ -45,6 +45,47 @@ pub fn columns(e: &ExpectedProfile, shots: f64) -> Vec<(&'static str, Vec<f64>)>
     CSV_COLUMNS.into_iter().zip(values).collect()
 }
 
+/// What the Python module's `expect` returns (docs/python.md): every variable a raw
+/// file of `lidar` holds before its first profile but the `profile` coordinate, the
+/// file's names, dimensions, values and attributes ([`memory::fixed_variables`]), then
+/// the CSV's two S/N ([`snr_variables`]); in a scene that changes along the track, the
+/// expectations the file holds per profile (`expected_signal`, …) come as the first
+/// column's (channel, bin). And the CSV's shots per profile (`rep_rate · accumulation
+/// time`). `command_line` goes to the `history` the file would have.
+///
+/// [`memory::fixed_variables`]: crate::output::raw_file::memory::fixed_variables
+pub fn model_variables(
+    lidar: &crate::scenario::Lidar,
+    command_line: &str,
+) -> crate::error::Result<(Vec<crate::output::raw_file::memory::MemoryVariable>, f64)> {
+    use crate::output::raw_file::{Dims, PROFILE_DIM, content, memory};
+    let opts = crate::simulate::RunOptions {
+        command_line: command_line.into(),
+        ..Default::default()
+    };
+    let plan = crate::simulate::plan(lidar, &opts, None)?;
+    let first = lidar.first();
+    let mut spec = plan.spec;
+    if plan.scene.is_some() {
+        let columns = [plan.expected.as_slice()];
+        let shots = first.shots_per_profile();
+        let first_column = content::variables(lidar, &plan.expected, &columns, shots, false);
+        for v in spec.variables.iter_mut() {
+            let same = first_column.iter().find(|f| f.name == v.name);
+            if let (Dims::ProfileChannelBin, Some(f)) = (v.dims, same) {
+                *v = f.clone();
+            }
+        }
+    }
+    let mut vars = memory::fixed_variables(spec)?;
+    vars.retain(|v| !v.dims.contains(&PROFILE_DIM));
+    vars.extend(snr_variables(lidar, &plan.expected));
+    Ok((
+        vars,
+        first.instrument.rep_rate_hz * first.accumulation_time_s(),
+    ))
+}
+
 /// The CSV's two S/N columns of every channel of `lidar` (`expected` in its order) as
 /// (channel, bin) variables beside the raw file's truth (the Python module's `expect`):
 /// `snr`, Eq. 4 with M = rep_rate · accumulation_time shots as the paper writes it (the
