@@ -110,6 +110,9 @@ def test_same_seed_same_counts_and_truth_as_the_cli(tmp_path):
     assert in_memory.counts.dtype == theirs.counts.dtype == np.uint32  # the file's width
     # the counts are the run's own buffer, handed to numpy without a copy
     assert type(memory_owner(in_memory.counts.values)).__name__ == "PySliceContainer"
+    # a progress bar asked for (hidden: standard error is no terminal here) changes nothing
+    shown = lidarsim.simulate(SCENARIO1, profiles=5, seed=7, progress=True)
+    np.testing.assert_array_equal(shown.counts.values, theirs.counts.values)
     # another seed, other counts
     other = lidarsim.simulate(SCENARIO1, profiles=5, seed=8)
     assert not np.array_equal(other.counts.values, theirs.counts.values)
