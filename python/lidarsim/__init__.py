@@ -125,8 +125,10 @@ def _dataset(variables: list, root: list) -> xr.Dataset:
         if not decode and "coordinates" in var.attrs:
             coords.update(var.attrs.pop("coordinates").split())
         data[name] = var
-    if decode:  # xarray's own decoding, as its file reader does it
-        return xr.decode_cf(xr.Dataset(data, attrs=attrs(root)))
+    if decode:  # xarray's own decoding, as its file reader does it (with the
+        # coordinates already taken from the variables before the first that needed it)
+        ds = xr.decode_cf(xr.Dataset(data, attrs=attrs(root)))
+        return ds.set_coords([c for c in coords if c in ds.data_vars])
     # nothing else to decode but the coordinates (what decode_cf would do, in a third of
     # its time)
     return xr.Dataset({k: v for k, v in data.items() if k not in coords},

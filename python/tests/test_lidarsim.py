@@ -260,3 +260,27 @@ def test_sweep_is_the_cli_csv_on_a_grid(tmp_path):
     # the S/N grows with the energy and the rate
     snr = ds["snr_at:11km"].values
     assert (np.diff(snr, axis=0) > 0).all() and (np.diff(snr, axis=1) > 0).all()
+
+
+def test_the_dataset_is_decoded_as_xarray_decodes_a_file():
+    """_dataset's shortcuts (time, NaN fill values, coordinates) give what xarray's own
+    CF decoding gives, also when a later variable needs the whole decoding."""
+    import xarray as xr
+
+    s = ("str",)
+    variables = [
+        ("bin", ("bin",), np.arange(3), []),
+        ("altitude", ("bin",), np.arange(3.0), [("units", s + ("m",))]),
+        ("time", ("bin",), np.array([0.5, 1.5, 2.5]),
+         [("units", s + ("seconds since 2000-01-01 00:00:00",)), ("calendar", s + ("standard",))]),
+        ("a", ("bin",), np.array([1.0, np.nan, 2.0]),
+         [("_FillValue", ("f64", float("nan"))), ("coordinates", s + ("time altitude",))]),
+        ("b", ("bin",), np.array([1, 2, -9], dtype=np.int32),
+         [("_FillValue", ("i32", -9)), ("coordinates", s + ("altitude",))]),
+    ]
+    ours = lidarsim._dataset(variables, [("title", s + ("t",))])
+    attrs = lambda items: {k: lidarsim._ATTR_TYPES[t](v) for k, (t, v) in items}
+    raw = xr.Dataset({n: xr.Variable(d, v, attrs=attrs(a)) for n, d, v, a in variables},
+                     attrs={"title": "t"})
+    xr.testing.assert_identical(ours, xr.decode_cf(raw))
+    assert np.isnan(ours.b.values[2]) and ours.time.dtype.kind == "M"
