@@ -323,6 +323,21 @@ pub fn sweep(
     csv: &Path,
     png: Option<&Path>,
 ) -> Result<()> {
+    let never = std::sync::atomic::AtomicBool::new(false);
+    sweep_cancellable(config, overrides, vary, metrics, csv, png, &never)
+}
+
+/// [`fn@sweep`], stopping with [`Error::Interrupted`] (no output written) at the next
+/// grid point once `cancel` is set (the Python module's Ctrl-C).
+pub fn sweep_cancellable(
+    config: &Path,
+    overrides: &[String],
+    vary: &[String],
+    metrics: &[String],
+    csv: &Path,
+    png: Option<&Path>,
+    cancel: &std::sync::atomic::AtomicBool,
+) -> Result<()> {
     use crate::design::sweep::{self, Axis, Metric};
     if vary.is_empty() || metrics.is_empty() {
         return Err(Error::Unsupported(
@@ -350,7 +365,7 @@ pub fn sweep(
         let all: Vec<String> = overrides.iter().chain(extra).cloned().collect();
         Scenario::load(config, &all)
     };
-    let rows = sweep::run(&axes, &parsed, &scenario, &|| bar.inc(1))?;
+    let rows = sweep::run(&axes, &parsed, &scenario, &|| bar.inc(1), cancel)?;
     bar.finish_and_clear();
     outputs.write(csv_id, |w| {
         let header: Vec<&str> = axes

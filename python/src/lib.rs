@@ -6,8 +6,8 @@
 //! A long call runs on a thread of its own while the calling thread waits for it
 //! without the GIL and looks for Ctrl-C every 50 ms: a KeyboardInterrupt stops a
 //! `simulate` before its next profile (its temporary file removed) and a `validate`
-//! before its next block of 256 realizations, and is raised; `validate_file` and
-//! `sweep` take no cancel flag and finish first.
+//! before its next block of 256 realizations, a `sweep` before its next grid point,
+//! and is raised; `validate_file` takes no cancel flag and finishes first.
 
 // PyO3 0.22's #[pyfunction] expansion converts each PyResult's error into itself
 #![allow(clippy::useless_conversion)]
@@ -323,8 +323,11 @@ fn sweep(
     metrics: Vec<String>,
     csv: PathBuf,
 ) -> PyResult<()> {
-    interruptible(py, |_| {
-        lidarsim::commands::sweep(&loaded.path, &loaded.overrides, &vary, &metrics, &csv, None)
+    interruptible(py, |cancel| {
+        let (config, overrides) = (&loaded.path, &loaded.overrides);
+        lidarsim::commands::sweep_cancellable(
+            config, overrides, &vary, &metrics, &csv, None, &cancel,
+        )
     })
 }
 

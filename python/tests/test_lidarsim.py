@@ -143,6 +143,9 @@ print("started", flush=True)
 try:
     if what == "validate":
         lidarsim.validate(sys.argv[1], realizations=4_000_000, seed=1)
+    elif what == "sweep":
+        lidarsim.sweep(sys.argv[1], {"instrument.pulse_energy_j": "0.01..1:1000000"},
+                       ["snr_at:11km"])
     else:
         lidarsim.simulate(sys.argv[1], profiles=400_000, seed=1, method="shot", path=path)
 except KeyboardInterrupt:
@@ -151,7 +154,7 @@ except KeyboardInterrupt:
 """
 
 
-@pytest.mark.parametrize("call", ["simulate to a file", "simulate", "validate"])
+@pytest.mark.parametrize("call", ["simulate to a file", "simulate", "validate", "sweep"])
 def test_ctrl_c_stops_a_long_run_within_a_second_and_leaves_no_file(tmp_path, call):
     import signal
     import sys

@@ -348,8 +348,12 @@ pub fn run(
     metrics: &[Metric],
     scenario: &(dyn Fn(&[String]) -> Result<Scenario> + Sync),
     tick: &(dyn Fn() + Sync),
+    cancel: &std::sync::atomic::AtomicBool,
 ) -> Result<Vec<(Vec<f64>, Vec<f64>)>> {
     let point_metrics = |point: Vec<f64>| -> Result<(Vec<f64>, Vec<f64>)> {
+        if cancel.load(std::sync::atomic::Ordering::Relaxed) {
+            return Err(Error::Interrupted);
+        }
         let overrides: Vec<String> = axes
             .iter()
             .zip(&point)
