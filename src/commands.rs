@@ -315,6 +315,8 @@ pub fn simulate_quietly(
 
 /// `lidarsim sweep`: the grid of `vary` over the config, the `metrics` of the
 /// deterministic model at each point, as CSV (`-` for stdout) and optionally a PNG.
+/// With `cancel` (the Python module's Ctrl-C), stops with [`Error::Interrupted`] (no
+/// output written) at the next grid point once it is set.
 pub fn sweep(
     config: &Path,
     overrides: &[String],
@@ -322,23 +324,11 @@ pub fn sweep(
     metrics: &[String],
     csv: &Path,
     png: Option<&Path>,
-) -> Result<()> {
-    let never = std::sync::atomic::AtomicBool::new(false);
-    sweep_cancellable(config, overrides, vary, metrics, csv, png, &never)
-}
-
-/// [`fn@sweep`], stopping with [`Error::Interrupted`] (no output written) at the next
-/// grid point once `cancel` is set (the Python module's Ctrl-C).
-pub fn sweep_cancellable(
-    config: &Path,
-    overrides: &[String],
-    vary: &[String],
-    metrics: &[String],
-    csv: &Path,
-    png: Option<&Path>,
-    cancel: &std::sync::atomic::AtomicBool,
+    cancel: Option<&std::sync::atomic::AtomicBool>,
 ) -> Result<()> {
     use crate::design::sweep::{self, Axis, Metric};
+    let never = std::sync::atomic::AtomicBool::new(false);
+    let cancel = cancel.unwrap_or(&never);
     if vary.is_empty() || metrics.is_empty() {
         return Err(Error::Unsupported(
             "sweep needs at least one --vary KEY=START..STOP:N and one --metric".into(),

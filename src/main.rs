@@ -394,9 +394,8 @@ fn main() -> ExitCode {
             metric,
             csv,
             png,
-        } => {
-            lidarsim::commands::sweep(config, set, vary, metric, csv, png.as_deref()).map(|()| true)
-        }
+        } => lidarsim::commands::sweep(config, set, vary, metric, csv, png.as_deref(), None)
+            .map(|()| true),
         Command::Curtain { raw, png, channel } => {
             lidarsim::commands::curtain(raw, png, channel.as_deref()).map(|()| true)
         }

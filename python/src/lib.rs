@@ -325,8 +325,14 @@ fn sweep(
 ) -> PyResult<()> {
     interruptible(py, |cancel| {
         let (config, overrides) = (&loaded.path, &loaded.overrides);
-        lidarsim::commands::sweep_cancellable(
-            config, overrides, &vary, &metrics, &csv, None, &cancel,
+        lidarsim::commands::sweep(
+            config,
+            overrides,
+            &vary,
+            &metrics,
+            &csv,
+            None,
+            Some(&cancel),
         )
     })
 }
