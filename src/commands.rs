@@ -55,13 +55,7 @@ pub fn load_channel(
     let lidar = Lidar::load(config, overrides)?;
     let names = lidar.channel_names();
     let k = match channel {
-        Some(name) => names.iter().position(|n| n == name).ok_or_else(|| {
-            Error::config(
-                config.display().to_string(),
-                "instrument.channels",
-                format!("has no channel `{name}` (channels: {})", names.join(", ")),
-            )
-        })?,
+        Some(name) => channel_index(&lidar, config, name)?,
         None => {
             if names.len() > 1 {
                 eprintln!(
@@ -79,6 +73,19 @@ pub fn load_channel(
         .into_iter()
         .nth(k)
         .unwrap_or_else(|| unreachable!()))
+}
+
+/// The index of the channel named `name` of `lidar` (loaded from `config`), or the
+/// error `--channel` gives for a name the config has not.
+pub fn channel_index(lidar: &Lidar, config: &Path, name: &str) -> Result<usize> {
+    let names = lidar.channel_names();
+    names.iter().position(|n| n == name).ok_or_else(|| {
+        Error::config(
+            config.display().to_string(),
+            "instrument.channels",
+            format!("has no channel `{name}` (channels: {})", names.join(", ")),
+        )
+    })
 }
 
 /// The output set of a command on `sc`, with the scenario's inputs protected.

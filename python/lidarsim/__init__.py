@@ -138,11 +138,7 @@ def _dataset(variables: list, root: list) -> xr.Dataset:
 def _one_channel(ds: xr.Dataset, cfg: Config, channel: Optional[str]) -> xr.Dataset:
     if channel is None:
         return ds
-    names = list(ds.channel.values)
-    if channel not in names:
-        raise ValueError(f"{cfg.path}: key `instrument.channels`: has no channel `{channel}` "
-                         f"(channels: {', '.join(names)})")
-    return ds.sel(channel=channel)
+    return ds.isel(channel=cfg.loaded.channel_index(channel))  # the CLI's refusal
 
 
 def expect(config: ConfigLike, channel: Optional[str] = None) -> xr.Dataset:

@@ -109,6 +109,11 @@ impl Loaded {
     fn channels(&self) -> Vec<String> {
         self.lidar.channel_names()
     }
+
+    /// The index of the channel `name`; refused as `--channel` refuses it.
+    fn channel_index(&self, name: &str) -> PyResult<usize> {
+        lidarsim::commands::channel_index(&self.lidar, &self.path, name).map_err(raise)
+    }
 }
 
 /// A Python attribute value tagged with its netCDF type, as the file stores it:

@@ -166,6 +166,8 @@ pub struct MemoryWriter {
     file: MemoryFile,
     /// Indices in `file.variables` of each [`PerProfile`] field's variables, in order.
     slots: Vec<(PerProfile, usize)>,
+    /// Those of the count rows (`counts`, the components), in order.
+    count_rows: Vec<usize>,
     n_written: usize,
 }
 
@@ -175,13 +177,17 @@ impl MemoryWriter {
     pub fn new(spec: &RawFileSpec) -> Result<Self> {
         super::layout::validate_spec(spec).map_err(Error::Unsupported)?;
         let vars = schema(spec);
-        let slots = vars
+        let slots: Vec<(PerProfile, usize)> = vars
             .iter()
             .enumerate()
             .filter_map(|(k, v)| match v.values {
                 Values::PerProfile(p) => Some((p, k)),
                 _ => None,
             })
+            .collect();
+        let count_rows = (slots.iter())
+            .filter(|&&(p, k)| p == PerProfile::Row && matches!(vars[k].element, Element::Count(_)))
+            .map(|&(_, k)| k)
             .collect();
         let variables = vars
             .iter()
@@ -194,6 +200,7 @@ impl MemoryWriter {
                 root_attributes: spec.root_attributes.clone(),
             },
             slots,
+            count_rows,
             n_written: 0,
         })
     }
@@ -214,11 +221,7 @@ impl MemoryWriter {
         // the counts first, narrowed as their width is checked (one pass over them); a
         // count too wide leaves every array as it was
         let names = std::iter::once("counts").chain(super::COMPONENT_NAMES);
-        let count_rows: Vec<usize> = (self.slots.iter())
-            .filter(|(p, _)| *p == PerProfile::Row)
-            .map(|(_, at)| *at)
-            .collect();
-        for (k, (&at, what)) in count_rows.iter().zip(names).enumerate() {
+        for (k, (&at, what)) in self.count_rows.iter().zip(names).enumerate() {
             let Some(&Row::Counts(c)) = rows.get(k) else {
                 break;
             };
@@ -232,7 +235,7 @@ impl MemoryWriter {
                 _ => false,
             };
             if !fits {
-                for &v in &count_rows[..=k] {
+                for &v in &self.count_rows[..=k] {
                     truncate(&mut self.file.variables[v].data, self.n_written * c.len());
                 }
                 let e = self.shape.width_error(rec.index, what, c);
