@@ -202,3 +202,109 @@ fn the_mpl_preset_validates() {
     let config = common::config_path("ground/mpl_like.toml");
     common::h5::validate_preset_consistent(&dir, &config, "acquisition.accumulation_time_s=0.2");
 }
+
+/// The afterpulses the sampler adds over `profiles` profiles of `recorded` counts in bin 0
+/// of a 400-bin window (delays 100 ns and 1 µs on 100 ns bins, weights 0.7 and 0.3,
+/// probability 0.05): the number landing j bins after their source, j = 0..399.
+fn sampled_afterpulses(recorded: u64, profiles: u64) -> Vec<u64> {
+    let cfg: lidarsim::config::AfterpulsingConfig =
+        toml::from_str("probability = 0.05\ntime_constants_s = [1e-7, 1e-6]\nweights = [0.7, 0.3]")
+            .unwrap();
+    let ap = lidarsim::detector::afterpulse::Afterpulsing::from_config(&cfg, 1e-7);
+    let mut source = vec![0u64; 400];
+    source[0] = recorded;
+    let mut acc = vec![0u64; 400];
+    let mut rng = lidarsim::sampling::stream_rng(20, 36, 0);
+    for _ in 0..profiles {
+        ap.add_profile(&mut rng, &source, &mut acc);
+    }
+    acc
+}
+
+/// Issue 36 item 20: the sampler's draws, not only the law. 10⁸ recorded counts (1,000
+/// profiles of 10⁵ in one bin) at p = 0.05: the afterpulses' total is Binomial(10⁸, p)
+/// (the window of 400 bins keeps all but e^{−39} of them) and their mean delay, in bins
+/// after the source, is the delay law's mean `Σ w_i τ_i/Δt` = 3.7 exactly
+/// (`E⌊u + X⌋ = E X` for u uniform on [0, 1)), its variance `Σ w_i·2(τ_i/Δt)² − 3.7² +
+/// 1/6 − …` estimated from the draws; and the shares of the first bins are the
+/// bin-averaged delay law written here, `1 − θ(1 − e^{−1/θ})` for j = 0 and
+/// `θ(1 − e^{−1/θ})²e^{−(j−1)/θ}` after, mixed by the weights (χ² over j = 0..30 and
+/// the rest pooled). Each at |z| < 5 or a χ² p-value above 1e-6: false alarm < 2e-6
+/// (fixed seed). Power: a sampler whose probability is 1 % high moves the total by 22
+/// standard errors; delays 1 % long move the mean delay by ~12 (asserted on the
+/// references so changed). This test: the total.
+#[test]
+fn the_sampled_afterpulses_are_binomial_in_the_recorded_counts() {
+    let (r, profiles, p) = (100_000u64, 1_000u64, 0.05);
+    let acc = sampled_afterpulses(r, profiles);
+    let trials = (r * profiles) as f64;
+    let total: u64 = acc.iter().sum();
+    let sd = (trials * p * (1.0 - p)).sqrt();
+    let z = |prob: f64| (total as f64 - trials * prob) / sd;
+    assert!(z(p).abs() < 5.0, "total {total}: z = {}", z(p));
+    assert!(
+        z(1.01 * p).abs() > 5.0,
+        "p × 1.01 unseen: z = {}",
+        z(1.01 * p)
+    );
+}
+
+/// The delays of the draws of [`the_sampled_afterpulses_are_binomial_in_the_recorded_counts`]:
+/// their mean and the shares of the landing bins (that test's docs).
+#[test]
+fn the_sampled_afterpulse_delays_follow_the_delay_laws_shares() {
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    let acc = sampled_afterpulses(100_000, 1_000);
+    let t = acc.iter().sum::<u64>() as f64;
+    let mean = acc
+        .iter()
+        .enumerate()
+        .map(|(j, &c)| j as f64 * c as f64)
+        .sum::<f64>()
+        / t;
+    let var = acc
+        .iter()
+        .enumerate()
+        .map(|(j, &c)| (j as f64 - mean).powi(2) * c as f64)
+        .sum::<f64>()
+        / t;
+    let se = (var / t).sqrt();
+    let theta = [(0.7, 1.0), (0.3, 10.0)];
+    let mean_delay = |scale: f64| theta.iter().map(|(w, th)| w * th * scale).sum::<f64>();
+    let zd = |scale: f64| (mean - mean_delay(scale)) / se;
+    assert!(zd(1.0).abs() < 5.0, "mean delay {mean}: z = {}", zd(1.0));
+    assert!(
+        zd(1.01).abs() > 5.0,
+        "delays × 1.01 unseen: z = {}",
+        zd(1.01)
+    );
+    // the shares of each landing bin
+    let share = |j: usize| -> f64 {
+        theta
+            .iter()
+            .map(|&(w, th)| {
+                let a: f64 = (-1.0 / th).exp();
+                w * if j == 0 {
+                    1.0 - th * (1.0 - a)
+                } else {
+                    th * (1.0 - a).powi(2) * a.powi(j as i32 - 1)
+                }
+            })
+            .sum()
+    };
+    let head = 31;
+    let expected_head: Vec<f64> = (0..head).map(|j| t * share(j)).collect();
+    let rest_expected = t - expected_head.iter().sum::<f64>();
+    let rest: u64 = acc[head..].iter().sum();
+    let chi2: f64 = expected_head
+        .iter()
+        .zip(&acc[..head])
+        .map(|(e, &o)| (o as f64 - e).powi(2) / e)
+        .sum::<f64>()
+        + (rest as f64 - rest_expected).powi(2) / rest_expected;
+    let p_value = 1.0 - ChiSquared::new(head as f64).unwrap().cdf(chi2);
+    assert!(
+        p_value > 1e-6,
+        "χ² {chi2} on {head} degrees of freedom: p = {p_value:e}"
+    );
+}

@@ -730,3 +730,58 @@ fn a_track_sees_its_segments_and_broken_cells() {
     .to_string();
     assert!(e.contains("1.2e7 cells"), "{e}");
 }
+
+/// Issue 36 item 20: the diattenuation's sign for each polarization, end to end (the
+/// Δ90 runs at ±45° cannot see it: both axes then receive `(A + B)/2`). From
+/// `ground_532_depol.toml` at D = 0 the two channels' expected signals (the
+/// perpendicular one over its 1.5 times the quantum efficiency) give each bin's
+/// parallel and perpendicular light (cross-talk x = 0.01: `par = (1−x)β∥ + xβ⊥`,
+/// `perp = (1−x)β⊥ + xβ∥`, solved here); at D = ±0.2 the receiving optics pass `(1+D)`
+/// of β∥ and `(1−D)` of β⊥, so each channel's signal must be
+/// `(1−x)(1±D)β + x(1∓D)β'` of those, to 1e-9 in every bin with signal. A sign error on
+/// either polarization moves the perpendicular channel by ≥ 2D·(1−x)·β⊥/perp, 10–40 %.
+#[test]
+fn the_diattenuation_passes_1_plus_d_parallel_and_1_minus_d_perpendicular() {
+    let signals = |d: f64| -> (Vec<f64>, Vec<f64>) {
+        let set = format!("instrument.diattenuation={d}");
+        let lidar = common::lidar("ground/ground_532_depol.toml", &[set.as_str()]);
+        let e = lidar.expected().unwrap();
+        let name = |k: usize| lidar.channels[k].channel_name.clone();
+        assert_eq!(
+            (name(0), name(1)),
+            ("532_parallel".into(), "532_perpendicular".into())
+        );
+        // the perpendicular tube's quantum efficiency is 0.3, the parallel one's 0.2
+        let perp = e[1].photon_signal().iter().map(|s| s / 1.5).collect();
+        (e[0].photon_signal().to_vec(), perp)
+    };
+    let x = 0.01;
+    let (par0, perp0) = signals(0.0);
+    for d in [0.2, -0.2] {
+        let (par, perp) = signals(d);
+        let mut tested = 0;
+        for b in 0..par0.len() {
+            if par0[b] <= 0.0 {
+                continue;
+            }
+            // [par0, perp0] = [[1−x, x], [x, 1−x]]·[β∥, β⊥]
+            let det = (1.0 - x) * (1.0 - x) - x * x;
+            let beta_par = ((1.0 - x) * par0[b] - x * perp0[b]) / det;
+            let beta_perp = ((1.0 - x) * perp0[b] - x * par0[b]) / det;
+            let (a, bb) = ((1.0 + d) * beta_par, (1.0 - d) * beta_perp);
+            let want_par = (1.0 - x) * a + x * bb;
+            let want_perp = (1.0 - x) * bb + x * a;
+            assert!(
+                (par[b] / want_par - 1.0).abs() < 1e-9,
+                "D {d} bin {b}: parallel"
+            );
+            assert!(
+                (perp[b] / want_perp - 1.0).abs() < 1e-9,
+                "D {d} bin {b}: perpendicular {} vs {want_perp}",
+                perp[b]
+            );
+            tested += 1;
+        }
+        assert!(tested > 100, "{tested} bins with signal");
+    }
+}

@@ -31,9 +31,11 @@
 //! summed (one Poisson draw per bin, as the photon-counting aggregate path), their
 //! charge one Gamma(N_tot·k, 1/k) draw (exact), the low-pass applied to the sum (exact:
 //! it is linear), and the M shots' noise and rounding as one Gaussian of variance
-//! `M·((σ_e/LSB)² + 1/12)` around `M·V₀/LSB + c·Σ h q`, rounded and clipped to
+//! `M·((σ_e/LSB)² + 1/12) − 1/12` around `M·V₀/LSB + c·Σ h q`, rounded (the rounding of
+//! the sum adds the last 1/12: [`aggregate_noise_variance`]) and clipped to
 //! `[0, M·(2^bits − 1)]`. This approximates the per-shot quantisation (exact in mean and
-//! variance where the law above holds) and ignores per-shot clipping.
+//! variance where the law above holds: `M·κ2`, as M shots each rounded) and ignores
+//! per-shot clipping.
 
 use rand::Rng;
 use rand_distr::{Distribution, Gamma, StandardNormal};
@@ -57,6 +59,16 @@ fn quantize(v: f64, full: f64) -> u64 {
 fn clips(k: &[f64; 4], full: f64) -> bool {
     let sd = k[1].max(0.0).sqrt();
     k[0] - 4.0 * sd < -0.5 || k[0] + 4.0 * sd > full + 0.5
+}
+
+/// Variance, codes², of the one Gaussian the aggregate path draws for the noise and
+/// rounding of `shots` shots of electronic noise `sigma_codes` per shot:
+/// `M·(σ² + 1/12) − 1/12`, since rounding that Gaussian's sum adds the last 1/12 itself
+/// (Sheppard's correction, exact to `e^{−2π²s²}` for a Gaussian of sd s ≥ σ; Widrow &
+/// Kollár 2008, ch. 4), so that the profile's code has the variance `M·κ2` of M shots
+/// each rounded (module docs). At M = 1 it is σ², the shot path's own draw.
+pub fn aggregate_noise_variance(shots: f64, sigma_codes: f64) -> f64 {
+    shots * (sigma_codes * sigma_codes + 1.0 / 12.0) - 1.0 / 12.0
 }
 
 /// One standard normal variate (rand_distr's ziggurat).
@@ -332,7 +344,7 @@ impl Analog {
     ) {
         let m = shots as f64;
         let (c, v0) = (self.codes_per_photoelectron(), self.offset_codes());
-        let sd = (m * (self.noise_codes().powi(2) + 1.0 / 12.0)).sqrt();
+        let sd = aggregate_noise_variance(m, self.noise_codes()).sqrt();
         let full = m * self.full_scale_code() as f64;
         let (h0, h1, a) = self.low_pass.unwrap_or((1.0, 0.0, 0.0));
         // one pass: each bin's charge, the low-pass's carry z (as in `record_shot`)

@@ -38,9 +38,12 @@
 //! would exceed [`MAX_GRID_STEPS`] uses the stationary formulas per bin (error O(τ/Δt) at
 //! the bin edges).
 //!
-//! **Variance** ([`DeadTime::recorded_variance`]) of a bin's recorded count per shot:
-//! the renewal-theory forms of docs/model.md §4b at the bin's rate, `nΔt/(1+nτ)³` and
-//! `mΔt·(1 − 2nτ·e^{−nτ})`, which tend to the Poisson value at low rates.
+//! **Variance** ([`DeadTime::recorded_mean_and_variance`]) of a bin's recorded count per
+//! shot: non-paralyzable, exact given the dead time the solver carries into each bin
+//! ([`super::dead_time_variance`]); paralyzable, the renewal-theory form
+//! `mΔt·(1 − 2nτ·e^{−nτ})` at the bin's rate ([`DeadTime::recorded_variance`], whose
+//! non-paralyzable `nΔt/(1+nτ)³` is the asymptote for bins much longer than the count's
+//! correlation time, ~(nτ)²·τ: 11× too low at nτ = 40 in bins of 40τ).
 
 use rand::Rng;
 
@@ -122,13 +125,30 @@ impl DeadTime {
     /// Mean recorded counts per shot per bin for true means `lambda` per bin (see the
     /// module docs).
     pub fn recorded_means(&self, lambda: &[f64]) -> Vec<f64> {
+        self.solve(lambda, |_, _| {})
+    }
+
+    /// The mean-rate solver of [`recorded_means`](Self::recorded_means); before each bin
+    /// of the grid it hands `entering(bin, last)` the recorded counts of the last steps
+    /// before the bin, newest first, each `m·h` of a step of `h` (non-paralyzable: the
+    /// detector's dead state entering the bin, [`super::dead_time_variance`]), or `None`
+    /// where the grid is too long and the stationary formulas are used.
+    pub(crate) fn solve(
+        &self,
+        lambda: &[f64],
+        mut entering: impl FnMut(usize, Option<(&[f64], f64)>),
+    ) -> Vec<f64> {
         let dt = self.bin_width_s;
         let h = self.tau_s.min(dt) / STEPS_PER_TAU;
         let per_bin = (dt / h).ceil().max(1.0);
         if per_bin * lambda.len() as f64 > MAX_GRID_STEPS {
             return lambda
                 .iter()
-                .map(|&l| self.stationary_rate(l / dt) * dt)
+                .enumerate()
+                .map(|(b, &l)| {
+                    entering(b, None);
+                    self.stationary_rate(l / dt) * dt
+                })
                 .collect();
         }
         let per_bin = per_bin as usize;
@@ -140,10 +160,15 @@ impl DeadTime {
         let oldest_share = past - (lag as f64 - 1.0);
         // ring buffer of the last `lag` steps: m·h (non-paralyzable) or n·h (paralyzable)
         let mut ring = vec![0.0f64; lag];
+        let mut newest_first = Vec::new();
         let (mut pos, mut window) = (0usize, 0.0f64);
         lambda
             .iter()
-            .map(|&l| {
+            .enumerate()
+            .map(|(b, &l)| {
+                newest_first.clear();
+                newest_first.extend((1..=lag).map(|k| ring[(pos + lag - k) % lag]));
+                entering(b, Some((&newest_first, h)));
                 let n = l / dt;
                 let mut recorded = 0.0;
                 for _ in 0..per_bin {
@@ -170,7 +195,8 @@ impl DeadTime {
     /// from shot to shot with the laser's jitter (`energy`, drift excluded): by the law
     /// of total variance over the shot's energy factor f,
     /// `E[m(f)]` and `E[v(f)] + Var[m(f)]`, with m from [`recorded_means`](Self::recorded_means)
-    /// and v from [`recorded_variance`](Self::recorded_variance) at `f·signal + rest`.
+    /// and v from [`recorded_mean_and_variance`](Self::recorded_mean_and_variance) at
+    /// `f·signal + rest`.
     pub fn recorded_moments(
         &self,
         signal: &[f64],
@@ -180,8 +206,7 @@ impl DeadTime {
         let n = signal.len();
         let m = energy.jitter_expectation(|f| {
             let lambda: Vec<f64> = signal.iter().map(|s| f * s + rest).collect();
-            let mean = self.recorded_means(&lambda);
-            let var = lambda.iter().map(|&l| self.recorded_variance(l));
+            let (mean, var) = self.recorded_mean_and_variance(&lambda);
             let square = mean.iter().map(|x| x * x).collect::<Vec<f64>>();
             mean.iter().copied().chain(var).chain(square).collect()
         });

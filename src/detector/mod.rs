@@ -8,6 +8,7 @@ pub mod afterpulse;
 pub mod analog;
 pub mod counting;
 pub mod dead_time;
+pub mod dead_time_variance;
 pub mod delay;
 pub mod induced;
 pub mod modulated;

@@ -11,8 +11,9 @@
 //! * **ideal detector** (`dead_time` 0): given the shots' energies, a sum of independent
 //!   Poisson counts, so `c ~ Poisson(μ)` exactly, with
 //!   `μ = M_p·(expected_counts + (f_p − 1)·expected_signal)`;
-//! * **dead time**: mean `M_p·expected_counts`, variance `M_p·v(λ)` with `v` the renewal
-//!   variance per shot ([`DeadTime::recorded_variance`]) at the arriving mean
+//! * **dead time**: mean `M_p·expected_counts`, variance `M_p·v` with `v` the variance
+//!   per shot ([`DeadTime::recorded_mean_and_variance`], the dead time carried from bin
+//!   to bin) of the channel's arriving means
 //!   `λ = expected_signal + expected_background + expected_dark`, the higher cumulants
 //!   those of a Poisson law of that variance (as `validate` takes them).
 //!

@@ -7,7 +7,6 @@ use hdf5::types::{VarLenAscii, VarLenUnicode};
 use ndarray::{Ix1, Ix2, Ix3, s};
 
 use super::{Channels, Sums};
-use crate::detector::DeadTime;
 use crate::error::{Error, Result};
 use crate::output::raw_file::read::RawHeader;
 use crate::output::safe_file::describe_hdf5_error;
@@ -221,13 +220,23 @@ impl Block {
                     continue;
                 }
                 judged[k] += 1;
+                let expected = |v: usize, j: usize| {
+                    let (vals, rows) = &self.expected[v];
+                    if *rows { vals[r * per + j] } else { vals[j] }
+                };
+                // a dead-time channel's variance per shot, bin by bin from the channel's
+                // arriving means (the dead time carried from bin to bin)
+                let recorded_var = dead.as_ref().map(|d| {
+                    let lambda: Vec<f64> = (0..n_bins)
+                        .map(|i| (1..4).map(|v| expected(v, k * n_bins + i)).sum())
+                        .collect();
+                    d.recorded_mean_and_variance(&lambda).1
+                });
                 for i in 0..n_bins {
                     let j = k * n_bins + i;
-                    let e: [f64; 4] = std::array::from_fn(|v| {
-                        let (vals, rows) = &self.expected[v];
-                        if *rows { vals[r * per + j] } else { vals[j] }
-                    });
-                    let (mu, var) = law(dead.as_ref(), shots as f64, factor, e);
+                    let e: [f64; 4] = std::array::from_fn(|v| expected(v, j));
+                    let v = recorded_var.as_ref().map(|v| v[i]);
+                    let (mu, var) = law(v, shots as f64, factor, e);
                     if !(mu.is_finite() && var.is_finite()) {
                         return Err(Error::output(
                             path,
@@ -260,17 +269,15 @@ impl Block {
 
 /// Mean and variance of a profile's count over `m` shots at energy factor `factor`, from
 /// the per-shot `expected_counts`, `_signal`, `_background` and `_dark` at the nominal
-/// energy (module docs of [`super`]).
-fn law(dead: Option<&DeadTime>, m: f64, factor: f64, e: [f64; 4]) -> (f64, f64) {
-    let [counts, signal, background, dark] = e;
-    match dead {
+/// energy (module docs of [`super`]); `recorded_var` the per-shot variance of a dead-time channel's count
+/// ([`crate::detector::DeadTime::recorded_mean_and_variance`]), `None` for an ideal detector.
+fn law(recorded_var: Option<f64>, m: f64, factor: f64, e: [f64; 4]) -> (f64, f64) {
+    let [counts, signal, ..] = e;
+    match recorded_var {
         None => {
             let mu = m * (counts - signal + factor * signal).max(0.0);
             (mu, mu)
         }
-        Some(d) => (
-            m * counts,
-            m * d.recorded_variance(signal + background + dark),
-        ),
+        Some(v) => (m * counts, m * v),
     }
 }
