@@ -733,7 +733,7 @@ pub struct BackgroundConfig {
     pub efficiency: BackgroundEfficiency,
     /// Solar model: a stated two-way transmission of the sunlight (sun → scene →
     /// instrument), whatever the angle; absent = the slant path through the modelled
-    /// atmosphere (`SunlightPath` in `src/scene/sun.rs`).
+    /// atmosphere and its path radiance (`SunlightPath` in `src/scene/sun.rs`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub transmission: Option<f64>,
     /// Solar model: albedo of an optically thick cloud top (column optical depth ≥ 1); absent = 0.7.
@@ -743,6 +743,10 @@ pub struct BackgroundConfig {
     /// along the orbit).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub solar_zenith_deg: Option<f64>,
+    /// Solar model: whether the air's once-scattered sunlight (path radiance) is added
+    /// to the reflected sunlight (`src/scene/sky.rs`); absent = true.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path_radiance: Option<bool>,
 }
 
 /// Where the sky background comes from.

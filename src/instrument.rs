@@ -44,8 +44,8 @@ pub struct Instrument {
 
 /// The sky radiance the instrument sees, photons m⁻² s⁻¹ sr⁻¹ nm⁻¹: the fixed
 /// `background.radiance`; with the solar model and a fixed `solar_zenith_deg` also the
-/// sunlight reflected below (at 1 AU, `crate::scene::sun::reflected_radiance`, through
-/// `atmosphere` along the sun's slant path). Along an orbit the solar part changes from
+/// sunlight reflected below and the air's scattered sunlight (at 1 AU,
+/// `crate::scene::sun::SunlightPath::radiance`, through `atmosphere`). Along an orbit the solar part changes from
 /// profile to profile and is added by the scene (`src/simulate/scene.rs`), not here.
 pub fn sky_radiance(cfg: &ScenarioConfig, atmosphere: &Atmosphere) -> f64 {
     let b = &cfg.background;
@@ -55,12 +55,9 @@ pub fn sky_radiance(cfg: &ScenarioConfig, atmosphere: &Atmosphere) -> f64 {
             use crate::scene::sun;
             let f = sun::solar_spectral_irradiance_photons(cfg.instrument.wavelength_nm);
             let reflector = crate::surface::reflector_below(cfg);
-            let sun = sun::reflected_radiance(
-                reflector.albedo,
-                if f.is_finite() { f } else { 0.0 },
-                zenith,
-                sun::SunlightPath::of(cfg, atmosphere, reflector.altitude_m),
-            );
+            let sun = sun::SunlightPath::of(cfg, atmosphere, reflector.altitude_m)
+                .radiance(reflector.albedo, if f.is_finite() { f } else { 0.0 }, zenith)
+                .total();
             floor + sun
         }
         _ => floor,

@@ -27,7 +27,7 @@ pub struct Reflector {
     /// Its albedo ρ.
     pub albedo: f64,
     /// Its altitude (the surface, or the thick cloud's top), m: the sunlight crosses
-    /// the atmosphere above it (`crate::scene::sun::SunlightPath::above`).
+    /// the atmosphere above it (`crate::scene::sky::SkyColumn::above`).
     pub altitude_m: f64,
 }
 

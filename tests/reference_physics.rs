@@ -599,29 +599,20 @@ fn the_sun_is_where_meeus_puts_it() {
 }
 
 /// The sunlight's optical depths above a reflector (docs/model.md §4f,
-/// `SunlightPath::above`): τ_sca = ∫ (α_total − α_O3) dz, everything but ozone, and
+/// `SkyColumn::above`): τ_sca = ∫ (α_total − α_O3) dz, everything but ozone, and
 /// τ_abs = σ_O3·∫ n_O3 dz, from the reflector to the top, against the reference's point
 /// optics and AFGL ozone integrated here by the midpoint rule at 1 m, to 1e-4: paper
 /// scenario 2 with ozone (US76 molecules, the background aerosol, cirrus at 9–11 and
 /// 16–17 km) from the ground, inside the lower cirrus and between the two; above the
-/// atmosphere both are 0. And the factor on the reflected sunlight `T(μ)`, written here
-/// from the module docs with these depths, to 1e-3 at μ = 1, 0.5, 0.1 (survivors in
-/// `SunlightPath::above`, `−` → `/`, which divided the extinction by ozone's, and in
-/// `transmission`, `/` → `%`, which took ozone's slant path in the diffuse light as
-/// τ_abs mod μ).
+/// atmosphere both are 0. (The radiance through these depths is checked against an
+/// independent single-scattering integration in `tests/solar_background.rs`.)
 #[test]
 fn the_sunlight_path_is_the_optical_depth_above_the_reflector() {
-    use lidarsim::scene::sun::SunlightPath;
+    use lidarsim::scene::sky::SkyColumn;
     let sc = scenario("paper/scenario2.toml", &["atmosphere.ozone=true"]);
     let reference = r::RefAtmosphere::new(&sc);
     let sigma_o3 = r::ozone_cross_section_m2(532.0);
-    let depths = |z: f64| match SunlightPath::above(&sc.atmosphere, z) {
-        SunlightPath::Slant {
-            scattering_depth,
-            absorbing_depth,
-        } => (scattering_depth, absorbing_depth),
-        other => panic!("{other:?}"),
-    };
+    let depths = |z: f64| SkyColumn::above(&sc.atmosphere, z).vertical_depths();
     for reflector in [0.0, 9_500.0, 13_000.0] {
         let steps = (100_000.0 - reflector) as usize; // 1 m each, to 100 km
         let scattering: f64 = (0..steps)
@@ -640,20 +631,6 @@ fn the_sunlight_path_is_the_optical_depth_above_the_reflector() {
             rel(abs, absorbing) < 1e-4,
             "{reflector} m: τ_abs {abs} vs {absorbing}"
         );
-        // the factor on the reflected sunlight, written here from the module docs:
-        // exp(−τ)·[exp(−τ/μ) + ½·exp(−τ_abs/μ)·(1 − exp(−τ_sca/μ))]
-        let path = SunlightPath::above(&sc.atmosphere, reflector);
-        for mu in [1.0, 0.5, 0.1] {
-            let tau = scattering + absorbing;
-            let want = (-tau).exp()
-                * ((-tau / mu).exp()
-                    + 0.5 * (-absorbing / mu).exp() * (1.0 - (-scattering / mu).exp()));
-            let got = path.transmission(mu);
-            assert!(
-                rel(got, want) < 1e-3,
-                "{reflector} m, μ = {mu}: T {got} vs {want}"
-            );
-        }
     }
     // the ground's τ_sca holds the cirrus (0.4 + 0.025) and ~0.11 of molecules
     assert!(depths(0.0).0 > 0.5);

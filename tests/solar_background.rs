@@ -1,41 +1,29 @@
-//! Sunlight through the atmosphere (docs/model.md "Sunlight from the
-//! scene"): the solar background seen from above is `ρ·F_λ·μ/π·T(μ)` with, for a
-//! molecules-only atmosphere (no absorber),
-//! `T(μ) = exp(−τ)·[exp(−τ/μ) + ½·(1 − exp(−τ/μ))]`, μ = cos θ_s, τ the Rayleigh optical
-//! depth above the reflector. τ is computed here independently of lidarsim: the Bucholtz
-//! (1995, Appl. Opt. 34, 2765, Eq. 8 and Table 3) fit of the Rayleigh cross-section,
-//! times the air column of a hydrostatic atmosphere, `p0/(m_air·g_eff)` (U.S. Standard
-//! Atmosphere 1976: p0 = 101,325 Pa, M = 28.9644 g/mol; g_eff = g at the mass-weighted
-//! mean altitude, ~8 km, 0.25 % below g0).
+//! The daylight sky from space (docs/model.md "Sky light from space by day",
+//! `src/scene/sky.rs`): the sunlight reflected below *and* the air's own once-scattered
+//! sunlight, the sun's path through a spherical atmosphere. The reference is
+//! `validation/sky_reference.rs`, a single-scattering integration written apart from
+//! lidarsim's sky code: its own U.S. Standard Atmosphere 1976 column times Bucholtz's
+//! (1995) Rayleigh cross-section, the scene's aerosol profile as a Henyey–Greenstein
+//! species of g = 0.7, exact spherical chords from every 10–50 m grid point, fine
+//! (μ', φ') rules for the diffuse light (validation/reports/daylight_sky.md).
 
 mod common;
 
-use std::f64::consts::PI;
+#[path = "../validation/sky_reference.rs"]
+#[allow(dead_code)]
+mod sky_reference;
+
 use std::path::PathBuf;
 
-/// Bucholtz (1995) Eq. 8: σ(λ) = A·λ^−(B + C·λ + D/λ), λ in µm, σ in cm², with his
-/// Table 3 coefficients for λ > 0.5 µm: A = 4.01061e-28, B = 3.99668, C = 1.10298e-3,
-/// D = 2.71393e-2 (5.16e-27 cm² at 532 nm).
-fn bucholtz_cross_section_m2(wavelength_um: f64) -> f64 {
-    let (a, b, c, d) = (4.01061e-28, 3.99668, 1.10298e-3, 2.71393e-2);
-    a * wavelength_um.powf(-(b + c * wavelength_um + d / wavelength_um)) * 1e-4
-}
-
-/// The air column above sea level, molecules m⁻² (hydrostatic).
-fn air_column_m2() -> f64 {
-    let (p0, molar_mass, avogadro) = (101_325.0, 0.028_964_4, 6.022_140_76e23);
-    let g_eff = 9.806_65 * (6_356_766.0f64 / (6_356_766.0 + 8_000.0)).powi(2);
-    p0 / (molar_mass / avogadro * g_eff)
-}
-
-/// The slant-path factor of the issue's formula, molecules only.
-fn slant(tau: f64, mu: f64) -> f64 {
-    (-tau).exp() * ((-tau / mu).exp() + 0.5 * (1.0 - (-tau / mu).exp()))
-}
-
-/// A space-borne 532 nm config over the ocean (ρ = 0.05, at sea level), molecules
-/// only (US76, no aerosol, no ozone, no layers), no night floor; `extra` TOML appended.
-fn config(dir: &std::path::Path, extra: &str) -> PathBuf {
+/// A space-borne 532 nm config (US76 molecules, no ozone, no layers, no night floor)
+/// over a sea-level surface of albedo `albedo`; `extra` TOML appended. `aerosol`: the
+/// background aerosol of 23 km visibility (`[atmosphere.aerosol]`) or none.
+fn config(dir: &std::path::Path, albedo: f64, aerosol: bool, extra: &str) -> PathBuf {
+    let aerosol = if aerosol {
+        "[atmosphere.aerosol]\nvisibility_km = 23.0\nlidar_ratio_sr = 50.0\n"
+    } else {
+        ""
+    };
     let text = format!(
         r#"name = "solar background test"
 [instrument]
@@ -64,8 +52,10 @@ start_time = "2024-06-20T12:00:00Z"
 ozone = false
 [atmosphere.molecular]
 model = "us76"
+{aerosol}
 [surface]
 kind = "ocean"
+albedo = {albedo}
 [simulation]
 seed = 1
 {extra}
@@ -81,96 +71,175 @@ fn scratch(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("lidarsim-solar-{name}-{}", std::process::id()))
 }
 
-/// The deterministic model's background (fixed zenith angle) at θ_s = 60° and 85°
-/// equals `ρ·F·μ/π·T(μ)·factor` with T from the independent τ, within 0.5 % (the
-/// issue's criterion is 2 %); the atmosphere's factor T alone (against a stated
-/// transmission of 1) too. A 1 % error in the background, or the old constant 0.8
-/// (20 % off at 60°), fails.
+/// The reference column of a loaded scene: its own molecules, and the scene's
+/// background aerosol profile (if any) as an HG species of g = 0.7.
+fn reference(sc: &lidarsim::scenario::Scenario) -> sky_reference::Column {
+    let none = |_: f64| 0.0;
+    match &sc.atmosphere.aerosol {
+        Some(a) => {
+            let aer = |z: f64| a.extinction_per_m(z);
+            sky_reference::Column::new(0.532, 0.0, &none, &[(0.7, &aer)])
+        }
+        None => sky_reference::Column::new(0.532, 0.0, &none, &[]),
+    }
+}
+
+/// The sky radiance of a fixed-zenith scene from the deterministic model: its
+/// background counts over the instrument's counts per unit radiance.
+fn model_radiance(path: &std::path::Path, set: &[String]) -> f64 {
+    let lidar = lidarsim::scenario::Lidar::load(path, set).unwrap();
+    let sc = lidar.first();
+    sc.expected().unwrap().background / sc.instrument.background_per_radiance
+}
+
+/// The issue's criterion: the daylight sky radiance (reflected + path) at θ_s = 60°
+/// and 85° over the ocean (ρ = 0.05) and snow (ρ = 0.8), US76 molecules and the 23 km
+/// background aerosol, agrees with the independent single-scattering integration
+/// within 3 % (the issue asks 10 %; measured: ≤ 1.2 %, report). Before the path
+/// radiance the ocean's sky was 0.35 (60°) and 0.1 (85°) of this.
 #[test]
-fn solar_background_follows_the_slant_path_at_60_and_85_degrees() {
-    let dir = scratch("fixed");
-    let tau = bucholtz_cross_section_m2(0.532) * air_column_m2();
-    // the Rayleigh optical depth of a standard atmosphere at 532 nm is ~0.11
-    assert!((tau - 0.111).abs() < 0.002, "τ = {tau}");
+fn the_daylight_sky_agrees_with_a_single_scattering_integration() {
+    let dir = scratch("sky");
     let f = lidarsim::scene::sun::solar_spectral_irradiance_photons(532.0);
-    for zenith in [60.0f64, 85.0] {
+    for albedo in [0.05, 0.8] {
         let path = config(
             &dir,
-            &format!("[background]\nmodel = \"solar\"\nsolar_zenith_deg = {zenith}\n"),
+            albedo,
+            true,
+            "[background]\nmodel = \"solar\"\nsolar_zenith_deg = 60\n",
         );
         let lidar = lidarsim::scenario::Lidar::load(&path, &[]).unwrap();
-        let sc = lidar.first();
-        let got = sc.expected().unwrap().background;
-        let mu = zenith.to_radians().cos();
-        let factor = sc.instrument.background_per_radiance;
-        let want = 0.05 * f * mu / PI * slant(tau, mu) * factor;
-        assert!(
-            (got / want - 1.0).abs() < 0.005,
-            "θ_s = {zenith}: {got} vs {want}"
-        );
-        // the atmosphere's share alone, against a stated transmission of 1
-        let bare = lidarsim::scenario::Lidar::load(&path, &["background.transmission=1".into()])
-            .unwrap()
-            .first()
-            .expected()
-            .unwrap()
-            .background;
-        let t = got / bare;
-        eprintln!(
-            "θ_s = {zenith}: τ = {tau:.5}, background {got:.6e} vs {want:.6e} ({:+.3} %), T = {t:.5}",
-            (got / want - 1.0) * 100.0
-        );
-        assert!(
-            (t / slant(tau, mu) - 1.0).abs() < 0.005,
-            "θ_s = {zenith}: T = {t} vs {}",
-            slant(tau, mu)
-        );
+        let column = reference(lidar.first());
+        for zenith in [60.0, 85.0] {
+            let got = model_radiance(&path, &[format!("background.solar_zenith_deg={zenith}")]);
+            let want = column.sky(albedo, f, zenith);
+            let ratio = got / (want.reflected + want.path);
+            eprintln!(
+                "ρ = {albedo}, θ_s = {zenith}°: lidarsim {got:.4e}, reference {:.4e} \
+                 (reflected {:.4e}, path {:.4e}), ratio {ratio:.4}",
+                want.reflected + want.path,
+                want.reflected,
+                want.path
+            );
+            assert!((ratio - 1.0).abs() < 0.03, "ρ {albedo}, {zenith}°: {ratio}");
+        }
     }
-    // below the horizon: nothing
-    let path = config(
-        &dir,
-        "[background]\nmodel = \"solar\"\nsolar_zenith_deg = 90\n",
-    );
-    let lidar = lidarsim::scenario::Lidar::load(&path, &[]).unwrap();
-    assert_eq!(lidar.first().expected().unwrap().background, 0.0);
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// Near the terminator the background falls with the slant path, far below a
-/// constant transmission: at 85° T(μ) is 0.62 of its 60° value (0.8 held constant
-/// would keep it), and the drop from 60° to 89° of `μ·T(μ)` exceeds the drop of μ alone.
+/// Each part on its own, molecules only and with aerosol: the path radiance and the
+/// reflected term of `SkyColumn::radiance` against the reference's within 3 %, and
+/// `background.path_radiance = false` leaves the reflected term alone.
 #[test]
-fn the_background_drops_near_the_terminator() {
-    let tau = bucholtz_cross_section_m2(0.532) * air_column_m2();
-    let (t60, t85) = (slant(tau, 0.5), slant(tau, 85f64.to_radians().cos()));
-    assert!(t85 / t60 < 0.85, "{t85} / {t60}");
+fn the_path_and_reflected_parts_each_agree() {
+    use lidarsim::scene::sky::SkyColumn;
+    let dir = scratch("parts");
+    for aerosol in [false, true] {
+        let path = config(
+            &dir,
+            0.8,
+            aerosol,
+            "[background]\nmodel = \"solar\"\nsolar_zenith_deg = 60\n",
+        );
+        let lidar = lidarsim::scenario::Lidar::load(&path, &[]).unwrap();
+        let sc = lidar.first();
+        let column = SkyColumn::above(&sc.atmosphere, 0.0);
+        let reference = reference(sc);
+        for zenith in [30.0, 60.0, 75.0, 85.0, 88.0] {
+            let got = column.radiance(0.8, 1.0, zenith, true);
+            let want = reference.sky(0.8, 1.0, zenith);
+            let (rp, rr) = (got.path / want.path, got.reflected / want.reflected);
+            eprintln!("aerosol {aerosol}, {zenith}°: path {rp:.4}, reflected {rr:.4}");
+            assert!((rp - 1.0).abs() < 0.03, "{aerosol} {zenith}: path {rp}");
+            assert!((rr - 1.0).abs() < 0.03, "{aerosol} {zenith}: reflected {rr}");
+            let off = column.radiance(0.8, 1.0, zenith, false);
+            assert_eq!((off.path, off.reflected), (0.0, got.reflected));
+        }
+        // the switch in the config
+        let with = model_radiance(&path, &[]);
+        let without = model_radiance(&path, &["background.path_radiance=false".into()]);
+        let r = column.radiance(0.8, 1.0, 60.0, true);
+        assert!((without / with - r.reflected / r.total()).abs() < 1e-6);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The spherical air mass. Kasten & Young (1989):
+/// `AM = 1/(cos z + 0.50572·(96.07995 − z)^−1.6364)`, by hand 10.3058 at 85° and
+/// 19.4332 at 88° (1.9943 at 60°): `kasten_young_air_mass` to 1e-5. The molecular air
+/// mass of lidarsim's US76 column along its straight spherical solar path
+/// (`molecular_air_mass`: 1.9931, 10.201, 18.822) against the reference's chords from
+/// its 10 m grid (1.9932, 10.204, 18.835) within 0.2 %, and both against Kasten–Young
+/// within 0.2 % at 60°, 1.5 % at 85° and 3.5 % at 88°: Kasten & Young integrate along
+/// the refracted ray, which near the horizon stays longer in the dense air (+1.0 % at
+/// 85°, +3.2 % at 88°); lidarsim's sun is geometric (no refraction, `scene/sun.rs`).
+/// The plane-parallel 1/μ is 11 % high at 85° and 47 % at 88°. A 1 % error in either
+/// formula fails.
+#[test]
+fn the_air_mass_is_spherical() {
+    use lidarsim::scene::sky::{SkyColumn, kasten_young_air_mass};
+    for (z, hand) in [(60.0, 1.99429), (85.0, 10.30579), (88.0, 19.43325)] {
+        let ky = kasten_young_air_mass(z);
+        assert!((ky / hand - 1.0).abs() < 1e-5, "{z}: {ky} vs {hand}");
+    }
+    let dir = scratch("airmass");
+    let path = config(
+        &dir,
+        0.05,
+        false,
+        "[background]\nmodel = \"solar\"\nsolar_zenith_deg = 60\n",
+    );
+    let lidar = lidarsim::scenario::Lidar::load(&path, &[]).unwrap();
+    let sc = lidar.first();
+    let column = SkyColumn::above(&sc.atmosphere, 0.0);
+    let reference = reference(sc);
+    for (z, tol) in [(60.0, 0.002), (85.0, 0.015), (88.0, 0.035)] {
+        let (got, own) = (column.molecular_air_mass(z), reference.molecular_air_mass(z));
+        let hand = 1.0 / (z.to_radians().cos() + 0.50572 * (96.07995 - z).powf(-1.6364));
+        eprintln!("{z}°: lidarsim {got:.4}, reference {own:.4}, Kasten-Young {hand:.4}");
+        assert!((got / hand - 1.0).abs() < tol, "{z}: {got} vs {hand}");
+        assert!((own / hand - 1.0).abs() < tol, "{z}: reference {own} vs {hand}");
+        assert!((got / own - 1.0).abs() < 0.002, "{z}: {got} vs {own}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Near the terminator the sky falls with the slant path, as the reference's does:
+/// the ratio of the 85° to the 60° radiance over the ocean within 3 %; and below the
+/// horizon it is 0.
+#[test]
+fn the_sky_drops_near_the_terminator() {
     let dir = scratch("drop");
     let path = config(
         &dir,
+        0.05,
+        true,
         "[background]\nmodel = \"solar\"\nsolar_zenith_deg = 60\n",
     );
-    let at = |z: f64| {
-        lidarsim::scenario::Lidar::load(&path, &[format!("background.solar_zenith_deg={z}")])
-            .unwrap()
-            .first()
-            .expected()
-            .unwrap()
-            .background
+    let at = |z: f64| model_radiance(&path, &[format!("background.solar_zenith_deg={z}")]);
+    let lidar = lidarsim::scenario::Lidar::load(&path, &[]).unwrap();
+    let column = reference(lidar.first());
+    let sky = |z: f64| {
+        let s = column.sky(0.05, 1.0, z);
+        s.reflected + s.path
     };
     let ratio = at(85.0) / at(60.0);
-    let want = 85f64.to_radians().cos() / 0.5 * t85 / t60;
-    assert!((ratio / want - 1.0).abs() < 0.005, "{ratio} vs {want}");
+    let want = sky(85.0) / sky(60.0);
+    assert!((ratio / want - 1.0).abs() < 0.03, "{ratio} vs {want}");
+    assert_eq!(at(90.0), 0.0);
     std::fs::remove_dir_all(&dir).ok();
 }
 
 /// Along an orbit the simulated file's `expected_background` of a daylit profile is the
-/// slant-path formula at that profile's own solar zenith angle (from the file's
-/// latitude, longitude and time), within 0.5 %.
+/// reference's sky at that profile's own solar zenith angle (from the file's
+/// latitude, longitude and time) and sun distance, within 3 %.
 #[test]
-fn an_orbit_run_uses_the_slant_path() {
+fn an_orbit_run_sees_the_daylight_sky() {
     let dir = scratch("orbit");
     let path = config(
         &dir,
+        0.05,
+        false,
         "[background]\nmodel = \"solar\"\n[orbit]\ninclination_deg = 98.2\n\
          start_latitude_deg = -50.0\nstart_longitude_deg = 0.0\nascending = false\n",
     );
@@ -193,28 +262,25 @@ fn an_orbit_run_uses_the_slant_path() {
         read("expected_background"),
         read("altitude").len(),
     );
-    let tau = bucholtz_cross_section_m2(0.532) * air_column_m2();
     let start = humantime::parse_rfc3339("2024-06-20T12:00:00Z").unwrap();
     let start_s = start
         .duration_since(std::time::UNIX_EPOCH)
         .unwrap()
         .as_secs_f64();
-    let factor = lidarsim::scenario::Lidar::load(&path, &[])
-        .unwrap()
-        .first()
-        .instrument
-        .background_per_radiance;
+    let lidar = lidarsim::scenario::Lidar::load(&path, &[]).unwrap();
+    let factor = lidar.first().instrument.background_per_radiance;
+    let column = reference(lidar.first());
     let f532 = lidarsim::scene::sun::solar_spectral_irradiance_photons(532.0);
     for p in 0..4 {
         let unix = start_s + (p as f64 + 0.5) * 15.0 / 20.16;
         let zenith = lidarsim::scene::sun::solar_zenith_deg(unix, lat[p], lon[p]);
         assert!(zenith > 60.0 && zenith < 80.0, "{zenith}");
         let au = lidarsim::scene::sun::earth_sun_distance_au(unix);
-        let mu = zenith.to_radians().cos();
-        let want = 0.05 * f532 / (au * au) * mu / PI * slant(tau, mu) * factor;
+        let sky = column.sky(0.05, f532 / (au * au), zenith);
+        let want = (sky.reflected + sky.path) * factor;
         let got = bkg[p * n_bins];
         assert!(
-            (got / want - 1.0).abs() < 0.005,
+            (got / want - 1.0).abs() < 0.03,
             "profile {p}: {got} vs {want}"
         );
     }

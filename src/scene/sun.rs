@@ -27,35 +27,16 @@
 //! 1-nm spectrum swings by ±10 % around these values), 300–2000 nm, at 1 AU.
 //!
 //! **Daylight radiance** seen looking down on a Lambertian reflector of albedo ρ
-//! (docs/model.md §4f): `L = ρ·E↓/π · exp(−τ)`, with `E↓` the solar irradiance reaching the
-//! reflector and `exp(−τ)` the direct transmission back up to the nadir view; 0 when
-//! the sun is below the horizon (θ_s ≥ 90°). Sunlight reaches the reflector along its
-//! slant path (docs/model.md §4f), μ = cos θ_s:
-//!
-//! ```text
-//! E↓ = F_λ·μ·[ exp(−τ/μ)  +  ½·exp(−τ_abs/μ)·(1 − exp(−τ_sca/μ)) ]
-//!            direct beam      diffuse skylight
-//! ```
-//!
-//! τ = τ_sca + τ_abs is the modelled atmosphere's optical depth above the reflector at
-//! the channel's wavelength ([`SunlightPath::above`]): molecules (Rayleigh), the
-//! background aerosol and every aerosol or cloud layer above the reflector scatter
-//! (single-scattering albedo 1, their full extinction, no multiple-scattering factor);
-//! ozone absorbs. The diffuse term is the rule of the simple clear-sky models: of the
-//! light scattered out of the direct beam, half reaches the ground (Rayleigh scattering
-//! is symmetric forward/backward), attenuated by the absorbers along the slant path
-//! (Bird & Hulstrom 1981, *A simplified clear sky model for direct and diffuse
-//! insolation on horizontal surfaces*, SERI/TR-642-761, Eq. 8–10; Iqbal 1983, *An
-//! Introduction to Solar Radiation*, §7.4). Stated limits: it neglects multiple
-//! scattering between the ground and the sky and the forward peak of aerosol and cloud
-//! scattering (Bird & Hulstrom take 0.84 of the aerosol's scattered light forward: this
-//! rule's ½ gives less diffuse light under thick aerosol), takes the plane-parallel air
-//! mass `1/μ` (at 85° the spherical air mass is 10.3, not 11.5: Kasten & Young 1989),
-//! and brings the reflected light up along the direct path only.
+//! (docs/model.md §4f): through the modelled atmosphere, the reflected sunlight and the
+//! air's own once-scattered sunlight, with the sun's path through a spherical
+//! atmosphere ([`crate::scene::sky`]); with a stated two-way transmission T
+//! (`background.transmission`) `L = ρ·F_λ·cos θ_s/π·T` and no path radiance. 0 when
+//! the sun is below the horizon (θ_s ≥ 90°).
 
-use crate::atmosphere::{Atmosphere, ozone};
+use crate::atmosphere::Atmosphere;
 use crate::config::ScenarioConfig;
 use crate::constants::{PLANCK_J_S, SPEED_OF_LIGHT_M_PER_S};
+use crate::scene::sky::{SkyColumn, SkyRadiance};
 use std::f64::consts::PI;
 
 /// Julian date of the Unix epoch, 1970-01-01T00:00:00 UTC.
@@ -140,70 +121,73 @@ pub fn earth_sun_distance_au(unix_time_s: f64) -> f64 {
 }
 
 /// How sunlight reaches a reflector and comes back to a nadir view (module docs).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum SunlightPath {
     /// A stated two-way transmission (`background.transmission`), whatever the angle.
     Fixed(f64),
-    /// Through the modelled atmosphere above the reflector: its scattering and
-    /// absorbing optical depths at the channel's wavelength.
-    Slant {
-        /// τ_sca: molecules, aerosol and clouds above the reflector.
-        scattering_depth: f64,
-        /// τ_abs: ozone above the reflector.
-        absorbing_depth: f64,
+    /// Through the modelled atmosphere above the reflector ([`SkyColumn`]).
+    Sky {
+        /// The column above the reflector at the channel's wavelength.
+        column: SkyColumn,
+        /// Whether the air's scattered sunlight is added (`background.path_radiance`).
+        path_radiance: bool,
     },
 }
 
 impl SunlightPath {
     /// The path of a config's sunlight to a reflector at `reflector_m`: the stated
-    /// `background.transmission` if given, else [`SunlightPath::above`] in `atmosphere`.
+    /// `background.transmission` if given, else the column above it in `atmosphere`.
     pub fn of(cfg: &ScenarioConfig, atmosphere: &Atmosphere, reflector_m: f64) -> SunlightPath {
         match cfg.background.transmission {
             Some(t) => SunlightPath::Fixed(t),
-            None => SunlightPath::above(atmosphere, reflector_m),
+            None => SunlightPath::Sky {
+                column: SkyColumn::above(atmosphere, reflector_m),
+                path_radiance: cfg.background.path_radiance.unwrap_or(true),
+            },
         }
     }
 
-    /// The sunlight path above altitude `reflector_m` in `atmosphere` (module docs):
-    /// its slabs' total extinction, ozone taken apart as the absorber.
-    pub fn above(atmosphere: &Atmosphere, reflector_m: f64) -> SunlightPath {
-        let top = atmosphere.top_m();
-        let sigma_o3 = atmosphere.ozone_cross_section_m2.unwrap_or(0.0);
-        let mut scattering_depth = 0.0;
-        if top > reflector_m {
-            for slab in atmosphere.slabs(reflector_m, top) {
-                let o = slab.optics;
-                let scattering = o.alpha_mol + o.alpha_aer + o.alpha_cld;
-                scattering_depth += scattering * (slab.z_hi - slab.z_lo);
-            }
-        }
-        SunlightPath::Slant {
-            scattering_depth,
-            absorbing_depth: sigma_o3 * ozone::column_m2(reflector_m, ozone::TOP_ALTITUDE_M),
+    /// The daylight radiance over a reflector of albedo `albedo` under the
+    /// top-of-atmosphere irradiance `irradiance` at solar zenith `zenith_deg`
+    /// (module docs), photons m⁻² s⁻¹ sr⁻¹ nm⁻¹, split into its reflected and path parts.
+    pub fn radiance(&self, albedo: f64, irradiance: f64, zenith_deg: f64) -> SkyRadiance {
+        match self {
+            SunlightPath::Fixed(t) => SkyRadiance {
+                reflected: reflected_radiance(albedo, irradiance, zenith_deg, *t),
+                path: 0.0,
+            },
+            SunlightPath::Sky {
+                column,
+                path_radiance,
+            } => column.radiance(albedo, irradiance, zenith_deg, *path_radiance),
         }
     }
 
-    /// The factor `E↓·exp(−τ)/(F_λ·μ)` by which the atmosphere scales the reflected
-    /// sunlight at `cos_zenith` = μ > 0 (module docs), or the fixed transmission.
-    pub fn transmission(&self, cos_zenith: f64) -> f64 {
-        match *self {
-            SunlightPath::Fixed(t) => t,
-            SunlightPath::Slant {
-                scattering_depth: sca,
-                absorbing_depth: abs,
+    /// An upper bound of [`SunlightPath::radiance`]'s total at any angle: the albedo
+    /// under an overhead sun with no atmosphere (or the stated transmission), plus the
+    /// path radiance's bound.
+    pub fn brightest(&self, albedo: f64, irradiance: f64) -> f64 {
+        match self {
+            SunlightPath::Fixed(t) => reflected_radiance(albedo, irradiance, 0.0, *t),
+            SunlightPath::Sky {
+                column,
+                path_radiance,
             } => {
-                let direct = (-(sca + abs) / cos_zenith).exp();
-                let diffuse = 0.5 * (-abs / cos_zenith).exp() * (1.0 - (-sca / cos_zenith).exp());
-                (direct + diffuse) * (-(sca + abs)).exp()
+                reflected_radiance(albedo, irradiance, 0.0, 1.0)
+                    + if *path_radiance {
+                        column.path_radiance_bound(irradiance)
+                    } else {
+                        0.0
+                    }
             }
         }
     }
 }
 
 /// Daylight radiance seen looking down on a Lambertian reflector (docs/model.md §4f),
-/// photons m⁻² s⁻¹ sr⁻¹ nm⁻¹ (the unit of the irradiance, per steradian):
-/// `L = ρ·F_λ·cos θ_s/π · T(cos θ_s)` for |θ_s| < 90°, 0 otherwise (NaN for a NaN angle),
-/// with `T` the sunlight's path ([`SunlightPath::transmission`]).
+/// photons m⁻² s⁻¹ sr⁻¹ nm⁻¹ (the unit of the irradiance, per steradian), through a
+/// stated two-way transmission `transmission`:
+/// `L = ρ·F_λ·cos θ_s/π·T` for |θ_s| < 90°, 0 otherwise (NaN for a NaN angle).
 ///
 /// `albedo` is ρ, `solar_irradiance_photons_m2_s_nm` the top-of-atmosphere F_λ (for the
 /// day of year: [`solar_spectral_irradiance_photons`] divided by
@@ -212,13 +196,13 @@ pub fn reflected_radiance(
     albedo: f64,
     solar_irradiance_photons_m2_s_nm: f64,
     solar_zenith_deg: f64,
-    path: SunlightPath,
+    transmission: f64,
 ) -> f64 {
     if solar_zenith_deg.abs() >= 90.0 {
         return 0.0;
     }
     let cos_zenith = solar_zenith_deg.to_radians().cos();
-    albedo * solar_irradiance_photons_m2_s_nm * cos_zenith / PI * path.transmission(cos_zenith)
+    albedo * solar_irradiance_photons_m2_s_nm * cos_zenith / PI * transmission
 }
 
 /// ASTM E-490-00a at 1 AU averaged over 10 nm around each node: (nm, W m⁻² nm⁻¹).
@@ -416,18 +400,18 @@ mod tests {
     #[test]
     fn radiance_follows_lambert_and_is_zero_at_night() {
         let f = 5.0e18;
-        let l = reflected_radiance(0.3, f, 60.0, SunlightPath::Fixed(0.8));
+        let l = reflected_radiance(0.3, f, 60.0, 0.8);
         assert!((l - 0.3 * f * 0.5 / PI * 0.8).abs() < 1e-6 * l);
         // model.md: ~1e17–1e18 for land and cloud at moderate sun
         assert!(l > 1e17 && l < 1e18);
         assert_eq!(
-            reflected_radiance(0.3, f, 90.0, SunlightPath::Fixed(0.8)),
+            reflected_radiance(0.3, f, 90.0, 0.8),
             0.0
         );
         assert_eq!(
-            reflected_radiance(0.3, f, 120.0, SunlightPath::Fixed(0.8)),
+            reflected_radiance(0.3, f, 120.0, 0.8),
             0.0
         );
-        assert!((reflected_radiance(1.0, PI, 0.0, SunlightPath::Fixed(1.0)) - 1.0).abs() < 1e-12);
+        assert!((reflected_radiance(1.0, PI, 0.0, 1.0) - 1.0).abs() < 1e-12);
     }
 }

@@ -119,7 +119,7 @@ pub struct SceneModel {
     /// The sun, for a solar background.
     sunlight: Option<Sunlight>,
     /// Per column, per channel: the albedo below (surface or thick cloud top) and the
-    /// sunlight's path to it and back, for the solar background.
+    /// sunlight's path to it and back, for the solar background (empty without it).
     reflectors: Vec<Vec<(f64, sun::SunlightPath)>>,
     /// Per channel: the instrument's background counts per unit radiance, and the solar
     /// irradiance at its wavelength at 1 AU (photons s⁻¹ m⁻² nm⁻¹).
@@ -248,17 +248,21 @@ impl SceneModel {
                 .zip(&configs)
                 .map(|(c, cfg)| column_scenario(&track, c, cfg, col))
                 .collect::<Result<Vec<Scenario>>>()?;
-            let below = crate::surface::reflector_below(&track.column_config(&configs[0], col));
-            reflectors.push(
-                channels
-                    .iter()
-                    .map(|c| {
-                        let cfg = &c.loaded.config;
-                        let path = sun::SunlightPath::of(cfg, &c.atmosphere, below.altitude_m);
-                        (below.albedo, path)
-                    })
-                    .collect(),
-            );
+            if solar {
+                // the sky above each column's reflector, built once (none without the sun)
+                let below =
+                    crate::surface::reflector_below(&track.column_config(&configs[0], col));
+                reflectors.push(
+                    channels
+                        .iter()
+                        .map(|c| {
+                            let cfg = &c.loaded.config;
+                            let path = sun::SunlightPath::of(cfg, &c.atmosphere, below.altitude_m);
+                            (below.albedo, path)
+                        })
+                        .collect(),
+                );
+            }
             let e: Vec<ExpectedProfile> = channels
                 .iter()
                 .map(Scenario::expected)
@@ -323,7 +327,7 @@ impl SceneModel {
 
     /// An upper bound of the solar background counts per shot per bin of any channel:
     /// the brightest albedo under an overhead sun at perihelion, with no atmosphere or
-    /// the stated transmission (0 without the sun).
+    /// the stated transmission, plus the path radiance's bound (0 without the sun).
     pub fn brightest_background(&self) -> f64 {
         if self.sunlight.is_none() {
             return 0.0;
@@ -331,13 +335,7 @@ impl SceneModel {
         let brightest = |ch: usize| {
             self.reflectors
                 .iter()
-                .map(|r| {
-                    let path = match r[ch].1 {
-                        sun::SunlightPath::Fixed(t) => sun::SunlightPath::Fixed(t),
-                        sun::SunlightPath::Slant { .. } => sun::SunlightPath::Fixed(1.0),
-                    };
-                    sun::reflected_radiance(r[ch].0, 1.04, 0.0, path)
-                })
+                .map(|r| r[ch].1.brightest(r[ch].0, 1.04))
                 .fold(0.0, f64::max)
         };
         self.channel_sun
@@ -359,10 +357,9 @@ impl SceneModel {
 
     /// Background counts per shot per bin of each run of profile `p`, channel `channel`:
     /// the channel's fixed background, or the sunlight reflected below each run's
-    /// column, `ρ·F_λ/d²·cos θ_s/π·T(θ_s)` (docs/model.md §4f, T along the sun's slant path
-    /// through the column's atmosphere at the channel's wavelength,
-    /// [`sun::SunlightPath`]) times the instrument's factor, plus the fixed radiance's
-    /// background as a floor.
+    /// column and the air's scattered sunlight above it (docs/model.md §4f, through the
+    /// column's atmosphere at the channel's wavelength, [`sun::SunlightPath::radiance`])
+    /// times the instrument's factor, plus the fixed radiance's background as a floor.
     pub fn run_backgrounds(&self, channel: usize, p: u64, runs: &[(usize, u64)]) -> Vec<f64> {
         match &self.sunlight {
             None => runs
@@ -375,9 +372,10 @@ impl SceneModel {
                 let floor = sunlight.floor;
                 runs.iter()
                     .map(|&(col, _)| {
-                        let (albedo, path) = self.reflectors[col][channel];
-                        let l =
-                            sun::reflected_radiance(albedo, irradiance / (au * au), zenith, path);
+                        let (albedo, path) = &self.reflectors[col][channel];
+                        let l = path
+                            .radiance(*albedo, irradiance / (au * au), zenith)
+                            .total();
                         // the fixed radiance, if any, is a floor (night sky)
                         (l + floor) * factor
                     })
