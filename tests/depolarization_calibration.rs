@@ -164,3 +164,108 @@ fn the_calibration_flag_rotates_the_receiver() {
         );
     }
 }
+
+/// The total + cross layout (PollyXT): each perpendicular channel's η* is relative to the
+/// total channel at its laser line, η* = η·T_R/T_T (docs/model.md §4c, Eq. 4c.1). By hand
+/// from `pollyxt_like.toml`: the perpendicular and total channels at a line differ only in
+/// `receiver_efficiency` (1e-4 and 3e-6 at 355 nm, 8e-5 and 3e-6 at 532 nm), so
+/// η = 1e-4/3e-6 and 8e-5/3e-6; the cross channel's analyser passes on average 1/2
+/// (`(1−x) + x` over two polarizations), the total channel's 1: η* = 16.67 and 13.33.
+/// Independently of the formula, the Δ90 method applied to the ±45° runs' expected
+/// signals (cross over total, geometric mean) gives the file's η* in every bin to 1e-12.
+/// Before this fix the file said NaN for both.
+#[test]
+fn the_total_and_cross_layout_has_its_delta90_constant() {
+    let dir = scratch("delta90-total-cross");
+    let config = config_path("ground/pollyxt_like.toml");
+    let run = |phi: f64, out: &str| {
+        let rotation = format!("instrument.receiver_rotation_deg={phi}");
+        let more = [
+            "--set",
+            "acquisition.accumulation_time_s=0.5",
+            "--set",
+            &rotation,
+        ];
+        common::h5::simulate_with(&dir, &config, out, "1", &more)
+    };
+    let (plus, minus) = (run(45.0, "p.h5"), run(-45.0, "m.h5"));
+    let names = strings(&plus, "channel");
+    let k = |n: &str| names.iter().position(|c| c == n).unwrap();
+    let truth = floats(&plus, "polarization_calibration_constant");
+    for (total, cross, by_hand) in [
+        ("355_total", "355_perpendicular", 1e-4 / 3e-6 / 2.0),
+        ("532_total", "532_perpendicular", 8e-5 / 3e-6 / 2.0),
+    ] {
+        let eta = truth[k(cross)];
+        assert!(
+            (eta / by_hand - 1.0).abs() < 1e-12,
+            "{cross}: {eta}, by hand {by_hand}"
+        );
+        let ratio = |f: &hdf5::File| {
+            let s = channel_rows(f, "expected_signal", names.len());
+            let (t, c) = (s[k(total)].clone(), s[k(cross)].clone());
+            t.iter().zip(c).map(|(t, c)| c / t).collect::<Vec<f64>>()
+        };
+        let mut judged = 0;
+        for (a, b) in ratio(&plus).iter().zip(ratio(&minus)) {
+            if a.is_finite() && b.is_finite() && *a > 0.0 {
+                let delta90 = (a * b).sqrt();
+                assert!(
+                    (delta90 / eta - 1.0).abs() < 1e-12,
+                    "{cross}: {delta90} vs {eta}"
+                );
+                judged += 1;
+            }
+        }
+        assert!(judged > 1000, "{judged}");
+        // the other channels have none
+        assert!(truth[k(total)].is_nan());
+    }
+}
+
+/// Every shipped config with a perpendicular channel (two-channel layouts: parallel +
+/// perpendicular, total + cross, the HSRL's co- and cross-polar channels) writes a
+/// finite, positive η* for each of its perpendicular channels.
+#[test]
+fn every_shipped_polarization_layout_has_a_finite_delta90_constant() {
+    let dir = scratch("delta90-shipped");
+    let root = config_path("");
+    let mut configs = Vec::new();
+    let mut stack = vec![root];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "toml")
+                && std::fs::read_to_string(&p)
+                    .unwrap()
+                    .contains("polarization = \"perpendicular\"")
+            {
+                configs.push(p);
+            }
+        }
+    }
+    configs.sort();
+    assert!(configs.len() >= 6, "{configs:?}");
+    for (i, config) in configs.iter().enumerate() {
+        let out = format!("shipped{i}.h5");
+        let f = common::h5::simulate_with(
+            &dir,
+            config,
+            &out,
+            "1",
+            &["--set", "acquisition.accumulation_time_s=0.2"],
+        );
+        let pol = strings(&f, "polarization");
+        let eta = floats(&f, "polarization_calibration_constant");
+        for (p, e) in pol.iter().zip(&eta) {
+            if p == "perpendicular" {
+                assert!(e.is_finite() && *e > 0.0, "{}: {e}", config.display());
+            } else {
+                assert!(e.is_nan(), "{}: {p} {e}", config.display());
+            }
+        }
+        std::fs::remove_file(dir.join(&out)).ok();
+    }
+}
