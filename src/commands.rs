@@ -255,6 +255,62 @@ pub fn simulate_as(
     Ok(())
 }
 
+/// A Δ90 depolarization calibration run (`simulate --calibration plus45|minus45`,
+/// docs/simulation.md "Calibration runs"): the run of `config` with the receiver's
+/// polarization plane rotated by `rotation_deg` (±45°), its noise drawn from
+/// [`calibration_seed`] of the run's seed (`--seed`, else `simulation.seed`) and the
+/// rotation, so that the two runs and the measurement do not share their noise;
+/// `same_noise` (`--same-noise`) draws with the seed itself. Refused, before anything is
+/// written, for an instrument without a parallel or perpendicular channel.
+pub fn simulate_calibration(
+    config: &Path,
+    overrides: &[String],
+    opts: &simulate::RunOptions,
+    threads: Option<usize>,
+    format: OutputFormat,
+    rotation_deg: f64,
+    same_noise: bool,
+) -> Result<()> {
+    let lidar = Lidar::load(config, overrides)?;
+    let first = &lidar.first().loaded;
+    let polarized = lidar
+        .channels
+        .iter()
+        .any(|c| c.loaded.config.instrument.channel != crate::config::Channel::Total);
+    if !polarized {
+        return Err(Error::config(
+            first.file_label(),
+            "instrument.polarization",
+            "--calibration rotates the polarization plane in front of a polarizing beam \
+             splitter, and no channel of this instrument is `parallel` or `perpendicular`",
+        ));
+    }
+    let seed = opts.seed.unwrap_or(first.config.simulation.seed);
+    let opts = simulate::RunOptions {
+        seed: Some(if same_noise {
+            seed
+        } else {
+            calibration_seed(seed, rotation_deg)
+        }),
+        ..opts.clone()
+    };
+    let mut set = overrides.to_vec();
+    set.push(format!("instrument.receiver_rotation_deg={rotation_deg}"));
+    simulate_as(config, &set, &opts, threads, format)
+}
+
+/// The seed of a calibration run with the receiver rotated by `rotation_deg`, from the
+/// run's seed: SplitMix64's finalizer (Steele et al. 2014) of the seed XOR the
+/// rotation's f64 bits times the golden-ratio constant, a stream unrelated to the
+/// seed's own (and to its channels' `seed ^ k·0x9E37…`) for each rotation. The file
+/// stores it as its `simulation.seed`, so the stored config reproduces the file.
+pub fn calibration_seed(seed: u64, rotation_deg: f64) -> u64 {
+    let mut z = seed ^ rotation_deg.to_bits().wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
 /// [`simulate_as`] without its closing lines: what the run did (the Python module's
 /// `simulate`, which raises the warning as a Python warning).
 pub fn simulate_quietly(

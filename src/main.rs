@@ -117,6 +117,10 @@ enum Command {
         /// rotated by +45° or −45° (`--set instrument.receiver_rotation_deg=±45`).
         #[arg(long, value_enum)]
         calibration: Option<Calibration>,
+        /// With --calibration: draw with the seed itself (the noise of the measurement
+        /// with that seed), not with the seed derived from it and the rotation.
+        #[arg(long, requires = "calibration")]
+        same_noise: bool,
     },
     /// Merges the shards of a run (`simulate --shard K/N`) into the file of the whole run.
     Merge {
@@ -320,6 +324,7 @@ fn main() -> ExitCode {
             format,
             shard,
             calibration,
+            same_noise,
         } => shard
             .map(ShardArg::resolve)
             .transpose()
@@ -338,9 +343,18 @@ fn main() -> ExitCode {
                     shard,
                     cancel: None,
                 };
-                let mut set = set.clone();
-                set.extend(calibration.map(Calibration::rotation_override));
-                lidarsim::commands::simulate_as(config, &set, &opts, *threads, *format)
+                match calibration {
+                    Some(c) => lidarsim::commands::simulate_calibration(
+                        config,
+                        set,
+                        &opts,
+                        *threads,
+                        *format,
+                        c.rotation_deg(),
+                        *same_noise,
+                    ),
+                    None => lidarsim::commands::simulate_as(config, set, &opts, *threads, *format),
+                }
             })
             .map(|()| true),
         Command::Merge { output, shards } => {
@@ -477,12 +491,11 @@ enum Calibration {
 }
 
 impl Calibration {
-    /// The config override the run is: `instrument.receiver_rotation_deg=±45`.
-    fn rotation_override(self) -> String {
-        let deg = match self {
-            Calibration::Plus45 => 45,
-            Calibration::Minus45 => -45,
-        };
-        format!("instrument.receiver_rotation_deg={deg}")
+    /// The run's `instrument.receiver_rotation_deg`: ±45.
+    fn rotation_deg(self) -> f64 {
+        match self {
+            Calibration::Plus45 => 45.0,
+            Calibration::Minus45 => -45.0,
+        }
     }
 }

@@ -164,3 +164,219 @@ fn the_calibration_flag_rotates_the_receiver() {
         );
     }
 }
+
+/// The total + cross layout (PollyXT): each perpendicular channel's η* is relative to the
+/// total channel at its laser line, η* = η·T_R/T_T (docs/model.md §4c, Eq. 4c.1). By hand
+/// from `pollyxt_like.toml`: the perpendicular and total channels at a line differ only in
+/// `receiver_efficiency` (1e-4 and 3e-6 at 355 nm, 8e-5 and 3e-6 at 532 nm), so
+/// η = 1e-4/3e-6 and 8e-5/3e-6; the cross channel's analyser passes on average 1/2
+/// (`(1−x) + x` over two polarizations), the total channel's 1: η* = 16.67 and 13.33.
+/// Independently of the formula, the Δ90 method applied to the ±45° runs' expected
+/// signals (cross over total, geometric mean) gives the file's η* in every bin to 1e-12.
+/// Before this fix the file said NaN for both.
+#[test]
+fn the_total_and_cross_layout_has_its_delta90_constant() {
+    let dir = scratch("delta90-total-cross");
+    let config = config_path("ground/pollyxt_like.toml");
+    let run = |phi: f64, out: &str| {
+        let rotation = format!("instrument.receiver_rotation_deg={phi}");
+        let more = [
+            "--set",
+            "acquisition.accumulation_time_s=0.5",
+            "--set",
+            &rotation,
+        ];
+        common::h5::simulate_with(&dir, &config, out, "1", &more)
+    };
+    let (plus, minus) = (run(45.0, "p.h5"), run(-45.0, "m.h5"));
+    let names = strings(&plus, "channel");
+    let k = |n: &str| names.iter().position(|c| c == n).unwrap();
+    let truth = floats(&plus, "polarization_calibration_constant");
+    for (total, cross, by_hand) in [
+        ("355_total", "355_perpendicular", 1e-4 / 3e-6 / 2.0),
+        ("532_total", "532_perpendicular", 8e-5 / 3e-6 / 2.0),
+    ] {
+        let eta = truth[k(cross)];
+        assert!(
+            (eta / by_hand - 1.0).abs() < 1e-12,
+            "{cross}: {eta}, by hand {by_hand}"
+        );
+        let ratio = |f: &hdf5::File| {
+            let s = channel_rows(f, "expected_signal", names.len());
+            let (t, c) = (s[k(total)].clone(), s[k(cross)].clone());
+            t.iter().zip(c).map(|(t, c)| c / t).collect::<Vec<f64>>()
+        };
+        let mut judged = 0;
+        for (a, b) in ratio(&plus).iter().zip(ratio(&minus)) {
+            if a.is_finite() && b.is_finite() && *a > 0.0 {
+                let delta90 = (a * b).sqrt();
+                assert!(
+                    (delta90 / eta - 1.0).abs() < 1e-12,
+                    "{cross}: {delta90} vs {eta}"
+                );
+                judged += 1;
+            }
+        }
+        assert!(judged > 1000, "{judged}");
+        // the other channels have none
+        assert!(truth[k(total)].is_nan());
+    }
+}
+
+/// Every shipped config with a perpendicular channel (two-channel layouts: parallel +
+/// perpendicular, total + cross, the HSRL's co- and cross-polar channels) writes a
+/// finite, positive η* for each of its perpendicular channels.
+#[test]
+fn every_shipped_polarization_layout_has_a_finite_delta90_constant() {
+    let dir = scratch("delta90-shipped");
+    let root = config_path("");
+    let mut configs = Vec::new();
+    let mut stack = vec![root];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "toml")
+                && std::fs::read_to_string(&p)
+                    .unwrap()
+                    .contains("polarization = \"perpendicular\"")
+            {
+                configs.push(p);
+            }
+        }
+    }
+    configs.sort();
+    assert!(configs.len() >= 6, "{configs:?}");
+    for (i, config) in configs.iter().enumerate() {
+        let out = format!("shipped{i}.h5");
+        let f = common::h5::simulate_with(
+            &dir,
+            config,
+            &out,
+            "1",
+            &["--set", "acquisition.accumulation_time_s=0.2"],
+        );
+        let pol = strings(&f, "polarization");
+        let eta = floats(&f, "polarization_calibration_constant");
+        for (p, e) in pol.iter().zip(&eta) {
+            if p == "perpendicular" {
+                assert!(e.is_finite() && *e > 0.0, "{}: {e}", config.display());
+            } else {
+                assert!(e.is_nan(), "{}: {p} {e}", config.display());
+            }
+        }
+        std::fs::remove_file(dir.join(&out)).ok();
+    }
+}
+
+/// Counts minus their expectation over the shots, in units of the Poisson sd, of every
+/// bin of every channel; NaN where the expected count over the shots is 20 or less.
+fn standardized_residuals(f: &hdf5::File) -> Vec<f64> {
+    let n = floats(f, "n_shots")[0];
+    let mean = floats(f, "expected_counts");
+    let counts = f.dataset("counts").unwrap().read_raw::<u64>().unwrap();
+    counts
+        .iter()
+        .zip(&mean)
+        .map(|(c, m)| {
+            if m * n > 20.0 {
+                (*c as f64 - m * n) / (m * n).sqrt()
+            } else {
+                f64::NAN
+            }
+        })
+        .collect()
+}
+
+/// Pearson's correlation of two series over the bins where both are finite, and how
+/// many those are.
+fn correlation(a: &[f64], b: &[f64]) -> (f64, usize) {
+    let pairs: Vec<(f64, f64)> = a
+        .iter()
+        .zip(b)
+        .filter(|(x, y)| x.is_finite() && y.is_finite())
+        .map(|(x, y)| (*x, *y))
+        .collect();
+    let n = pairs.len() as f64;
+    let ma = pairs.iter().map(|p| p.0).sum::<f64>() / n;
+    let mb = pairs.iter().map(|p| p.1).sum::<f64>() / n;
+    let cov: f64 = pairs.iter().map(|(x, y)| (x - ma) * (y - mb)).sum();
+    let va: f64 = pairs.iter().map(|(x, _)| (x - ma).powi(2)).sum();
+    let vb: f64 = pairs.iter().map(|(_, y)| (y - mb).powi(2)).sum();
+    (cov / (va * vb).sqrt(), pairs.len())
+}
+
+/// The two calibration runs with the config's seed are two measurements: at ±45° their
+/// expected counts are the same (both splitter axes see half the light whatever the
+/// rotation's sign, D = 0), and their noises are independent. Over the N > 400 bins
+/// with more than 20 expected counts (no pulse-energy jitter, so that no factor common to
+/// a run's bins correlates them) the correlation of the standardized residuals of two
+/// independent runs has sd 1/√N: |ρ|·√N < 4 has a false-alarm rate of 6e-5 per pair
+/// (fixed seeds; three pairs). Identical noise — today's `--calibration` with one seed,
+/// and what `--same-noise` asks for — gives ρ = 1 and fails it; the measurement's (φ = 0)
+/// noise is independent of either run's as well.
+#[test]
+fn the_two_calibration_runs_do_not_share_their_noise() {
+    let dir = scratch("delta90-noise");
+    let measured = calibration_config(&dir, 0.0, 0.0);
+    let run = |out: &str, more: &[&str]| {
+        let mut args = vec!["--set", "instrument.pulse_energy_jitter=0"];
+        args.extend_from_slice(more);
+        common::h5::simulate_with(&dir, &measured, out, "1", &args)
+    };
+    let plus = run("p.h5", &["--calibration", "plus45"]);
+    let minus = run("m.h5", &["--calibration", "minus45"]);
+    let zero = run("z.h5", &[]);
+    assert_eq!(
+        floats(&plus, "expected_counts"),
+        floats(&minus, "expected_counts")
+    );
+    let z = |f: &hdf5::File| standardized_residuals(f);
+    for (name, a, b) in [
+        ("plus45 and minus45", z(&plus), z(&minus)),
+        ("plus45 and the measurement", z(&plus), z(&zero)),
+        ("minus45 and the measurement", z(&minus), z(&zero)),
+    ] {
+        let (rho, n) = correlation(&a, &b);
+        assert!(n > 400, "{name}: {n}");
+        assert!(
+            rho.abs() * (n as f64).sqrt() < 4.0,
+            "{name} share their noise: ρ = {rho} over {n} bins"
+        );
+    }
+    // asked for with --same-noise: the seed itself, the same noise, the same counts
+    let counts = |f: &hdf5::File| f.dataset("counts").unwrap().read_raw::<u64>().unwrap();
+    let same_minus = run("sm.h5", &["--calibration", "minus45", "--same-noise"]);
+    let same_plus = run("sp.h5", &["--calibration", "plus45", "--same-noise"]);
+    assert_eq!(counts(&same_minus), counts(&same_plus));
+    assert_ne!(counts(&plus), counts(&same_plus));
+}
+
+/// `--calibration` on an instrument without a polarization channel is refused: one line
+/// naming the config and the key, exit 2, nothing written.
+#[test]
+fn calibration_without_a_polarization_channel_is_refused() {
+    let dir = scratch("delta90-no-polarization");
+    let config = config_path("ground/ground_532_overlap.toml");
+    for flag in ["plus45", "minus45"] {
+        let args = [
+            "simulate",
+            config.to_str().unwrap(),
+            "-o",
+            "out.h5",
+            "--calibration",
+            flag,
+        ];
+        common::cli::refused(
+            &dir,
+            &args,
+            &[
+                "ground_532_overlap.toml",
+                "instrument.polarization",
+                "--calibration",
+            ],
+            "out.h5",
+        );
+    }
+}

@@ -292,7 +292,8 @@ fn simulate_writes_scc_for_every_channel() {
 
 /// The background window the SCC file must carry for channel `c` of `raw`, worked out
 /// here from the raw file's own variables by the rule of `docs/scc.md`: a bin is
-/// signal-free when its expected signal per shot (the largest over profiles) is 0 or
+/// signal-free when its expected signal per shot (the largest over profiles, with the
+/// signal-induced counts `expected_induced` where the file has them) is 0 or
 /// below 1 % of its expected background (the smallest over profiles) + dark; the window
 /// is the longest run of consecutive signal-free bins (the farthest of equal runs)
 /// among the first `pretrigger` bins when there are any, else among all bins; its
@@ -308,7 +309,15 @@ fn window_in_m(raw: &Path, c: usize, pretrigger: usize) -> (f64, f64) {
             .map(|p| p[c * nb..(c + 1) * nb].to_vec())
             .collect()
     };
-    let sig = per_profile(read("expected_signal"));
+    let mut sig = per_profile(read("expected_signal"));
+    // the signal-induced counts (their first column) count as signal
+    if let Ok(ds) = f.dataset("expected_induced") {
+        let induced = ds.read_raw::<f64>().unwrap();
+        let induced = &induced[c * nb..(c + 1) * nb];
+        for p in sig.iter_mut() {
+            p.iter_mut().zip(induced).for_each(|(s, i)| *s += i);
+        }
+    }
     let bkg = per_profile(read("expected_background"));
     let dark = &per_profile(read("expected_dark"))[0];
     let free: Vec<bool> = (0..nb)
@@ -440,6 +449,92 @@ fn no_signal_free_bin_is_refused_with_what_to_do() {
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(err.starts_with("lidarsim: error: "), "{err}");
     assert!(!out.exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The far-range run of `the_background_window_is_the_longest_signal_free_run` (0 to
+/// 100 km in 2 µs bins, signal-free above 86 km) with a photomultiplier's exponential
+/// signal-induced noise of time constant `tau_s`.
+fn far_run_with_sin(dir: &Path, name: &str, tau_s: f64) -> PathBuf {
+    let sin = format!(
+        "instrument.detector={{signal_induced_noise={{model=\"exponential\", fraction=1e-3, \
+         time_constant_s={tau_s}}}}}"
+    );
+    let far = [
+        "acquisition.top_altitude_km=100",
+        "instrument.bin_width_s=2e-6",
+        sin.as_str(),
+    ];
+    small_ground_run(dir, name, &far, 1)
+}
+
+/// The background window is where the expected record is background + dark only: the
+/// signal-induced noise counts as signal (issue 36). With a 1 ms exponential SIN the
+/// tail fills the whole 667 µs record (the far bins hold ~7e3 times the background +
+/// dark; before this fix the window was put there all the same): the export is refused,
+/// one line naming the file and the channel, exit 2, nothing written. With a SIN that
+/// decays within the record, the window moves out to where the SIN is below 1 % of the
+/// background + dark, bin by bin from the raw file's `expected_induced`.
+#[test]
+fn signal_induced_noise_is_not_background() {
+    let _serial = serial();
+    let dir = scratch("sin");
+    let out = dir.join("out.nc");
+    let long = far_run_with_sin(&dir, "long.h5", 1e-3);
+    let e = export_scc(&long, &out, &SccOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(!e.contains('\n'), "{e}");
+    for part in [
+        "long.h5",
+        "parallel`",
+        "signal-induced",
+        "Background_Low/High",
+    ] {
+        assert!(e.contains(part), "{part}: {e}");
+    }
+    assert!(!out.exists());
+    let o = Command::new(env!("CARGO_BIN_EXE_lidarsim"))
+        .arg("export-scc")
+        .arg(&long)
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(String::from_utf8_lossy(&o.stderr).lines().count(), 1);
+    assert!(!out.exists());
+    let short = far_run_with_sin(&dir, "short.h5", SHORT_SIN_TAU_S);
+    export_scc(&short, &out, &SccOptions::default()).unwrap();
+    let (lo, hi) = background_of(&out);
+    same_window((lo, hi), window_in_m(&short, 0, 0));
+    assert!(lo > 90_000.0 && hi > 99_000.0, "{lo} {hi}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The time constant of the SIN that decays within the far run's record: below 1 % of
+/// the background + dark from ~94.6 km on (worked out from `expect`'s signal column
+/// convolved with the decay law).
+const SHORT_SIN_TAU_S: f64 = 3.6e-5;
+
+/// The afterpulses of the background + dark are part of the level the SCC subtracts, not
+/// signal: with afterpulsing (p = 0.3, 100 ns and 10 µs delays, so that the background's
+/// afterpulses are 30 % of it, far above the 1 % rule) the window is still the run above
+/// 86 km that it is without.
+#[test]
+fn afterpulses_of_the_background_are_background() {
+    let _serial = serial();
+    let dir = scratch("afterpulse");
+    let out = dir.join("out.nc");
+    let ap = "instrument.detector={afterpulsing={probability=0.3, time_constants_s=[1e-7, 1e-5]}}";
+    let far = [
+        "acquisition.top_altitude_km=100",
+        "instrument.bin_width_s=2e-6",
+        ap,
+    ];
+    let raw = small_ground_run(&dir, "ap.h5", &far, 1);
+    export_scc(&raw, &out, &SccOptions::default()).unwrap();
+    let (lo, hi) = background_of(&out);
+    assert!(lo >= 86_000.0 - 300.0 && hi > 99_000.0, "{lo} {hi}");
     std::fs::remove_dir_all(&dir).ok();
 }
 

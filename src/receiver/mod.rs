@@ -17,7 +17,7 @@ pub mod polarization;
 pub use channel::{
     ChannelConfig, ChannelKind, Filter, LineTransmission, RamanSpecies, Record, channel_name,
 };
-pub use polarization::PolarizationOptics;
+pub use polarization::{PolarizationOptics, analyser_transmission, delta90_calibration_constant};
 
 use crate::config::{self, ScenarioConfig};
 use crate::error::{Error, Result};

@@ -73,6 +73,47 @@ impl PolarizationOptics {
     }
 }
 
+/// The mean transmission `T_S` of a channel's analyser (Freudenthaler 2016, Atmos. Meas.
+/// Tech. 9, 4181, §2: the intensity transmittance for unpolarized light, its
+/// `T_S = (T_S,p + T_S,s)/2`): the channel's share of light half parallel, half
+/// perpendicular to the laser (δ = 1) without diattenuation or rotation, i.e. the mean of
+/// its transmissions `(1−x, x)` of the two polarizations: 1/2 for a parallel or a
+/// perpendicular channel behind the splitter whatever its cross-talk x, 1 for a total
+/// channel.
+pub fn analyser_transmission(channel: Channel, crosstalk: f64) -> f64 {
+    let ideal = PolarizationOptics {
+        crosstalk,
+        diattenuation: 0.0,
+        rotation_rad: 0.0,
+    };
+    ideal.share(channel, 1.0)
+}
+
+/// The Δ90 calibration constant η* of a cross-polarized channel R relative to a
+/// reference channel T (a parallel or a total channel at the same laser line) with signal
+/// constants `C_R`, `C_T` (everything but the analyser; `Instrument::signal_constant`):
+///
+/// ```text
+/// η* = η · T_R/T_T,   η = C_R/C_T          (docs/model.md §4c, Eq. 4c.1)
+/// ```
+///
+/// with `T_S` the analysers' mean transmissions ([`analyser_transmission`]): the gain
+/// ratio η times the ratio of the channels' transmissions, Freudenthaler's (2016) "η
+/// T_R/T_T", what the signal ratio `I_R/I_T` is at ±45° (both axes see `(A+B)/2`, a total
+/// channel `A+B`, the module docs) and so what the Δ90 method
+/// `sqrt([I_R/I_T](+45°)·[I_R/I_T](−45°))` recovers (with an ideal calibrator, K = 1).
+/// For a parallel reference `T_R/T_T = 1` and η* = C_R/C_T; for a total reference
+/// (PollyXT's total + cross layout) `T_R/T_T = 1/2`.
+pub fn delta90_calibration_constant(
+    cross_signal_constant: f64,
+    cross: (Channel, f64),
+    reference_signal_constant: f64,
+    reference: (Channel, f64),
+) -> f64 {
+    let eta = cross_signal_constant / reference_signal_constant;
+    eta * analyser_transmission(cross.0, cross.1) / analyser_transmission(reference.0, reference.1)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -421,7 +421,7 @@ pub fn instrument_variables(lidar: &Lidar, e0: &ExpectedProfile) -> Vec<Variable
             ..var(
                 "polarization_calibration_constant",
                 Channel,
-                "calibration constant eta* of a perpendicular channel: its lidar constant over that of the parallel channel at the same laser wavelength (what the Delta-90 method recovers); NaN for other channels",
+                "Delta-90 calibration constant eta* = eta T_R/T_T of a perpendicular channel R relative to the parallel channel T at the same laser wavelength, else to the total channel there: eta the ratio of their lidar constants, T_R/T_T their analysers' mean transmissions (1 over a parallel, 1/2 over a total channel); what the Delta-90 method sqrt(ratio(+45) ratio(-45)) recovers; NaN for other channels",
                 "1",
                 &[],
                 calibration_constants(lidar),
@@ -455,24 +455,38 @@ pub fn instrument_variables(lidar: &Lidar, e0: &ExpectedProfile) -> Vec<Variable
     .collect()
 }
 
-/// Each channel's Δ90 calibration constant η* (src/receiver/polarization.rs): for a
-/// perpendicular channel its lidar constant over that of the parallel channel at the same
-/// laser wavelength; NaN for other channels and where there is no such parallel channel.
+/// Each channel's Δ90 calibration constant η* (docs/model.md §4c, Eq. 4c.1;
+/// [`crate::receiver::delta90_calibration_constant`]): for a perpendicular channel,
+/// relative to the elastic parallel channel at the same laser wavelength, else to the
+/// elastic total channel there (the total + cross layout); NaN for other channels and
+/// where there is no such reference channel.
 fn calibration_constants(lidar: &Lidar) -> Vec<f64> {
     use crate::config::Channel as Pol;
+    use crate::receiver::ChannelKind;
     let pol = |c: &Scenario| c.loaded.config.instrument.channel;
+    let reference = |c: &Scenario, want: Pol| {
+        lidar.channels.iter().find(|p| {
+            pol(p) == want
+                && p.loaded.channels[0].kind == ChannelKind::Elastic
+                && p.instrument.wavelength_nm == c.instrument.wavelength_nm
+        })
+    };
+    let optics = |c: &Scenario| (pol(c), c.loaded.config.instrument.crosstalk);
     lidar
         .channels
         .iter()
         .map(|c| {
-            let parallel = lidar.channels.iter().find(|p| {
-                pol(p) == Pol::Parallel && p.instrument.wavelength_nm == c.instrument.wavelength_nm
-            });
-            match (pol(c), parallel) {
-                (Pol::Perpendicular, Some(p)) => {
-                    c.instrument.signal_constant / p.instrument.signal_constant
-                }
-                _ => f64::NAN,
+            if pol(c) != Pol::Perpendicular {
+                return f64::NAN;
+            }
+            match reference(c, Pol::Parallel).or_else(|| reference(c, Pol::Total)) {
+                Some(p) => crate::receiver::delta90_calibration_constant(
+                    c.instrument.signal_constant,
+                    optics(c),
+                    p.instrument.signal_constant,
+                    optics(p),
+                ),
+                None => f64::NAN,
             }
         })
         .collect()

@@ -271,12 +271,10 @@ fn channel(
     let res = SPEED_OF_LIGHT_M_PER_S * raw.bin_width_s / 2.0;
     let first_bin_start_m = raw.range_m[0] - res / 2.0;
     let bins = c * raw.n_bins..(c + 1) * raw.n_bins;
-    let window = background_bins(
-        &raw.expected_signal[bins.clone()],
-        &raw.expected_noise[bins],
-        raw.pretrigger_bins,
-    )
-    .ok_or_else(|| no_background(path, &cfg.name, raw.pretrigger_bins))?;
+    let noise = &raw.expected_noise[bins.clone()];
+    let not_background = not_background(raw, bins, cfg, analog.is_some());
+    let window = background_bins(&not_background, noise, raw.pretrigger_bins)
+        .ok_or_else(|| no_background(path, &cfg.name, raw.pretrigger_bins))?;
     Ok(SccChannel {
         name: cfg.name.clone(),
         id,
@@ -315,6 +313,50 @@ fn dead_time(detector: Option<&DetectorConfig>) -> (f64, i32) {
     }
 }
 
+/// What a channel's expected record per shot holds beyond its background + dark, bin by
+/// bin (`bins` its rows of the (channel, bin) variables): the expected signal, the
+/// signal-induced counts (`expected_induced`) and the afterpulses beyond those the
+/// background + dark alone would give — `expected_afterpulse` less the afterpulses of a
+/// record of background + dark only (through the dead time), by the simulation's own
+/// laws (`Afterpulsing::expected`, `DeadTime::recorded_means`). The afterpulses of the
+/// background + dark are part of the constant level the SCC subtracts; those of the
+/// signal are not. An analog record has no afterpulses.
+fn not_background(
+    raw: &RawRun,
+    bins: std::ops::Range<usize>,
+    cfg: &ChannelConfig,
+    analog: bool,
+) -> Vec<f64> {
+    let noise = &raw.expected_noise[bins.clone()];
+    let detector = cfg.config.instrument.detector.as_ref();
+    let afterpulsing = detector
+        .and_then(|d| d.afterpulsing.as_ref())
+        .filter(|_| !analog);
+    let of_background = match afterpulsing {
+        Some(a) => {
+            let recorded = match detector.filter(|d| d.dead_time_s > 0.0) {
+                Some(d) => crate::detector::DeadTime {
+                    tau_s: d.dead_time_s,
+                    model: d.dead_time_model,
+                    bin_width_s: raw.bin_width_s,
+                }
+                .recorded_means(noise),
+                None => noise.to_vec(),
+            };
+            crate::detector::afterpulse::Afterpulsing::from_config(a, raw.bin_width_s)
+                .expected(&recorded)
+        }
+        None => vec![0.0; noise.len()],
+    };
+    let afterpulse = &raw.expected_afterpulse[bins.clone()];
+    raw.expected_signal[bins.clone()]
+        .iter()
+        .zip(&raw.expected_induced[bins])
+        .zip(afterpulse.iter().zip(&of_background))
+        .map(|((s, i), (a, b))| s + i + (a - b).max(0.0))
+        .collect()
+}
+
 /// Whether a bin is free of signal: its expected signal per shot is below
 /// [`SIGNAL_FREE_SHARE`] of its expected background + dark per shot, or is exactly 0.
 pub fn signal_free(signal: f64, noise: f64) -> bool {
@@ -324,8 +366,10 @@ pub fn signal_free(signal: f64, noise: f64) -> bool {
 /// The bins of the SCC background window (`Background_Low/High`): the longest run of
 /// consecutive [`signal_free`] bins, the farthest of equally long runs; within the
 /// first `pretrigger_bins` bins (recorded before the pulse) when there are any, else
-/// anywhere in the profile. `None` when no bin qualifies. `signal` is the largest
-/// expected signal over the profiles, `noise` the smallest background + dark.
+/// anywhere in the profile. `None` when no bin qualifies. `signal` is what the expected
+/// record holds beyond the background + dark (the largest over the profiles: the
+/// signal, its signal-induced counts and its afterpulses), `noise` the smallest
+/// background + dark.
 pub fn background_bins(
     signal: &[f64],
     noise: &[f64],
@@ -360,13 +404,15 @@ fn no_background(path: &Path, channel: &str, pretrigger_bins: usize) -> Error {
     let reason = if pretrigger_bins > 0 {
         format!(
             "channel `{channel}`: none of the {pretrigger_bins} pre-trigger bins has an \
-             expected signal below {share} % of the expected background + dark, so the SCC \
-             background window (Background_Low/High) has no place: check the pre-trigger bins"
+             expected signal (with its signal-induced counts and afterpulses) below {share} % \
+             of the expected background + dark, so the SCC background window \
+             (Background_Low/High) has no place: check the pre-trigger bins"
         )
     } else {
         format!(
-            "channel `{channel}`: no bin has an expected signal below {share} % of the \
-             expected background + dark, so the SCC background window \
+            "channel `{channel}`: no bin has an expected signal (with its signal-induced \
+             counts and afterpulses) below {share} % of the expected background + dark, so \
+             the SCC background window \
              (Background_Low/High) has no place: record bins beyond the signal (raise \
              acquisition.top_altitude_km, e.g. above 86 km where the US76 atmosphere ends) \
              or pre-trigger bins"

@@ -35,8 +35,9 @@
 //!   station p and T from US76 at `platform.altitude_km`.
 //! * `Background_Low/High` (range, m, the unit of the `atmospheric_lidar` examples:
 //!   19–20 km, 50–60 km, 75–105 km, beyond any bin count): the limits of the longest run
-//!   of consecutive bins whose expected signal per shot is below 1 % of the expected
-//!   background + dark (the farthest of equal runs; in a changing scene the largest
+//!   of consecutive bins whose expected record per shot beyond the background + dark
+//!   (the signal, its signal-induced counts and its afterpulses) is below 1 % of the
+//!   expected background + dark (the farthest of equal runs; in a changing scene the largest
 //!   signal and smallest background over the profiles), within the pre-trigger bins when
 //!   the file has `pretrigger_bins`; no such bin is refused with what to do.
 //! * `Trigger_Delay` (ns) = 2·r₀/c with r₀ the range at the start of bin 0, so that bin

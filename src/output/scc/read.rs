@@ -34,6 +34,12 @@ pub struct RawRun {
     /// `expected_background + expected_dark` (channel, bin), counts per shot; in a
     /// changing scene the smallest background over profiles.
     pub expected_noise: Vec<f64>,
+    /// `expected_induced` (channel, bin), the signal-induced counts per shot (0 where
+    /// the file has none); in a changing scene the largest over profiles.
+    pub expected_induced: Vec<f64>,
+    /// `expected_afterpulse` (channel, bin), the afterpulses per shot of the recorded
+    /// counts (0 where the file has none); in a changing scene the largest over profiles.
+    pub expected_afterpulse: Vec<f64>,
     /// Root attribute `pretrigger_bins` (bins recorded before the pulse leaves, at the
     /// start of each profile; a format-3 feature), 0 when the file has none.
     pub pretrigger_bins: usize,
@@ -97,6 +103,20 @@ pub fn read_raw(path: &Path) -> Result<RawRun> {
             )?,
             &read_values::<f64>(path, &f, "expected_dark")?,
         ),
+        expected_induced: optional_largest(
+            path,
+            &f,
+            "expected_induced",
+            n_profiles,
+            n_channels * n_bins,
+        )?,
+        expected_afterpulse: optional_largest(
+            path,
+            &f,
+            "expected_afterpulse",
+            n_profiles,
+            n_channels * n_bins,
+        )?,
         pretrigger_bins: pretrigger_bins(path, &f, n_bins)?,
         wavelength_nm: f64_attr(path, &f, "wavelength_nm")?,
         rep_rate_hz: f64_attr(path, &f, "rep_rate_hz")?,
@@ -205,6 +225,23 @@ fn over_profiles(
     Ok(out)
 }
 
+/// A detector's (channel, bin) variable the file writes only when some channel has it
+/// (`expected_induced`, `expected_afterpulse`): its largest value over profiles, zeros
+/// when absent.
+fn optional_largest(
+    path: &Path,
+    f: &hdf5::File,
+    name: &str,
+    n_profiles: usize,
+    per_profile: usize,
+) -> Result<Vec<f64>> {
+    if f.dataset(name).is_err() {
+        return Ok(vec![0.0; per_profile]);
+    }
+    let values = read_values::<f64>(path, f, name)?;
+    over_profiles(path, name, values, (n_profiles, per_profile), f64::max)
+}
+
 /// Root attribute `pretrigger_bins` (format 3: bins recorded before the pulse, at the
 /// start of each profile), 0 when absent; refused unless a whole number below the bins.
 fn pretrigger_bins(path: &Path, f: &hdf5::File, n_bins: usize) -> Result<usize> {
@@ -247,6 +284,18 @@ fn check_shapes(path: &Path, r: &RawRun, n_channels: usize) -> Result<()> {
         (
             "expected_background/dark",
             r.expected_noise.len(),
+            per_channel_bin,
+            "channel × bin",
+        ),
+        (
+            "expected_induced",
+            r.expected_induced.len(),
+            per_channel_bin,
+            "channel × bin",
+        ),
+        (
+            "expected_afterpulse",
+            r.expected_afterpulse.len(),
             per_channel_bin,
             "channel × bin",
         ),
