@@ -21,8 +21,9 @@
 //! taken as an independent uniform error (mean 0, variance 1/12 LSB²): with σ_e ≥ LSB its
 //! bias is below `e^{−2π²}/π ≈ 9e-10` LSB (the Gaussian part alone smooths the
 //! quantiser; Widrow & Kollár 2008, *Quantization Noise*, ch. 4), 2e-3 LSB at σ_e =
-//! LSB/2. Clipping is not in the law: `simulate` warns where a bin's mean is within four
-//! standard deviations of either end of the ADC range.
+//! LSB/2. Clipping is not in the law: `simulate` warns where a bin's codes leave the
+//! ADC's range with a probability above 1e-6 a shot (bounded from the law of the code,
+//! [`super::analog_range`]).
 //!
 //! **Shot path** ([`Analog::record_shot`], through [`super::recorded_profile`]: its gains
 //! and noise from `stream_rng(seed ^ ANALOG_STREAM, profile, block)`, the photons the
@@ -52,13 +53,6 @@ fn quantize(v: f64, full: f64) -> u64 {
     } else {
         (v + 0.5).min(full + 0.5) as u64
     }
-}
-
-/// Whether a shot's code of cumulants `k` comes within four standard deviations of
-/// either end of the ADC's range `[0, full]` (where clipping leaves the law).
-fn clips(k: &[f64; 4], full: f64) -> bool {
-    let sd = k[1].max(0.0).sqrt();
-    k[0] - 4.0 * sd < -0.5 || k[0] + 4.0 * sd > full + 0.5
 }
 
 /// Variance, codes², of the one Gaussian the aggregate path draws for the noise and
@@ -357,22 +351,27 @@ impl Analog {
     }
 
     /// Whether each bin's record is linear in its photoelectrons (the file's
-    /// `linear_range`): the mean code above the offset is at least the rms of one shot's
-    /// electronic noise and rounding (below, a shot's code is mostly noise), and the mean
-    /// stays four standard deviations inside the ADC's ends (no clipping).
+    /// `linear_range`, `super::analog_range`): the mean code above the offset is at least
+    /// the rms of one shot's electronic noise and rounding (below, a shot's code is mostly
+    /// noise), a shot's code leaves the ADC's range with probability at most
+    /// `CLIP_PROBABILITY` (from the law of the code), and the low-passed photoelectrons
+    /// are the bin's own to `PROPORTIONAL_TOLERANCE` (the ratio to the photon counts is
+    /// the gluing constant there).
     pub fn linear_bins(&self, lambda: &[f64]) -> Vec<bool> {
         let floor = (self.noise_codes().powi(2) + 1.0 / 12.0).sqrt();
-        let full = self.full_scale_code() as f64;
-        self.shot_cumulants(lambda)
+        let clipping = self.clipping_bins(lambda);
+        let proportional = self.proportional_bins(lambda);
+        self.expected_codes(lambda)
             .iter()
-            .map(|k| k[0] - self.offset_codes() >= floor && !clips(k, full))
+            .zip(clipping.iter().zip(&proportional))
+            .map(|(&m, (&clips, &prop))| m - self.offset_codes() >= floor && !clips && prop)
             .collect()
     }
 
     /// The warning for a chain whose law the codes leave: electronic noise below one
     /// code (the rounding's bias is then up to `e^{−2π²σ²}/π` codes a shot), or bins whose
-    /// mean code per shot comes within four standard deviations of either end of the ADC
-    /// range (clipping), naming the first such bin; `None` when neither.
+    /// codes leave the ADC's range with a probability above `CLIP_PROBABILITY` a shot
+    /// (clipping, `super::analog_range`), naming the first such bin; `None` when neither.
     pub fn clipping_warning(&self, lambda: &[f64], altitude_m: &[f64]) -> Option<String> {
         let sigma = self.noise_codes();
         if sigma < 1.0 {
@@ -386,17 +385,22 @@ impl Analog {
                 self.volts_per_code()
             ));
         }
-        let full = self.full_scale_code() as f64;
-        let cumulants = self.shot_cumulants(lambda);
-        let (bin, k) = cumulants.iter().enumerate().find(|(_, k)| clips(k, full))?;
+        let full = self.full_scale_code();
+        let limit = super::analog_range::CLIP_PROBABILITY;
+        let (bin, (lo, hi)) = self
+            .clipping_probabilities(lambda)
+            .into_iter()
+            .enumerate()
+            .find(|(_, (lo, hi))| *lo > limit || *hi > limit)?;
+        let mean = self.expected_codes(&lambda[..=bin])[bin];
         Some(format!(
-            "lidarsim: warning: analog bin {bin} ({:.2} km) has a mean of {:.1} codes per shot \
-             (sd {:.1}) within 4 sd of the ADC's ends (0, {full}): its codes clip, and \
-             expected_counts (which has no clipping) overstates or understates them; change \
-             instrument.detector.adc_range_v, offset_v or gain",
+            "lidarsim: warning: analog bin {bin} ({:.2} km) has a mean of {mean:.1} codes per \
+             shot and its codes leave the ADC's range (0, {full}) with a probability up to \
+             {:.1e} a shot (above {limit:e}): they clip, and expected_counts (which has no \
+             clipping) overstates or understates them; change instrument.detector.adc_range_v, \
+             offset_v or gain",
             altitude_m.get(bin).copied().unwrap_or(f64::NAN) / 1e3,
-            k[0],
-            k[1].max(0.0).sqrt()
+            lo.max(hi)
         ))
     }
 }

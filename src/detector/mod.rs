@@ -6,6 +6,7 @@
 
 pub mod afterpulse;
 pub mod analog;
+pub mod analog_range;
 pub mod counting;
 pub mod dead_time;
 pub mod dead_time_variance;

@@ -197,7 +197,7 @@ pub fn analog_variables(lidar: &Lidar, expected: &[ExpectedProfile]) -> Vec<Dete
     vars.push(DetectionVariable {
         name: "linear_range",
         per_bin: true,
-        long_name: "1 where the channel's record is linear in the photons (photon counting: dead time loses at most 1 %; analog: mean above one shot's noise rms and 4 sd inside the ADC range), else 0; a both pair glues where both are 1",
+        long_name: "1 where the channel's record is linear in the photons (photon counting: dead time loses at most 1 %; analog: mean above one shot's noise rms, codes inside the ADC range but with probability at most 1e-6 a shot, and the low-passed photons within 1 % of the bin's own), else 0; a both pair glues where both are 1",
         units: "1",
         data: linear,
     });
