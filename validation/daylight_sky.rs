@@ -1,7 +1,9 @@
 //! The daylight sky from space against an independent single-scattering integration,
 //! and the error of the single-scattering order (validation/reports/daylight_sky.md).
 //!
-//!     cargo run --release --example daylight_sky > validation/reports/daylight_sky.md
+//!     cargo run --release --example daylight_sky
+//!
+//! (its output is the body of the report, below a summary written by hand).
 //!
 //! 1. lidarsim's sky (`SkyColumn::radiance`, and the deterministic model's background
 //!    over the instrument's factor) against `validation/sky_reference.rs` at 60° and
@@ -88,9 +90,8 @@ fn former(albedo: f64, f: f64, zenith: f64, tau: f64) -> f64 {
 
 fn main() {
     let f = lidarsim::scene::sun::solar_spectral_irradiance_photons(532.0);
-    println!("# The daylight sky from space against a single-scattering integration\n");
     println!(
-        "Made by `cargo run --release --example daylight_sky > validation/reports/daylight_sky.md` \
+        "Made by `cargo run --release --example daylight_sky` \
          (`validation/daylight_sky.rs`; the reference is `validation/sky_reference.rs`, also \
          used by `tests/solar_background.rs`). 532 nm, F = {f:.4e} photons m⁻² s⁻¹ nm⁻¹ \
          (1 AU), nadir view, US76 molecules, ozone off; radiances in photons m⁻² s⁻¹ sr⁻¹ nm⁻¹.\n"
@@ -193,7 +194,9 @@ fn main() {
     let lidar = load(true, &[]);
     let a = lidar.first().atmosphere.aerosol.clone().unwrap();
     let tau_r = reference(load(false, &[]).first()).molecular_depth();
-    let tau_a: f64 = (0..100_000).map(|k| a.extinction_per_m(k as f64 + 0.5)).sum();
+    let tau_a: f64 = (0..100_000)
+        .map(|k| a.extinction_per_m(k as f64 + 0.5))
+        .sum();
     println!(
         "Homogeneous plane-parallel layers, black surface, nadir view (scalar, no polarization): \
          the second-order path radiance I₂ over the first I₁ (`second_order` below: the \
@@ -204,7 +207,10 @@ fn main() {
     );
     println!("| layer | θ_s | I₂/I₁ | successive orders 1/(1 − I₂/I₁) − 1 |");
     println!("|---|---|---|---|");
-    for (name, tr, ta) in [("molecules", tau_r, 0.0), ("molecules + aerosol", tau_r, tau_a)] {
+    for (name, tr, ta) in [
+        ("molecules", tau_r, 0.0),
+        ("molecules + aerosol", tau_r, tau_a),
+    ] {
         for (zenith, s) in [(60.0, 2.0), (85.0, 10.2)] {
             let r = second_order(tr, ta, 0.7, zenith, s);
             println!(
@@ -214,7 +220,10 @@ fn main() {
         }
     }
     println!();
-    for (name, tr, ta) in [("molecules", tau_r, 0.0), ("molecules + aerosol", tau_r, tau_a)] {
+    for (name, tr, ta) in [
+        ("molecules", tau_r, 0.0),
+        ("molecules + aerosol", tau_r, tau_a),
+    ] {
         let s = spherical_albedo(tr, ta, 0.7);
         println!(
             "Spherical albedo from below (single scattering), {name}: s = {s:.4}; coupling \
@@ -288,14 +297,24 @@ fn shipped() {
             )
             .unwrap();
             let factor = lidar.first().instrument.background_per_radiance;
-            let floor = lidar.first().loaded.config.background.radiance.unwrap_or(0.0);
+            let floor = lidar
+                .first()
+                .loaded
+                .config
+                .background
+                .radiance
+                .unwrap_or(0.0);
             let sunlight = model.sunlight().unwrap();
             (0..profiles)
                 .map(|p| {
                     let runs = model.runs(p);
                     let b = model.run_backgrounds(0, p, &runs);
                     let shots: u64 = runs.iter().map(|r| r.1).sum();
-                    let mean: f64 = runs.iter().zip(&b).map(|(r, b)| r.1 as f64 * b).sum::<f64>()
+                    let mean: f64 = runs
+                        .iter()
+                        .zip(&b)
+                        .map(|(r, b)| r.1 as f64 * b)
+                        .sum::<f64>()
                         / shots as f64;
                     ((mean / factor - floor).max(0.0), sunlight.sun_at(p).0)
                 })
@@ -312,7 +331,11 @@ fn shipped() {
                 zenith[p],
                 with[p],
                 without[p],
-                if without[p] > 0.0 { with[p] / without[p] } else { f64::NAN }
+                if without[p] > 0.0 {
+                    with[p] / without[p]
+                } else {
+                    f64::NAN
+                }
             );
         }
     }
@@ -334,7 +357,9 @@ fn second_order(tr: f64, ta: f64, g: f64, zenith: f64, s: f64) -> f64 {
     let sin_s = (1.0 - mu_s * mu_s).sqrt();
     let (nt, nm, np) = (200, 200, 72);
     // the φ'-average of the first scattering's phase function per μ' node
-    let mus: Vec<f64> = (0..nm).map(|j| -1.0 + (j as f64 + 0.5) * 2.0 / nm as f64).collect();
+    let mus: Vec<f64> = (0..nm)
+        .map(|j| -1.0 + (j as f64 + 0.5) * 2.0 / nm as f64)
+        .collect();
     let avg: Vec<f64> = mus
         .iter()
         .map(|&m| {
@@ -391,12 +416,20 @@ fn spherical_albedo(tr: f64, ta: f64, g: f64) -> f64 {
                 let (sa, sb) = ((1.0 - a * a).sqrt(), (1.0 - b * b).sqrt());
                 // up (a) scattered into down (b): cos Θ = −a·b + sa·sb·cos Δφ
                 let p: f64 = (0..np)
-                    .map(|q| mixed_phase(-a * b + sa * sb * ((q as f64 + 0.5) * d_phi).cos(), tr, ta, g))
+                    .map(|q| {
+                        mixed_phase(
+                            -a * b + sa * sb * ((q as f64 + 0.5) * d_phi).cos(),
+                            tr,
+                            ta,
+                            g,
+                        )
+                    })
                     .sum::<f64>()
                     * d_phi;
                 // incoming radiance 1 at slant t/a; into 2π·d_mu of up directions; out to
                 // the bottom at slant t/b, irradiance weight b·(1/b) path factor
-                e += p / (4.0 * PI) * (-t / a).exp() * (-t / b).exp() * 2.0 * PI * d_mu * d_mu * d_t;
+                e +=
+                    p / (4.0 * PI) * (-t / a).exp() * (-t / b).exp() * 2.0 * PI * d_mu * d_mu * d_t;
             }
         }
     }
