@@ -56,7 +56,11 @@ pub fn sky_radiance(cfg: &ScenarioConfig, atmosphere: &Atmosphere) -> f64 {
             let f = sun::solar_spectral_irradiance_photons(cfg.instrument.wavelength_nm);
             let reflector = crate::surface::reflector_below(cfg);
             let sun = sun::SunlightPath::of(cfg, atmosphere, reflector.altitude_m)
-                .radiance(reflector.albedo, if f.is_finite() { f } else { 0.0 }, zenith)
+                .radiance(
+                    reflector.albedo,
+                    if f.is_finite() { f } else { 0.0 },
+                    zenith,
+                )
                 .total();
             floor + sun
         }

@@ -95,8 +95,9 @@ fn model_radiance(path: &std::path::Path, set: &[String]) -> f64 {
 /// The issue's criterion: the daylight sky radiance (reflected + path) at θ_s = 60°
 /// and 85° over the ocean (ρ = 0.05) and snow (ρ = 0.8), US76 molecules and the 23 km
 /// background aerosol, agrees with the independent single-scattering integration
-/// within 3 % (the issue asks 10 %; measured: ≤ 1.2 %, report). Before the path
-/// radiance the ocean's sky was 0.35 (60°) and 0.1 (85°) of this.
+/// within 1 % (the issue asks 10 %; measured: ≤ 0.03 %, validation/reports/
+/// daylight_sky.md). Today's main (reflected term only, plane-parallel, the ½ rule)
+/// gives 0.32, 0.13, 0.75 and 0.94 of it and fails.
 #[test]
 fn the_daylight_sky_agrees_with_a_single_scattering_integration() {
     let dir = scratch("sky");
@@ -121,14 +122,15 @@ fn the_daylight_sky_agrees_with_a_single_scattering_integration() {
                 want.reflected,
                 want.path
             );
-            assert!((ratio - 1.0).abs() < 0.03, "ρ {albedo}, {zenith}°: {ratio}");
+            assert!((ratio - 1.0).abs() < 0.01, "ρ {albedo}, {zenith}°: {ratio}");
         }
     }
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// Each part on its own, molecules only and with aerosol: the path radiance and the
-/// reflected term of `SkyColumn::radiance` against the reference's within 3 %, and
+/// Each part on its own, molecules only and with aerosol, at 30°–88°: the path
+/// radiance and the reflected term of `SkyColumn::radiance` against the reference's
+/// within 0.5 % (measured ≤ 0.12 %, at 88°), and
 /// `background.path_radiance = false` leaves the reflected term alone.
 #[test]
 fn the_path_and_reflected_parts_each_agree() {
@@ -150,8 +152,11 @@ fn the_path_and_reflected_parts_each_agree() {
             let want = reference.sky(0.8, 1.0, zenith);
             let (rp, rr) = (got.path / want.path, got.reflected / want.reflected);
             eprintln!("aerosol {aerosol}, {zenith}°: path {rp:.4}, reflected {rr:.4}");
-            assert!((rp - 1.0).abs() < 0.03, "{aerosol} {zenith}: path {rp}");
-            assert!((rr - 1.0).abs() < 0.03, "{aerosol} {zenith}: reflected {rr}");
+            assert!((rp - 1.0).abs() < 0.005, "{aerosol} {zenith}: path {rp}");
+            assert!(
+                (rr - 1.0).abs() < 0.005,
+                "{aerosol} {zenith}: reflected {rr}"
+            );
             let off = column.radiance(0.8, 1.0, zenith, false);
             assert_eq!((off.path, off.reflected), (0.0, got.reflected));
         }
@@ -194,11 +199,17 @@ fn the_air_mass_is_spherical() {
     let column = SkyColumn::above(&sc.atmosphere, 0.0);
     let reference = reference(sc);
     for (z, tol) in [(60.0, 0.002), (85.0, 0.015), (88.0, 0.035)] {
-        let (got, own) = (column.molecular_air_mass(z), reference.molecular_air_mass(z));
+        let (got, own) = (
+            column.molecular_air_mass(z),
+            reference.molecular_air_mass(z),
+        );
         let hand = 1.0 / (z.to_radians().cos() + 0.50572 * (96.07995 - z).powf(-1.6364));
         eprintln!("{z}°: lidarsim {got:.4}, reference {own:.4}, Kasten-Young {hand:.4}");
         assert!((got / hand - 1.0).abs() < tol, "{z}: {got} vs {hand}");
-        assert!((own / hand - 1.0).abs() < tol, "{z}: reference {own} vs {hand}");
+        assert!(
+            (own / hand - 1.0).abs() < tol,
+            "{z}: reference {own} vs {hand}"
+        );
         assert!((got / own - 1.0).abs() < 0.002, "{z}: {got} vs {own}");
     }
     std::fs::remove_dir_all(&dir).ok();

@@ -229,7 +229,8 @@ impl Column {
             }
             path += p * (-(sun[k] + top[k])).exp() * dz(k);
         }
-        let direct_down = mu_s * (-(self.slant(0, sin_z, &ext) + 0.5 * ext(0) * dz(0) / mu_s)).exp();
+        let direct_down =
+            mu_s * (-(self.slant(0, sin_z, &ext) + 0.5 * ext(0) * dz(0) / mu_s)).exp();
         let down = self.diffuse(mu_s, &sun, &below);
         // up: the air scatters the reflector's light into the nadir view
         let up = (-total).exp() + self.diffuse(1.0, &top, &below);

@@ -404,14 +404,8 @@ mod tests {
         assert!((l - 0.3 * f * 0.5 / PI * 0.8).abs() < 1e-6 * l);
         // model.md: ~1e17–1e18 for land and cloud at moderate sun
         assert!(l > 1e17 && l < 1e18);
-        assert_eq!(
-            reflected_radiance(0.3, f, 90.0, 0.8),
-            0.0
-        );
-        assert_eq!(
-            reflected_radiance(0.3, f, 120.0, 0.8),
-            0.0
-        );
+        assert_eq!(reflected_radiance(0.3, f, 90.0, 0.8), 0.0);
+        assert_eq!(reflected_radiance(0.3, f, 120.0, 0.8), 0.0);
         assert!((reflected_radiance(1.0, PI, 0.0, 1.0) - 1.0).abs() < 1e-12);
     }
 }

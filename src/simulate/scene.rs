@@ -250,8 +250,7 @@ impl SceneModel {
                 .collect::<Result<Vec<Scenario>>>()?;
             if solar {
                 // the sky above each column's reflector, built once (none without the sun)
-                let below =
-                    crate::surface::reflector_below(&track.column_config(&configs[0], col));
+                let below = crate::surface::reflector_below(&track.column_config(&configs[0], col));
                 reflectors.push(
                     channels
                         .iter()
