@@ -74,7 +74,7 @@ impl PolarizationOptics {
 }
 
 /// The mean transmission `T_S` of a channel's analyser (Freudenthaler 2016, Atmos. Meas.
-/// Tech. 9, 4181, §2: the intensity transmittance for unpolarized light, its
+/// Tech. 9, 4181: the intensity transmittance for unpolarized light,
 /// `T_S = (T_S,p + T_S,s)/2`): the channel's share of light half parallel, half
 /// perpendicular to the laser (δ = 1) without diattenuation or rotation, i.e. the mean of
 /// its transmissions `(1−x, x)` of the two polarizations: 1/2 for a parallel or a
