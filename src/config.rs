@@ -501,6 +501,19 @@ pub enum ExtinctionSource {
     SurfaceExtinction,
 }
 
+/// The background aerosol's stratosphere (docs/model.md §4 "Background aerosol").
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StratosphericAerosol {
+    /// Elterman's (1968) shape throughout, scaled with the surface extinction (the
+    /// paper's model; a volcanically loaded 1960s stratosphere).
+    #[default]
+    Elterman1968,
+    /// A present-day background stratospheric aerosol of its own extinction above the
+    /// troposphere (`aerosol_profile::background_stratosphere_per_m`).
+    Background,
+}
+
 /// Background aerosol: Eq. 5 surface extinction with the Eq. 6 vertical shape.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -529,6 +542,10 @@ pub struct AerosolConfig {
     /// absent = 0.5.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub effective_radius_um: Option<f64>,
+    /// The stratosphere's aerosol: Elterman's shape (default) or a present-day
+    /// background.
+    #[serde(default)]
+    pub stratosphere: StratosphericAerosol,
 }
 
 /// Layer species.

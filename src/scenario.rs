@@ -510,6 +510,7 @@ impl Scenario {
         }
         e.background_bin_indices = self.background_bin_indices();
         e.background_bins = e.background_bin_indices.len();
+        check_finite(&e)?;
         Ok(e)
     }
 
@@ -580,9 +581,15 @@ impl Scenario {
 
     /// Gives each water cloud's apparent return the depolarization of Hu et al. (2006)
     /// (`multiple_scattering::water_cloud_depolarization`, docs/model.md §4j): the
-    /// channel sees the cloud's part of the bin's return (from the point optics at the bin
-    /// centre) with that depolarization instead of the droplets' own (`depolarization`,
-    /// kept where it is larger); the air's part keeps its own.
+    /// channel sees the cloud's apparent return in every polarization with that
+    /// depolarization instead of the droplets' own (`depolarization`, kept where it is
+    /// larger); the air's part keeps its own. The cloud's apparent return in every
+    /// polarization, `W_i`, is the bin's own (`BinMultipleScattering::cloud_apparent`),
+    /// the same for every channel, never the channel's return divided by its share of
+    /// the droplets' own depolarization: that share is 0 for a perpendicular channel
+    /// without cross-talk under droplets of δ = 0, whose multiply scattered light the
+    /// channel does see. The channel's return becomes
+    /// `old − W_i·share(δ_own) + W_i·share(δ_i)`.
     fn depolarize_water_clouds(&self, e: &mut ExpectedProfile) {
         let g = &self.geometry;
         let share = |d: f64| {
@@ -590,6 +597,7 @@ impl Scenario {
                 .polarization
                 .share(self.atmosphere.channel, d)
         };
+        let particle_line = self.atmosphere.lines.particle;
         let mut k = g.pretrigger_bins;
         while k < g.n_bins {
             if e.point[k].alpha_water <= 0.0 {
@@ -600,34 +608,47 @@ impl Scenario {
             while k < g.n_bins && e.point[k].alpha_water > 0.0 {
                 k += 1;
             }
-            let before = e.multiple_scattering_at(start.saturating_sub(1)).ratio;
-            let (mut single, mut apparent, mut tau) = (vec![], vec![], vec![]);
+            // the cloud's multiple scattering in every polarization, alike for every
+            // channel (a channel's own ratio weights a bin across the cloud's base by
+            // its own mix of cloud and air)
+            let before = e
+                .multiple_scattering_at(start.saturating_sub(1))
+                .total_ratio;
+            let (mut single, mut apparent, mut tau, mut whole) = (vec![], vec![], vec![], vec![]);
             let mut depth = 0.0;
-            // the cloud's part of the channel's return, and that return in every
-            // polarization (the channel's share of the droplets' own depolarization)
-            let cloud_part = |i: usize| {
-                let o = &e.point[i];
-                let part = self.atmosphere.lines.particle * o.beta_cld * share(o.depol_cld());
-                (part / o.beta_channel).clamp(0.0, 1.0)
-            };
             for i in start..k {
                 let (ra, rb) = g.bin_range_bounds(i);
                 let half = 0.5 * e.point[i].alpha_water * (rb - ra);
                 tau.push(depth + half);
                 depth += 2.0 * half;
-                let whole =
-                    e.attenuated_backscatter[i] * cloud_part(i) / share(e.point[i].depol_cld());
-                apparent.push(whole / before);
-                single.push(whole / e.multiple_scattering[i].ratio);
+                // the clouds' own return in every polarization, bin-averaged, through
+                // the channel's particle line: alike for every channel
+                let m = &e.multiple_scattering[i];
+                whole.push(particle_line * m.cloud_apparent);
+                single.push(m.cloud_single);
+                apparent.push(m.cloud_apparent / before);
             }
             let delta = multiple_scattering::water_cloud_depolarization(&single, &apparent, &tau);
-            for (i, d) in (start..k).zip(delta) {
+            for ((i, d), w) in (start..k).zip(delta).zip(whole) {
                 let own = e.point[i].depol_cld();
                 let d = d.max(own);
-                let part = cloud_part(i);
-                let factor = 1.0 - part + part * share(d) / share(own);
-                e.signal[i] *= factor;
-                e.attenuated_backscatter[i] *= factor;
+                let old = e.attenuated_backscatter[i];
+                // the channel's return less the cloud's part of it, plus the cloud's
+                // apparent return with its new depolarization
+                let new = (old - w * share(own)).max(0.0) + w * share(d);
+                let factor = if old > 0.0 {
+                    new / old
+                } else if new > 0.0 {
+                    f64::INFINITY // the channel saw none of the cloud's single scattering
+                } else {
+                    1.0
+                };
+                e.signal[i] = if old > 0.0 {
+                    e.signal[i] * factor
+                } else {
+                    self.instrument.signal_constant * e.range_weight[i] * new
+                };
+                e.attenuated_backscatter[i] = new;
                 e.multiple_scattering[i].water_depolarization = d;
                 e.multiple_scattering[i].polarization_factor = factor;
             }
@@ -649,4 +670,35 @@ impl Scenario {
         e.range_weight.push(0.0);
         e.attenuated_backscatter.push(0.0);
     }
+}
+
+/// No expectation that is not finite reaches a sampler or a file: the first bin whose
+/// signal, induced noise, afterpulses, recorded mean or attenuated backscatter is NaN or
+/// infinite (or a background or dark rate that is) is a clear error instead.
+fn check_finite(e: &ExpectedProfile) -> Result<()> {
+    for (what, rate) in [("background", e.background), ("dark", e.dark)] {
+        if !rate.is_finite() {
+            return Err(Error::Unsupported(format!(
+                "the expected {what} counts per bin are not finite ({rate})"
+            )));
+        }
+    }
+    let rows: [(&str, &[f64]); 5] = [
+        ("signal", &e.signal),
+        ("signal-induced noise", &e.induced),
+        ("afterpulses", &e.afterpulse),
+        ("recorded mean", &e.recorded),
+        ("attenuated backscatter", &e.attenuated_backscatter),
+    ];
+    for (what, row) in rows {
+        if let Some(i) = row.iter().position(|v| !v.is_finite()) {
+            let z = e.altitude_m.get(i).copied().unwrap_or(f64::NAN);
+            return Err(Error::Unsupported(format!(
+                "bin {i} (altitude {z:.0} m): the expected {what} is not finite ({}); \
+                 a model gave no number there",
+                row[i]
+            )));
+        }
+    }
+    Ok(())
 }

@@ -29,8 +29,13 @@ const X_N2: f64 = 0.780_84;
 /// Avila et al. (2004), Table 4 and Eq. 15: the H₂O ν₁ + ν₃ band excited at 354.7 nm,
 /// both polarizations, 288 K, m² sr⁻¹ (summed line by line; docs/model.md §4h).
 const AVILA_355_M2_SR: f64 = 9.087e-34;
-/// The preset's 407 nm filter passes this share of the band (`band_transmission`).
-const BAND_SHARE: f64 = 0.85;
+/// The preset's 407 nm filter passes this share of the band (`band_transmission`): by
+/// hand from Avila et al.'s (2004) Table 4 and Eq. 15 at 354.7 nm and 288.15 K, the ν₁
+/// and ν₃ lines of 3600–3670 cm⁻¹ (178 lines, mostly the ν₁ Q branch) hold 7.032e-34 of
+/// the band's 9.084e-34 m² sr⁻¹, both polarization components (docs/model.md §4h):
+/// 0.774. The parallel component alone would give 6.898e-34 of 8.074e-34 = 0.854, the
+/// share the preset used to give (issue 36).
+const BAND_SHARE: f64 = 0.774;
 
 /// The worst relative error of the retrieval over the bins of full overlap where the
 /// profile has more than 0.01 g/kg, and how many bins that was.
@@ -82,7 +87,7 @@ fn the_water_vapour_retrieval_of_the_expected_signals_recovers_the_mixing_ratio(
 }
 
 /// An H₂O channel's truth is its own: its `beta_mol` is the band's backscatter,
-/// `N·w·(M_d/M_w)·σ_H2O·0.85`, with Avila et al.'s σ_H2O at 354.7 nm (to 1e-3); its line
+/// `N·w·(M_d/M_w)·σ_H2O·0.774`, with Avila et al.'s σ_H2O at 354.7 nm (to 1e-3); its line
 /// is 407.5 nm (1/λ_R = 1/λ₀ − 3652 cm⁻¹); the file names it; its molecular lidar ratio
 /// is NaN (its backscatter follows the mixing ratio, not the air); and above the
 /// profile's last row (15 km) it sees no backscatter.
@@ -141,7 +146,7 @@ fn water_vapour_keys_are_checked() {
     let dry = format!("{}{}", &base[..profile_start], &base[profile_end..]);
     let heights = "altitude_km = [0.0, 1.0, 1.8,";
     let ratios = "mixing_ratio_g_per_kg = [10.0,";
-    let band = "band_transmission = 0.85";
+    let band = "band_transmission = 0.774";
     let elastic = "name = \"355_total\"\n";
     for (text, words) in [
         (

@@ -15,7 +15,7 @@ pub mod wide_angle;
 
 use crate::config::{
     Channel, ExtinctionSource, LayerKind, MolecularLine, MolecularModel, MultipleScatteringModel,
-    ScenarioConfig,
+    ScenarioConfig, StratosphericAerosol,
 };
 use crate::constants::BOLTZMANN_J_PER_K;
 use crate::error::Result;
@@ -219,15 +219,26 @@ pub struct BackgroundAerosol {
     pub depolarization: f64,
     /// Its particles' forward-lobe 1/e half-width Θ, rad (`multiple_scattering`).
     pub forward_lobe_rad: f64,
+    /// With a present-day background stratosphere, the laser wavelength, nm (the
+    /// stratosphere's extinction is its own, not Elterman's scaled with the surface's).
+    pub background_stratosphere_nm: Option<f64>,
 }
 
 impl BackgroundAerosol {
     /// Its particles' asymmetry factor (`wide_angle`).
     pub const ASYMMETRY: f64 = multiple_scattering::DEFAULT_AEROSOL_ASYMMETRY;
 
-    /// `α_aer(z)`, m⁻¹ (Eq. 6).
+    /// `α_aer(z)`, m⁻¹ (Eq. 6; with a background stratosphere,
+    /// `aerosol_profile::with_background_stratosphere_per_m`).
     pub fn extinction_per_m(&self, z_m: f64) -> f64 {
-        self.surface_extinction_per_m * aerosol_profile::relative_concentration(z_m)
+        match self.background_stratosphere_nm {
+            None => self.surface_extinction_per_m * aerosol_profile::relative_concentration(z_m),
+            Some(wl) => aerosol_profile::with_background_stratosphere_per_m(
+                self.surface_extinction_per_m,
+                z_m,
+                wl,
+            ),
+        }
     }
 }
 
@@ -829,6 +840,8 @@ fn background_aerosol(cfg: &ScenarioConfig) -> Option<BackgroundAerosol> {
             a.effective_radius_um
                 .unwrap_or(multiple_scattering::DEFAULT_AEROSOL_RADIUS_UM),
         ),
+        background_stratosphere_nm: (a.stratosphere == StratosphericAerosol::Background)
+            .then_some(wl),
     })
 }
 

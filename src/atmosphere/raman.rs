@@ -127,8 +127,10 @@ pub fn n2_backscatter_cross_section_m2_sr(laser_nm: f64, temperature_k: f64) -> 
 /// Against the band summed line by line at each laser line: 0.08 % above at 337.1 nm,
 /// 0.4 % above at 532.1 nm (1.312e-34 m² sr⁻¹). The band's temperature dependence
 /// (−0.1 % from 250 to 300 K) is neglected. It is 3.31 times the N₂ band (R1) at 354.7
-/// nm, 3.26 times at 532.1 nm; about 85 % of it lies in the ν₁ Q branch (3600–3670
-/// cm⁻¹), which a narrow filter passes alone (`band_transmission`).
+/// nm, 3.26 times at 532.1 nm; 77.4 % of it lies in the ν₁ Q branch (3600–3670 cm⁻¹,
+/// both polarization components: 7.032e-34 of 9.084e-34 in Avila et al.'s lines at
+/// 354.7 nm; docs/model.md §4h), which a narrow filter passes alone
+/// (`band_transmission`).
 pub fn h2o_backscatter_cross_section_m2_sr(laser_nm: f64) -> f64 {
     let line_wavenumber = |nm: f64| 1.0 / shifted_wavelength_nm(nm, H2O_SHIFT_PER_M);
     H2O_BAND_CROSS_SECTION_355_M2_SR

@@ -63,6 +63,9 @@ pub struct Segment {
     /// Backscatter of every species in every polarization (the elastic return a
     /// channel's share is taken from), m⁻¹ sr⁻¹.
     pub beta_total: f64,
+    /// Backscatter of the clouds in every polarization, m⁻¹ sr⁻¹ (a water cloud's
+    /// depolarization, `multiple_scattering`).
+    pub beta_cloud: f64,
 }
 
 /// The surface's echo on the beam: where it is and its integrated backscatter.
@@ -137,6 +140,7 @@ impl BeamPath {
                         alpha_lobe_g: s.optics.alpha_lobe_g,
                         alpha_absorbing: s.optics.alpha_o3,
                         beta_total: s.optics.beta_mol + s.optics.beta_aer + s.optics.beta_cld,
+                        beta_cloud: s.optics.beta_cld,
                     }
                 })
                 .collect()

@@ -15,8 +15,19 @@ const OPAQUE_OPTICAL_DEPTH: f64 = 400.0;
 /// A bin's multiple scattering (the `small_angle` and `small_and_wide_angle` models).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BinMultipleScattering {
-    /// Apparent over single-scattering signal of the bin (≥ 1; 1 without particles).
+    /// Apparent over single-scattering signal of the bin (≥ 1; 1 without particles),
+    /// its steps weighted by the channel's own single scattering.
     pub ratio: f64,
+    /// The same in every polarization (steps weighted by the single scattering of
+    /// every species), alike for every channel.
+    pub total_ratio: f64,
+    /// The clouds' single-scattering attenuated backscatter in every polarization,
+    /// averaged over the bin (`Σ β_cld·T²·Δ/r² / Σ Δ/r²` over its steps), m⁻¹ sr⁻¹.
+    pub cloud_single: f64,
+    /// The same with each step's multiple scattering (and the bin's wide-angle return):
+    /// the clouds' apparent return in every polarization, which a water cloud's
+    /// depolarization splits between the channels.
+    pub cloud_apparent: f64,
     /// One-way particle optical depth from the instrument to the bin centre.
     pub particle_optical_depth: f64,
     /// Linear depolarization of a water cloud's apparent return in the bin (Hu et al.
@@ -37,6 +48,9 @@ impl BinMultipleScattering {
     /// A bin without multiple scattering (the `constant` model, pre-trigger bins).
     pub const NONE: BinMultipleScattering = BinMultipleScattering {
         ratio: 1.0,
+        total_ratio: 1.0,
+        cloud_single: 0.0,
+        cloud_apparent: 0.0,
         particle_optical_depth: 0.0,
         water_depolarization: 0.0,
         polarization_factor: 1.0,
@@ -54,14 +68,24 @@ impl BinMultipleScattering {
     }
 }
 
+/// One step's share of its bin (`BeamSteps::weights`).
+struct StepWeight {
+    bin: usize,
+    channel: f64,
+    total: f64,
+    cloud: f64,
+    range: f64,
+}
+
 /// The small-angle model's steps along the beam and what each bin needs of them.
 #[derive(Default)]
 struct BeamSteps {
     steps: Vec<ms::Step>,
     /// (step end range, particle optical depth there)
     ends: Vec<(f64, f64)>,
-    /// (bin, single-scattering weight `β·T²·Δ/r²`, the same in all polarizations)
-    weights: Vec<(usize, f64, f64)>,
+    /// per step: its bin, the single-scattering weights `β·T²·Δ/r²` of the channel,
+    /// of every species in every polarization and of the clouds, and `Δ/r²`
+    weights: Vec<StepWeight>,
 }
 
 impl BeamPath {
@@ -87,25 +111,46 @@ impl BeamPath {
             weights,
         } = self.beam_steps(bins);
         let ratios = ms::small_angle_ratios(footprint, first.r_start, &steps);
-        let mut sums = vec![(0.0, 0.0); bins.len()];
-        let mut single_total = vec![0.0; bins.len()];
-        for ((bin, single, total), ratio) in weights.into_iter().zip(ratios) {
-            if let Some(s) = sums.get_mut(bin) {
-                s.0 += single * ratio;
-                s.1 += single;
-                single_total[bin] += total;
+        let n = bins.len();
+        let mut sums = vec![(0.0, 0.0); n];
+        let (mut single_total, mut apparent_total) = (vec![0.0; n], vec![0.0; n]);
+        let mut range_sum = vec![0.0; n];
+        for (w, ratio) in weights.into_iter().zip(ratios) {
+            let i = w.bin;
+            if let Some(s) = sums.get_mut(i) {
+                s.0 += w.channel * ratio;
+                s.1 += w.channel;
+                single_total[i] += w.total;
+                apparent_total[i] += w.total * ratio;
+                out[i].cloud_single += w.cloud;
+                out[i].cloud_apparent += w.cloud * ratio;
+                range_sum[i] += w.range;
             }
         }
-        for ((o, (num, den)), &(a, b)) in out.iter_mut().zip(sums).zip(bins) {
-            if den > 0.0 {
-                o.ratio = num / den;
+        for (i, (o, (num, den))) in out.iter_mut().zip(sums).enumerate() {
+            if range_sum[i] > 0.0 {
+                o.cloud_single /= range_sum[i];
+                o.cloud_apparent /= range_sum[i];
             }
+            if single_total[i] > 0.0 {
+                o.total_ratio = apparent_total[i] / single_total[i];
+            }
+            o.ratio = if den > 0.0 {
+                num / den
+            } else {
+                // the channel sees none of the bin's single scattering (a perpendicular
+                // channel without cross-talk, every species of δ = 0): the ratio of
+                // the return in every polarization, which a water cloud's
+                // depolarization then gives the channel a share of
+                o.total_ratio
+            };
+            let (a, b) = bins[i];
             let centre = 0.5 * (a + b);
             let k = ends.partition_point(|&(r, _)| r <= centre * (1.0 + 1e-12));
             o.particle_optical_depth = if k > 0 { ends[k - 1].1 } else { 0.0 };
         }
         if wide_angle {
-            self.add_wide_angle(footprint, bins, &single_total, &mut out);
+            self.add_wide_angle(footprint, bins, &single_total, &range_sum, &mut out);
         }
         out
     }
@@ -150,8 +195,15 @@ impl BeamPath {
                         Some(&(a, _)) if a <= mid => bin,
                         _ => usize::MAX, // between the path's start and the first bin
                     };
-                    let t2 = (-2.0 * tau).exp() * d / (mid * mid) * ms::mean_exp(2.0 * s.alpha * d);
-                    out.weights.push((bin, s.beta * t2, s.beta_total * t2));
+                    let range = d / (mid * mid);
+                    let t2 = (-2.0 * tau).exp() * range * ms::mean_exp(2.0 * s.alpha * d);
+                    out.weights.push(StepWeight {
+                        bin,
+                        channel: s.beta * t2,
+                        total: s.beta_total * t2,
+                        cloud: s.beta_cloud * t2,
+                        range,
+                    });
                 }
             }
         }
@@ -170,6 +222,7 @@ impl BeamPath {
         footprint: ms::Footprint,
         bins: &[(f64, f64)],
         single_total: &[f64],
+        range_sum: &[f64],
         out: &mut [BinMultipleScattering],
     ) {
         let (Some(path), Some(&(a0, b0))) = (self.segments.first(), bins.first()) else {
@@ -206,6 +259,9 @@ impl BeamPath {
             if single_total[i] > 0.0 {
                 let signal = wide[(i - first) / per_gate] * (1.0 / a - 1.0 / b);
                 out[i].ratio += signal / single_total[i];
+                out[i].total_ratio += signal / single_total[i];
+                // the diffuse light is the clouds' (the air scatters too little)
+                out[i].cloud_apparent += signal / range_sum[i];
             }
         }
     }
