@@ -849,7 +849,6 @@ fn draw_into<S: ProfileSink>(
     sink: &mut S,
 ) -> Result<(u64, Duration)> {
     let first = lidar.first();
-    let cfg = &first.loaded.config;
     let RunPlan {
         seed,
         components,
@@ -874,7 +873,12 @@ fn draw_into<S: ProfileSink>(
             stream_samplers(e, method, energy, components, seed, &c.instrument)
         })
         .collect();
-    let nominal_energy_j = cfg.instrument.pulse_energy_j;
+    // each channel's laser line has its own nominal energy; the shots' factors are shared
+    let nominal_energy_j: Vec<f64> = lidar
+        .channels
+        .iter()
+        .map(|c| c.loaded.config.instrument.pulse_energy_j)
+        .collect();
     let progress = progress_bar(opts.progress, rows.len());
     let streams = channels.len() * channels[0].len();
     // batch size: bounded memory (at most 32 MiB of counts) and a lively progress bar
@@ -939,11 +943,14 @@ fn draw_into<S: ProfileSink>(
                 .map(Vec::as_slice)
                 .chain(place.iter().flat_map(|p| p.iter().map(|v| &v[..])))
                 .collect();
+            // E0_c·(Σf_s/M): exactly E0_c when every factor is 1
+            let factor = d.energy_sum / shots as f64;
+            let pulse_energy_j: Vec<f64> = nominal_energy_j.iter().map(|e0| e0 * factor).collect();
             sink.write_profile(&ProfileRecord {
                 index: index - rows.start,
                 time_s: index as f64 * profile_time_s + 0.5 * profile_time_s,
                 n_shots: shots,
-                pulse_energy_j: nominal_energy_j * d.energy_sum / shots as f64,
+                pulse_energy_j: &pulse_energy_j,
                 counts: &d.counts,
                 components: d
                     .components
