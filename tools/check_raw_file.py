@@ -256,7 +256,9 @@ def check_xarray(path, engine, c, dims):
 def check_ncdump(path, c, dims, attr_names):
     ncdump = shutil.which("ncdump")
     if ncdump is None:
-        c.check(False, "ncdump not found on PATH (install netcdf-bin, or pass --no-ncdump)")
+        # optional (README): skipped, and said so, not a failure
+        print("check_raw_file: SKIPPED the ncdump -h check: ncdump is not on PATH "
+              "(install netcdf-bin to run it)", file=sys.stderr)
         return
     run = subprocess.run([ncdump, "-h", path], capture_output=True, text=True)
     if not c.check(run.returncode == 0, f"ncdump -h failed ({run.returncode}): {run.stderr.strip()}"):

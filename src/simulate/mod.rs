@@ -701,6 +701,13 @@ pub fn plan(lidar: &Lidar, opts: &RunOptions, resolved: Option<ResolvedMethod>) 
         Some(m) => m,
         None => resolve_method(requested, lidar)?,
     };
+    // what the plan holds besides the model (whose estimate was checked when it was
+    // built): the file's variables per bin, before the run's own estimate (check_sizes)
+    let bins = (lidar.channels.len() * first.geometry.n_bins) as f64;
+    crate::resources::require_memory(
+        &format!("planning a run of {bins} bins"),
+        bins * PLAN_BYTES_PER_BIN,
+    )?;
     let expected = lidar.expected()?;
     let shots = first.shots_per_profile();
     let profile_time_s = shots as f64 / first.instrument.rep_rate_hz;
@@ -1345,6 +1352,13 @@ fn raw_file_spec(
     })
 }
 
+/// Memory a run's plan holds per bin and channel beyond the model: the raw file's
+/// per-bin variables (the truth, the expectations), bytes. Measured: peak RSS of
+/// `simulate --profiles 2` over `expect --csv` of scenario 1's 40 km window at
+/// `bin_width_s` 2e-9 and 1e-9 (1.33e5 and 2.67e5 bins): 111 and 167 MB more, 418 bytes a
+/// bin (plus 55 MB of buffers the run's own estimate counts), rounded up.
+const PLAN_BYTES_PER_BIN: f64 = 500.0;
+
 /// Bytes per stored count beyond the Poisson entropy: deflate after shuffle stores
 /// ~1.6–1.75 × the entropy (measured: scenario 1 1.46 B against 0.90 B of entropy, the
 /// CALIOP-like config 0.51 B against 0.29 B), rounded up.
@@ -1414,10 +1428,23 @@ fn check_sizes(
         let file = estimated_file_bytes(totals, shots, profiles, streams);
         crate::resources::require_disk("-o", &opts.output, file)?;
     }
+    // the afterpulses, drawn one at a time from each profile's recorded counts
+    let afterpulse_ns: f64 = lidar
+        .channels
+        .iter()
+        .zip(&planned.expected)
+        .filter_map(|(c, e)| {
+            let p = c.instrument.afterpulsing.as_ref()?.probability;
+            Some(crate::resources::afterpulse_ns_per_shot(
+                p,
+                e.recorded.iter().sum(),
+            ))
+        })
+        .sum();
     let draw_ns_per_profile = match method {
         ResolvedMethod::Shot => ShotSampler::new(totals).strategy().est_ns_per_shot * shots as f64,
         _ => bins * cost::AGGREGATE_LARGE_NS,
-    } + dead_time_ns * shots as f64;
+    } + (dead_time_ns + afterpulse_ns) * shots as f64;
     let ns = profiles as f64
         * (draw_ns_per_profile * streams.min(3) as f64 / threads as f64
             + bins * streams as f64 * FILE_NS_PER_COUNT);
