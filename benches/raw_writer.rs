@@ -105,13 +105,14 @@ fn main() {
                         .collect()
                 })
                 .collect();
+            let energy = vec![0.1; channels];
             let recs: Vec<ProfileRecord> = (first..last)
                 .zip(&values)
                 .map(|(p, values)| ProfileRecord {
+                    pulse_energy_j: &energy,
                     index: p,
                     time_s: time[p],
                     n_shots: n_shots[p],
-                    pulse_energy_j: 0.1,
                     counts: &counts[p * row..(p + 1) * row],
                     components: None,
                     values,

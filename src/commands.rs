@@ -410,7 +410,11 @@ pub fn sweep(
     let at_once = points.min(rayon::current_num_threads().max(1)) as f64;
     resources::require_memory(
         &format!("sweeping {points} points of {} bins", base.geometry.n_bins),
-        at_once * base.geometry.n_bins as f64 * crate::scenario::MODEL_BYTES_PER_BIN,
+        at_once
+            * crate::scenario::model_bytes(
+                base.geometry.n_bins as f64,
+                base.path.segments().len() as f64,
+            ),
     )?;
     let bar =
         crate::simulate::progress_bar(std::io::IsTerminal::is_terminal(&std::io::stderr()), points);

@@ -277,6 +277,9 @@ pub enum SignalInducedNoiseConfig {
     },
 }
 
+/// The wavelengths the model covers, nm: a laser's, and the line a channel detects.
+pub const WAVELENGTH_RANGE_NM: (f64, f64) = (200.0, 4000.0);
+
 /// What a channel's detector records (docs/model.md §4b).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -948,6 +951,10 @@ pub fn plain_serde_message(key: &str, msg: &str) -> String {
         let (got, want) = rest
             .split_once(", expected ")
             .unwrap_or((rest, "another type"));
+        if want == "string only" || got == "unit variant" {
+            // toml's enums: a number or a table where one of the key's names belongs
+            return "expected a string, one of the names this key takes (docs/config.md)".into();
+        }
         let want = match want {
             w if w.starts_with("struct ") || w.starts_with("a map") => "a table".to_string(),
             "f64" | "f32" => "a number".to_string(),
@@ -1470,7 +1477,13 @@ impl ScenarioConfig {
 
     fn validate_instrument(&self, c: &Checker, owners: &OwnerChecks) -> Result<()> {
         let i = &self.instrument;
-        c.range("instrument.wavelength_nm", i.wavelength_nm, 200.0, 4000.0)?;
+        let (shortest, longest) = WAVELENGTH_RANGE_NM;
+        c.range(
+            "instrument.wavelength_nm",
+            i.wavelength_nm,
+            shortest,
+            longest,
+        )?;
         c.positive("instrument.pulse_energy_j", i.pulse_energy_j, 1e3)?;
         (owners.laser)(self, c)?;
         c.positive("instrument.rep_rate_hz", i.rep_rate_hz, 1e7)?;

@@ -15,12 +15,26 @@ use crate::loaded::{self, LoadedConfig};
 use crate::signal::{BeamPath, BinMultipleScattering};
 use crate::snr;
 
-/// Memory the deterministic model holds per range bin, bytes: the expected profile and
-/// truth by species (~35 f64) and at least four atmosphere slabs per bin along the beam.
-/// Measured (peak RSS of `expect --csv` on scenario 1 at `bin_width_s` 1e-9 and 5e-10,
-/// 6.7e5 and 1.3e6 bins): 705 bytes a bin, 354 before the truth by species was kept
-/// (and 610 at 2.7e6 bins then): the margin of the earlier figure is kept.
-pub const MODEL_BYTES_PER_BIN: f64 = 1100.0;
+/// Memory the deterministic model holds per range bin beyond its slabs
+/// ([`MODEL_BYTES_PER_SLAB`]), bytes: the expected profile and truth by species (~31 f64),
+/// the detector's means and the CSV's columns. Measured (heaptrack of `expect --csv` on
+/// scenario 1 at `bin_width_s` 2e-9, 1.33e5 bins: 150.9 MB at the peak, of which the
+/// 1.15e6 slabs' 101 MB): 375 bytes a bin, rounded up.
+pub const MODEL_BYTES_PER_BIN: f64 = 450.0;
+/// Memory per slab of the beam path (`signal::Segment`, 11 f64, and its altitude edge
+/// while the path is laid), bytes: 96, rounded up. A window's slabs are at least four per
+/// bin over the whole path, the atmosphere above a space-borne window included (8.6 per
+/// bin for scenario 1's 40 km window under its 86 km atmosphere). Peak RSS of
+/// `/usr/bin/time -v lidarsim expect configs/paper/scenario1.toml --set
+/// instrument.bin_width_s=1e-10 --set acquisition.top_altitude_km=40 --csv big.csv`
+/// (2.67e6 bins, 2.29e7 slabs): 2.91 GB, 3.5 GB estimated; 5.27 GB before the model's
+/// bins were taken a piece at a time into vectors of their final size.
+pub const MODEL_BYTES_PER_SLAB: f64 = 100.0;
+
+/// The model's memory for `bins` range bins along a path of `slabs` slabs, bytes.
+pub fn model_bytes(bins: f64, slabs: f64) -> f64 {
+    bins * MODEL_BYTES_PER_BIN + slabs * MODEL_BYTES_PER_SLAB
+}
 
 /// Everything the deterministic model needs, built from one validated config.
 #[derive(Debug, Clone)]
@@ -180,7 +194,38 @@ pub struct ExpectedProfile {
     pub background_bin_indices: Vec<usize>,
 }
 
+/// Bins of [`Scenario::expected`]'s model computed at once (their [`ModelBin`]s held
+/// until taken into the profile): 64 Ki bins, ~17 MB.
+const MODEL_PIECE_BINS: usize = 1 << 16;
+
 impl ExpectedProfile {
+    /// Room for `n` bins in each per-bin vector the model fills, exactly (no vector
+    /// grows past the window by doubling).
+    fn reserve_exact(&mut self, n: usize) {
+        self.altitude_m.reserve_exact(n);
+        self.range_m.reserve_exact(n);
+        self.point.reserve_exact(n);
+        self.state.reserve_exact(n);
+        self.overlap.reserve_exact(n);
+        self.t2.reserve_exact(n);
+        self.signal.reserve_exact(n);
+        self.range_weight.reserve_exact(n);
+        self.attenuated_backscatter.reserve_exact(n);
+    }
+
+    /// Takes bin `b` of the model as the next bin.
+    fn push_bin(&mut self, b: ModelBin) {
+        self.altitude_m.push(b.altitude_m);
+        self.range_m.push(b.range_m);
+        self.point.push(b.point);
+        self.state.push(b.state);
+        self.overlap.push(b.overlap);
+        self.t2.push(b.t2);
+        self.signal.push(b.signal);
+        self.range_weight.push(b.range_weight);
+        self.attenuated_backscatter.push(b.attenuated_backscatter);
+    }
+
     /// Number of bins.
     pub fn n_bins(&self) -> usize {
         self.signal.len()
@@ -270,9 +315,10 @@ impl Scenario {
         let cfg = &loaded.config;
         let geometry = Geometry::from_config(cfg, &file)?;
         let bins = geometry.n_bins as f64;
+        // a first look before the atmosphere is built (at least four slabs per bin)
         crate::resources::require_memory(
             &format!("the model of {bins} range bins"),
-            bins * MODEL_BYTES_PER_BIN,
+            model_bytes(bins, 4.0 * bins),
         )?;
         let mut atmosphere = Atmosphere::from_config(&loaded)?;
         let channel = &loaded.channels[0];
@@ -309,6 +355,17 @@ impl Scenario {
                 ),
             ));
         }
+        let (z_lo, z_hi) = BeamPath::altitude_span(&atmosphere, &geometry, surface.as_ref());
+        // the grid's slabs, split further at each layer edge and profile top
+        let edges = 8.0 + 2.0 * atmosphere.layers.len() as f64;
+        let slabs = ((z_hi - z_lo) / atmosphere.grid_m).max(0.0) + edges;
+        crate::resources::require_memory(
+            &format!(
+                "the model of {bins} range bins ({} slabs of the beam path)",
+                crate::error::compact(slabs.round())
+            ),
+            model_bytes(bins, slabs),
+        )?;
         let path = BeamPath::new(&atmosphere, &geometry, overlap, surface);
         let sc = Scenario {
             loaded,
@@ -445,27 +502,22 @@ impl Scenario {
             dark: self.instrument.dark_per_bin,
             ..Default::default()
         };
+        e.reserve_exact(n);
         for i in 0..g.pretrigger_bins {
             self.push_pretrigger_bin(&mut e, g.bin_centre_range_m(i));
         }
-        // the bins are independent: computed in parallel, taken in order (the first
-        // bad bin's error, as a loop would give it)
-        let bins: Vec<Result<ModelBin>> = (g.pretrigger_bins..n)
-            .into_par_iter()
-            .with_min_len(256)
-            .map(|i| self.model_bin(i))
-            .collect();
-        for bin in bins {
-            let b = bin?;
-            e.altitude_m.push(b.altitude_m);
-            e.range_m.push(b.range_m);
-            e.point.push(b.point);
-            e.state.push(b.state);
-            e.overlap.push(b.overlap);
-            e.t2.push(b.t2);
-            e.signal.push(b.signal);
-            e.range_weight.push(b.range_weight);
-            e.attenuated_backscatter.push(b.attenuated_backscatter);
+        // the bins are independent: computed in parallel a piece at a time, taken in order
+        // (the first bad bin's error, as a loop would give it); only a piece's bins are
+        // held twice, not the window's
+        for start in (g.pretrigger_bins..n).step_by(MODEL_PIECE_BINS) {
+            let bins: Vec<Result<ModelBin>> = (start..(start + MODEL_PIECE_BINS).min(n))
+                .into_par_iter()
+                .with_min_len(256)
+                .map(|i| self.model_bin(i))
+                .collect();
+            for bin in bins {
+                e.push_bin(bin?);
+            }
         }
         self.add_multiple_scattering(&mut e);
         let detector = self.loaded.config.instrument.detector.as_ref();

@@ -395,3 +395,145 @@ fn several_errors_are_told_in_the_order_of_the_keys() {
         expect_config_error(overrides, key, "");
     }
 }
+
+/// `text` (a preset with `from` replaced by `to`) loaded: its config error as
+/// (file, key, reason), the message one line.
+fn preset_error(preset: &str, from: &str, to: &str) -> (String, String, String) {
+    let base = std::fs::read_to_string(config_path(preset)).unwrap();
+    assert!(base.contains(from), "{preset} lacks {from:?}");
+    let text = base.replacen(from, to, 1);
+    match lidarsim::loaded::load_str(&text, std::path::Path::new("test.toml"), &[]) {
+        Err(e @ Error::Config { .. }) => {
+            assert!(!e.to_string().contains('\n'), "{e}");
+            let Error::Config { file, key, reason } = e else {
+                unreachable!()
+            };
+            (file, key, reason)
+        }
+        Err(other) => panic!("{preset} with {to:?}: not a config error: {other}"),
+        Ok(_) => panic!("{preset} with {to:?}: accepted"),
+    }
+}
+
+/// What docs/config.md refuses for a channel, refused when the channels are read
+/// (issue 36, item 18), in one line naming the file, the channel's key and the reason:
+/// `species` on an `hsrl_molecular` channel; a filter table without air
+/// (`atmosphere.molecular.model = "none"`: the Cabannes line's width needs the
+/// temperature); a `both` channel whose `<name>_an` would pass the 64-character limit; a
+/// Raman line beyond the 200–4000 nm the model covers, or none at all (the shift larger
+/// than the laser's wavenumber: H₂O at 3,000 nm, refused late before as "the signal is
+/// not finite").
+#[test]
+fn documented_channel_limits_are_refused_at_the_channel_key() {
+    let atlid = "instruments/atlid_like.toml";
+    let molecular = "kind = \"hsrl_molecular\"\n";
+    let (file, key, reason) =
+        preset_error(atlid, molecular, &format!("{molecular}species = \"N2\"\n"));
+    assert_eq!(file, "test.toml");
+    assert_eq!(key, "instrument.channels[1].species");
+    assert!(
+        reason.contains("Raman channels") && reason.contains("hsrl_molecular"),
+        "{reason}"
+    );
+
+    let constants = "molecular_transmission = 0.6     # f_m: the Cabannes line's wings (ASSUMED)\nparticle_transmission = 0.02     # f_p: particle line leaking through the filter (ASSUMED)\n";
+    let notch = "spectral_filter = { offset_ghz = [-1.5, -0.5, 0.5, 1.5], transmission = [0.9, 0.02, 0.02, 0.9] }\n";
+    let base = std::fs::read_to_string(config_path(atlid)).unwrap();
+    let us76 = base[base.find("[atmosphere.molecular]").unwrap()..]
+        .lines()
+        .find(|l| l.starts_with("model"))
+        .unwrap()
+        .to_string();
+    let text = base
+        .replacen(constants, notch, 1)
+        .replacen(&us76, "model = \"none\"", 1);
+    let Err(e) = lidarsim::loaded::load_str(&text, std::path::Path::new("test.toml"), &[]) else {
+        panic!("a filter table without air accepted");
+    };
+    let shown = e.to_string();
+    assert!(
+        shown.starts_with("test.toml: key `instrument.channels[1].spectral_filter`:")
+            && shown.contains("\"none\"")
+            && !shown.contains('\n'),
+        "{shown}"
+    );
+
+    let glued = "ground/pollyxt_like_glued.toml";
+    let text = std::fs::read_to_string(config_path(glued)).unwrap();
+    let old_name = "name = \"355_total\"";
+    let long = format!("name = \"{}\"", "x".repeat(62));
+    let (_, key, reason) = preset_error(glued, old_name, &long);
+    assert_eq!(key, "instrument.channels[0].name");
+    assert!(
+        reason.contains("62 characters") && reason.contains("at most 61"),
+        "{reason}"
+    );
+    // 61 characters make `<name>_an` of 64: accepted
+    let ok = text.replacen(old_name, &format!("name = \"{}\"", "x".repeat(61)), 1);
+    lidarsim::loaded::load_str(&ok, std::path::Path::new("test.toml"), &[]).unwrap();
+
+    let polly = "ground/pollyxt_like.toml";
+    let n2 = "wavelength_nm = 354.7            # the laser line; the channel detects 386.7 nm";
+    let h2o =
+        "species = \"H2O\"                  # the channel detects 407.5 nm\nwavelength_nm = 354.7";
+    let cases = [
+        // N2 (2330.7 cm⁻¹) of a 4,000 nm laser: the line at 59 µm; at most 2,070 nm
+        (
+            n2,
+            "wavelength_nm = 4000".to_string(),
+            2,
+            "at most 2070.1 nm",
+            "59067 nm",
+        ),
+        // H2O (3652 cm⁻¹) of 2,738 nm: 3,652.3 cm⁻¹, the line at ~3e7 nm
+        (
+            h2o,
+            "species = \"H2O\"\nwavelength_nm = 2738".to_string(),
+            3,
+            "at most 1625.5 nm",
+            "beyond",
+        ),
+        // H2O of 3,000 nm: 3,333 cm⁻¹, less than the shift: no line
+        (
+            h2o,
+            "species = \"H2O\"\nwavelength_nm = 3000".to_string(),
+            3,
+            "at most 1625.5 nm",
+            "does not exist",
+        ),
+    ];
+    for (from, to, k, limit, why) in cases {
+        let (_, key, reason) = preset_error(polly, from, &to);
+        assert_eq!(
+            key,
+            format!("instrument.channels[{k}].wavelength_nm"),
+            "{to}"
+        );
+        assert!(
+            reason.contains(limit) && reason.contains(why),
+            "{to}: {reason}"
+        );
+    }
+    // the longest N2 laser accepted: its line at 4,000 nm
+    let base = std::fs::read_to_string(config_path(polly)).unwrap();
+    let ok = base.replacen(n2, "wavelength_nm = 2070.0", 1);
+    lidarsim::loaded::load_str(&ok, std::path::Path::new("test.toml"), &[]).unwrap();
+}
+
+/// A number where a key takes one of its names (`mode = 5`) says so, not serde's
+/// "expected string only, got unit variant" (issue 36, item 18).
+#[test]
+fn a_number_for_a_name_says_a_name_is_expected() {
+    for set in ["instrument.detector={mode=5}", "instrument.channel=5"] {
+        let Err(e) = load(&[set]) else {
+            panic!("{set}: accepted");
+        };
+        let e = e.to_string();
+        assert!(
+            e.contains("expected a string, one of the names this key takes")
+                && !e.contains("unit variant")
+                && !e.contains('\n'),
+            "{e}"
+        );
+    }
+}

@@ -24,6 +24,8 @@ mod common;
 mod crafted;
 #[path = "hostile/inputs.rs"]
 mod inputs;
+#[path = "hostile/integrity.rs"]
+mod integrity;
 #[path = "hostile/resources.rs"]
 mod resources;
 #[path = "hostile/values.rs"]
@@ -150,6 +152,7 @@ fn prepare(name: &str, dir: &Scratch) -> bool {
         crafted::prepare,
         resources::prepare,
         values::prepare,
+        integrity::prepare,
     ] {
         if let Some(ok) = topic(name, dir) {
             return ok;
@@ -1173,8 +1176,14 @@ fn judge(case: &Case, o: &Outcome) -> Result<(), String> {
     Ok(())
 }
 
+/// Held by each test that runs cases: one at a time (the cases edit files with this
+/// process's HDF5 while the binary under test opens others with its own, and HDF5's file
+/// locks meet).
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 #[test]
 fn every_hostile_case_is_refused_cleanly() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let cases = cases();
     assert!(cases.len() >= 60, "{} cases", cases.len());
     let mut failures = Vec::new();
@@ -1201,13 +1210,48 @@ fn every_hostile_case_is_refused_cleanly() {
     );
 }
 
+/// Every class of damage that `merge` refuses, through every reader of its kind of file
+/// (`tests/hostile/integrity.rs`): each refused in one line naming the variable, exit 2,
+/// nothing left behind.
+#[test]
+fn every_damaged_file_is_refused_by_every_reader() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let cases = integrity::cases();
+    let mut rows = String::from("| # | damage — reader | after |\n|---|---|---|\n");
+    assert!(cases.len() >= 100, "{} cases", cases.len());
+    let mut failures = Vec::new();
+    for (n, case) in cases.iter().enumerate() {
+        match run_case(case, 10_000 + n) {
+            None => failures.push(format!("{}: its file could not be made", case.name)),
+            Some(o) => {
+                let name = case.name.trim_start_matches("integrity: ");
+                rows += &format!("| {} | {name} | {} |\n", n + 1, o.summary());
+                if let Err(why) = judge(case, &o) {
+                    failures.push(format!("{}: {why}", case.name));
+                }
+            }
+        }
+    }
+    // the table of docs/hostile-inputs.md, on request
+    if let Some(path) = std::env::var_os("LIDARSIM_INTEGRITY_TABLE") {
+        fs::write(path, rows).unwrap();
+    }
+    assert!(
+        failures.is_empty(),
+        "{} of {} cases failed:\n{}",
+        failures.len(),
+        cases.len(),
+        failures.join("\n")
+    );
+}
+
 /// Writes the markdown rows of `docs/hostile-inputs.md` for the binary in `LIDARSIM_BIN`.
 #[test]
 #[ignore]
 fn table() {
     let path = std::env::var_os("LIDARSIM_HOSTILE_TABLE").expect("set LIDARSIM_HOSTILE_TABLE");
     let mut rows = String::from("| # | case | outcome |\n|---|---|---|\n");
-    for (n, case) in cases().iter().enumerate() {
+    for (n, case) in cases().iter().chain(&integrity::cases()).enumerate() {
         let what = run_case(case, n).map_or("(not possible here)".to_string(), |o| o.summary());
         rows += &format!("| {} | {} | {} |\n", n + 1, case.name, what);
     }

@@ -275,11 +275,20 @@ fn compare_with_native(product: &Path, raw: &Path, g: &str, shots: usize) {
         f64s(product, g, "expected_dark"),
         f64s(product, g, "pulse_energy"),
     );
-    for (p, e) in energy.iter().enumerate() {
+    // (profile, channel): each channel's laser line in both files
+    assert_eq!(
+        energy.len(),
+        bkg.len(),
+        "pulse_energy is (profile, channel)"
+    );
+    for p in 0..energy.len() / channels {
         let mean_of = |f: &dyn Fn(usize) -> f64| {
             (p * shots..(p + 1) * shots).map(f).sum::<f64>() / shots as f64
         };
-        close(*e, mean_of(&|s| raw_energy[s]), "pulse_energy");
+        for (h, &c) in held.iter().enumerate() {
+            let e = energy[p * channels + h];
+            close(e, mean_of(&|s| raw_energy[s * nch + c]), "pulse_energy");
+        }
         for (h, &c) in held.iter().enumerate() {
             let b = mean_of(&|s| raw_bkg[row(s, c) * n]);
             close(bkg[p * channels + h], b, "expected_background");
@@ -380,6 +389,7 @@ fn check_identity(p: &Path, g: &str) -> f64 {
                     s += weights[q * slots + k] * signal[col * bins + j];
                 }
             }
+            // one channel: pulse_energy (profile, channel) is one value a profile
             expected[j] += shots * (energy[q] / e0 * s + merge * (bkg[q] + dark[q]));
             observed[j] += counts[q * bins + j] as f64;
         }

@@ -288,3 +288,138 @@ fn memory_stays_bounded_on_a_large_file() {
     assert!(peak_kb < 200_000, "peak {peak_kb} kB");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `text` as the figures draw their tick labels (the embedded font, 13 px, black on
+/// white): the dark pixels (any channel below 128) of its box, row by row.
+fn rendered(text: &str) -> Vec<Vec<bool>> {
+    use lidarsim::output::plot::{FONT, ensure_font};
+    use plotters::prelude::*;
+    ensure_font().unwrap();
+    let (w, h) = (120u32, 40u32);
+    let mut rgb = vec![255u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+        root.draw(&Text::new(
+            text.to_string(),
+            (10, 10),
+            (FONT, 13).into_font(),
+        ))
+        .unwrap();
+        root.present().unwrap();
+    }
+    let dark: Vec<bool> = rgb
+        .chunks_exact(3)
+        .map(|c| c.iter().any(|&v| v < 128))
+        .collect();
+    let (w, h) = (w as usize, h as usize);
+    let rows: Vec<usize> = (0..h)
+        .filter(|&y| (0..w).any(|x| dark[y * w + x]))
+        .collect();
+    let cols: Vec<usize> = (0..w)
+        .filter(|&x| (0..h).any(|y| dark[y * w + x]))
+        .collect();
+    let (y0, y1, x0, x1) = (
+        rows[0],
+        *rows.last().unwrap(),
+        cols[0],
+        *cols.last().unwrap(),
+    );
+    (y0..=y1)
+        .map(|y| (x0..=x1).map(|x| dark[y * w + x]).collect())
+        .collect()
+}
+
+/// Where `img` shows `text` (its dark pixels exactly, the box's other pixels light), in
+/// rows `y0..y1`: the left edges of every place found.
+fn find_text(img: &Image, text: &str, y0: usize, y1: usize) -> Vec<usize> {
+    let t = rendered(text);
+    let (th, tw) = (t.len(), t[0].len());
+    let dark = |x: usize, y: usize| img.rgb[y * img.w + x].iter().any(|&v| v < 128);
+    let mut found = Vec::new();
+    for y in y0..y1.min(img.h).saturating_sub(th) {
+        for x in 0..img.w.saturating_sub(tw) {
+            if (0..th).all(|j| (0..tw).all(|i| dark(x + i, y + j) == t[j][i])) {
+                found.push(x);
+            }
+        }
+    }
+    found
+}
+
+/// A ground file's time axis reads the UTC clock: `ground_532_depol` (10 profiles of
+/// 30 s from the default start, 2000-01-01T00:00:00Z) spans 00:00–00:05, so the x axis
+/// of the first panel (below its field, rows 380–430) shows `00:01` to `00:04` at
+/// whole minutes, left to right and evenly spaced (to a pixel), and no number of
+/// seconds since the start (`100`, `200`).
+#[test]
+fn a_ground_quicklook_labels_its_time_axis_by_the_utc_clock() {
+    let dir = scratch("quicklook-clock");
+    ok(lidarsim(
+        &dir,
+        &[
+            "simulate",
+            config_path("ground/ground_532_depol.toml")
+                .to_str()
+                .unwrap(),
+            "-o",
+            "raw.h5",
+        ],
+        &[],
+    ));
+    ok(lidarsim(
+        &dir,
+        &["quicklook", "raw.h5", "--png", "q.png"],
+        &[],
+    ));
+    let img = Image::read(&dir.join("q.png"));
+    let (y0, y1) = (34 + 350, 34 + 430);
+    let at: Vec<usize> = ["00:01", "00:02", "00:03", "00:04"]
+        .iter()
+        .map(|t| {
+            let found = find_text(&img, t, y0, y1);
+            assert_eq!(found.len(), 1, "{t} found at {found:?}");
+            found[0]
+        })
+        .collect();
+    let gaps: Vec<i64> = at.windows(2).map(|w| w[1] as i64 - w[0] as i64).collect();
+    assert!(gaps.iter().all(|&g| g > 100), "{at:?}");
+    assert!(gaps.iter().all(|&g| (g - gaps[0]).abs() <= 1), "{at:?}");
+    for seconds in ["100", "200"] {
+        assert!(find_text(&img, seconds, y0, y1).is_empty(), "{seconds}");
+    }
+    let q = quicklook::read(&dir.join("raw.h5"), None, false).unwrap();
+    assert_eq!(q.x_label, "time (UTC, 2000-01-01)");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Channels of different energies are drawn at their own: the PollyXT-like preset (60,
+/// 110 and 180 mJ at 355, 532 and 1064 nm) with `--truth`: in each elastic channel the
+/// estimate's sum over the cells where the truth is above 1e-7 m⁻¹ sr⁻¹ is the truth's
+/// within 3 % (each sum holds more than 10⁵ photons: statistical error below 0.3 %).
+/// Format 3 scaled every channel by the first channel's energy: 1.83 times too bright
+/// at 532 nm, 3 times at 1064 nm.
+#[test]
+fn each_channel_is_drawn_at_its_own_pulse_energy() {
+    let dir = scratch("quicklook-energy");
+    ok(lidarsim(
+        &dir,
+        &[
+            "simulate",
+            config_path("ground/pollyxt_like.toml").to_str().unwrap(),
+            "-o",
+            "raw.h5",
+            "--profiles",
+            "2",
+        ],
+        &[],
+    ));
+    for channel in ["355_total", "532_total", "1064_total"] {
+        let q = quicklook::read(&dir.join("raw.h5"), Some(channel), true).unwrap();
+        let truth = q.truth.as_ref().unwrap().means();
+        let (m, n) = ratio_of_sums(&q.signal.means(), &truth, 1e-7);
+        eprintln!("{channel}: estimate / truth {m:.4} over {n} cells");
+        assert!(n > 10_000, "{channel}: {n} cells");
+        assert!((m - 1.0).abs() < 0.03, "{channel}: ratio {m}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -72,7 +72,7 @@ fn same_arguments_and_source_date_epoch_give_identical_bytes() {
 }
 
 #[test]
-fn the_layout_is_format_version_3() {
+fn the_layout_is_format_version_4() {
     let dir = scratch("layout");
     let out = dir.join("s1.h5");
     simulate(
@@ -91,7 +91,8 @@ fn the_layout_is_format_version_3() {
         .unwrap()
         .read_scalar()
         .unwrap();
-    assert_eq!(v, 3);
+    assert_eq!(v, 4);
+    assert_eq!(f.dataset("pulse_energy").unwrap().shape(), vec![4, 1]);
     assert!(str_attr(&f, "Conventions").starts_with("CF-1."));
     let counts = f.dataset("counts").unwrap();
     assert_eq!(counts.shape(), vec![4, 1, 334]);
@@ -222,5 +223,160 @@ fn the_bin_averaged_truth_follows_a_cut_cloud_edge_where_the_point_truth_does_no
         alt[i],
         ab[i]
     );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Channels of different energies (the PollyXT-like preset: 60 mJ at 354.7 nm, 110 mJ at
+/// 532 nm, 180 mJ at 1064 nm, its header's figures, independent of the code): the file
+/// gives every channel the energy of its laser line, `nominal_pulse_energy` and
+/// `pulse_energy` (profile, channel), and the documented expectation `n_shots ·
+/// (expected_counts + (pulse_energy/nominal_pulse_energy − 1) · expected_signal)` (ideal
+/// photon counters) is what the counts are, per channel. With 5 % jitter over 4 profiles
+/// of 6,000 shots, the sum over each channel's bins against that expectation has
+/// |z| < 4.5 (a false alarm 7e-6 per channel); version 3 gave every channel the first
+/// channel's 60 mJ, so its 532 and 1064 nm expectations were ×0.55 and ×0.33: z in the
+/// thousands.
+#[test]
+fn each_channel_has_the_energy_of_its_laser_line() {
+    let dir = scratch("energy");
+    let out = dir.join("polly.h5");
+    simulate(
+        "ground/pollyxt_like.toml",
+        &out,
+        &[
+            "--profiles",
+            "4",
+            "--set",
+            "instrument.pulse_energy_jitter=0.05",
+        ],
+    );
+    let f = hdf5::File::open(&out).unwrap();
+    let emission = f64s(&f, "emission_wavelength");
+    let line_energy = |nm: f64| match nm.round() as i64 {
+        355 => 0.060,
+        532 => 0.110,
+        1064 => 0.180,
+        other => panic!("laser line {other} nm"),
+    };
+    let nominal = f64s(&f, "nominal_pulse_energy");
+    let channels = nominal.len();
+    assert_eq!(channels, 8);
+    for (c, e0) in nominal.iter().enumerate() {
+        assert_eq!(*e0, line_energy(emission[c]), "channel {c}");
+    }
+    let energy = f.dataset("pulse_energy").unwrap();
+    assert_eq!(energy.shape(), vec![4, channels]);
+    let energy: Vec<f64> = energy.read_raw().unwrap();
+    let shots: Vec<u64> = f.dataset("n_shots").unwrap().read_raw().unwrap();
+    let counts: Vec<u64> = f.dataset("counts").unwrap().read_raw().unwrap();
+    let (signal, total) = (f64s(&f, "expected_signal"), f64s(&f, "expected_counts"));
+    let bins = signal.len() / channels;
+    for c in 0..channels {
+        let (mut observed, mut expected) = (0.0, 0.0);
+        for p in 0..4 {
+            let factor = energy[p * channels + c] / nominal[c];
+            // one laser: every channel of a profile sees the same factor
+            assert!((factor / (energy[p * channels] / nominal[0]) - 1.0).abs() < 1e-12);
+            for b in 0..bins {
+                let j = c * bins + b;
+                expected += shots[p] as f64 * (total[j] + (factor - 1.0) * signal[j]);
+                observed += counts[(p * channels + c) * bins + b] as f64;
+            }
+        }
+        let z = (observed - expected) / expected.sqrt();
+        assert!(
+            z.abs() < 4.5,
+            "channel {c}: {observed} counts, {expected} expected (z = {z})"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Readers of older files keep working: the PollyXT-like file made a format-3 file
+/// (`pulse_energy` (profile), the first channel's, as version 3 wrote it; the version
+/// attribute 3) is read by `validate --file` (consistent), `quicklook` (every channel at
+/// its own energy: the same figure as the format-4 file's), `curtain` and `export-scc`.
+#[test]
+fn a_format_3_file_is_still_read_by_every_reader() {
+    let dir = scratch("format3");
+    let (v4, v3) = (dir.join("v4.h5"), dir.join("v3.h5"));
+    simulate(
+        "ground/pollyxt_like.toml",
+        &v4,
+        &[
+            "--profiles",
+            "3",
+            "--set",
+            "instrument.pulse_energy_jitter=0.05",
+        ],
+    );
+    std::fs::copy(&v4, &v3).unwrap();
+    {
+        let f = hdf5::File::open_rw(&v3).unwrap();
+        let energy = f.dataset("pulse_energy").unwrap();
+        let channels = energy.shape()[1];
+        let first: Vec<f64> = energy
+            .read_raw::<f64>()
+            .unwrap()
+            .iter()
+            .step_by(channels)
+            .copied()
+            .collect();
+        drop(energy);
+        f.unlink("pulse_energy").unwrap();
+        f.new_dataset::<f64>()
+            .shape(first.len())
+            .create("pulse_energy")
+            .unwrap()
+            .write_raw(&first)
+            .unwrap();
+        f.attr("lidarsim_format_version")
+            .unwrap()
+            .write_scalar(&3i32)
+            .unwrap();
+    }
+    let run = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_lidarsim"))
+            .current_dir(&dir)
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{args:?}: {}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let verdict = run(&["validate", "--file", "v3.h5"]);
+    assert!(
+        verdict.contains("CONSISTENT") && !verdict.contains("INCONSISTENT"),
+        "{verdict}"
+    );
+    run(&[
+        "quicklook",
+        "v3.h5",
+        "--png",
+        "q.png",
+        "--channel",
+        "1064_total",
+    ]);
+    run(&["curtain", "v3.h5", "--png", "c.png"]);
+    run(&["export-scc", "v3.h5", "scc.nc"]);
+    for channel in ["532_total", "1064_total"] {
+        let means = |p: &Path| {
+            lidarsim::output::quicklook::read(p, Some(channel), false)
+                .unwrap()
+                .signal
+                .means()
+        };
+        let (a, b) = (means(&v3), means(&v4));
+        let same = a
+            .iter()
+            .zip(&b)
+            .all(|(x, y)| x.to_bits() == y.to_bits() || (x - y).abs() <= 1e-12 * y.abs());
+        assert!(same, "{channel}: the format-3 figure differs");
+    }
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -109,6 +109,18 @@ fn profile(spec: &RawFileSpec, p: usize) -> Profile {
     }
 }
 
+/// Each channel's pulse energy of every profile, J (a channel's laser line of its own:
+/// 0.11 J, 0.12 J, …).
+const ENERGY_J: [f64; 16] = {
+    let mut e = [0.0; 16];
+    let mut c = 0;
+    while c < 16 {
+        e[c] = 0.11 + 0.01 * c as f64;
+        c += 1;
+    }
+    e
+};
+
 fn record<'a>(
     spec: &RawFileSpec,
     p: usize,
@@ -119,7 +131,7 @@ fn record<'a>(
         index: p,
         time_s: p as f64 * 1.5 + 0.75,
         n_shots: 15 + p as u64,
-        pulse_energy_j: 0.11,
+        pulse_energy_j: &ENERGY_J[..spec.channels.len()],
         counts: &d.counts,
         components: spec
             .components
@@ -195,7 +207,8 @@ fn check_all(path: &Path, spec: &RawFileSpec) {
         }
         assert_eq!(time[p], p as f64 * 1.5 + 0.75);
         assert_eq!(n_shots[p], 15 + p as u64);
-        assert_eq!(energy[p], 0.11);
+        let ch = spec.channels.len();
+        assert_eq!(energy[p * ch..(p + 1) * ch], ENERGY_J[..ch]);
         assert_eq!(lat[p], p as f64 * 0.01 - 40.0);
     }
 }
@@ -517,7 +530,7 @@ fn refusals_name_the_file_and_leave_the_writer_usable() {
         index,
         time_s: 1.0,
         n_shots: 1,
-        pulse_energy_j: 0.1,
+        pulse_energy_j: &[0.1],
         counts,
         components: None,
         values: &[],

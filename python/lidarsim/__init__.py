@@ -13,14 +13,17 @@ prints. Long calls release the GIL; Ctrl-C stops them and leaves no file.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
+import signal
 import tempfile
+import threading
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping, Optional, Union
+from typing import Any, Mapping, Optional, Sequence, Union
 
 import numpy as np
 import xarray as xr
@@ -168,24 +171,57 @@ def simulate(config: ConfigLike, profiles: Optional[int] = None, seed: Optional[
     cfg = _config(config)
     profiles, seed = _whole("profiles", profiles), _whole("seed", seed)
     if path is not None:
-        warning = _lidarsim.simulate(cfg.loaded, os.fspath(path), profiles, seed, method,
-                                     progress)
+        with _terminable():
+            warning = _lidarsim.simulate(cfg.loaded, os.fspath(path), profiles, seed, method,
+                                         progress)
         _warn(warning)
         return Path(path)
-    variables, root, warning, _times = _lidarsim.simulate_in_memory(
-        cfg.loaded, profiles, seed, method, progress)
+    with _terminable():
+        variables, root, warning, _times = _lidarsim.simulate_in_memory(
+            cfg.loaded, profiles, seed, method, progress)
     _warn(warning)
     return _dataset(variables, root)
 
 
-def _whole(name: str, value: Optional[int], bits: int = 64) -> Optional[int]:
-    """An optional whole-number argument, refused as ``ValueError`` (not Python's
-    OverflowError or TypeError) when it is not an integer from 0 to 2**bits - 1."""
+def _whole(name: str, value: Optional[int]) -> Optional[int]:
+    """An optional whole-number argument (``profiles``, ``realizations``, ``seed``) in
+    the range of the CLI's option of that name, refused as ``ValueError`` with the CLI's
+    range (not Python's OverflowError or TypeError) otherwise."""
     if value is None:
         return None
-    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2**bits:
-        raise ValueError(f"{name} = {value!r}: must be a whole number from 0 to 2**{bits} - 1")
-    return value
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ValueError(f"{name} = {value!r}: must be a whole number (an int)")
+    return _lidarsim.whole_option(name, str(value))
+
+
+class _Terminated(BaseException):
+    """SIGTERM received during a call: the run was stopped as Ctrl-C stops it."""
+
+
+@contextlib.contextmanager
+def _terminable():
+    """SIGTERM handled as Ctrl-C while a call runs: the run stops and removes the file
+    it was writing, then the process ends by SIGTERM as it would have. Only where
+    SIGTERM has its default action and on the main thread (where Python takes signals);
+    a handler of the caller's own is left as it is."""
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL):
+        yield
+        return
+
+    def stop(signum, frame):
+        raise _Terminated()
+
+    signal.signal(signal.SIGTERM, stop)
+    try:
+        yield
+    except _Terminated:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGTERM)
+        raise  # not reached: SIGTERM's default action ends the process
+    finally:
+        if signal.getsignal(signal.SIGTERM) is stop:
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def _warn(warning: Optional[str]) -> None:
@@ -199,7 +235,8 @@ def validate(config: ConfigLike, realizations: int = 1000, seed: Optional[int] =
     bin) as the CLI's JSON, parsed."""
     cfg = _config(config)
     realizations, seed = _whole("realizations", realizations), _whole("seed", seed)
-    return json.loads(_lidarsim.validate(cfg.loaded, realizations, seed))
+    with _terminable():
+        return json.loads(_lidarsim.validate(cfg.loaded, realizations, seed))
 
 
 def validate_file(path: Union[str, os.PathLike]) -> dict:
@@ -208,12 +245,27 @@ def validate_file(path: Union[str, os.PathLike]) -> dict:
     return json.loads(_lidarsim.validate_file(os.fspath(path)))
 
 
-def sweep(config: ConfigLike, vary: Mapping[str, str], metrics: list) -> xr.Dataset:
+def sweep(config: ConfigLike, vary: Mapping[str, str],
+          metrics: Union[str, Sequence[str]]) -> xr.Dataset:
     """``lidarsim sweep CONFIG --vary KEY=RANGE ... --metric M ...``: the metrics over
     the grid of the varied keys, one dimension per key (``vary`` maps a dotted key to
-    its range, ``"0.01..1:log:5"``; the CLI's numbers, read from its CSV)."""
+    its range, ``"0.01..1:log:5"``; the CLI's numbers, read from its CSV). ``metrics``:
+    one metric (a string, ``"snr_at:10km"``) or a list of them."""
     cfg = _config(config)
-    with tempfile.TemporaryDirectory(prefix="lidarsim-") as d:
+    if not isinstance(vary, Mapping) or not vary:
+        raise ValueError(
+            f"vary = {vary!r}: must be a dict of dotted keys to ranges, e.g. "
+            '{"instrument.pulse_energy_j": "0.01..1:log:5"}')
+    for k, v in vary.items():
+        if not isinstance(k, str) or not isinstance(v, str):
+            raise ValueError(f"vary: {k!r}: {v!r}: each key and range must be a string "
+                             '("instrument.pulse_energy_j": "0.01..1:log:5")')
+    if isinstance(metrics, str):
+        metrics = [metrics]
+    elif not isinstance(metrics, Sequence) or not all(isinstance(m, str) for m in metrics):
+        raise ValueError(f"metrics = {metrics!r}: must be a metric (a string, "
+                         '"snr_at:10km") or a list of them')
+    with _terminable(), tempfile.TemporaryDirectory(prefix="lidarsim-") as d:
         out = os.path.join(d, "sweep.csv")
         _lidarsim.sweep(cfg.loaded, [f"{k}={v}" for k, v in vary.items()], list(metrics), out)
         with open(out) as f:

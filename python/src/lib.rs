@@ -5,9 +5,11 @@
 //! buffers (no copy); `lidarsim/__init__.py` builds the xarray Datasets from them.
 //! A long call runs on a thread of its own while the calling thread waits for it
 //! without the GIL and looks for Ctrl-C every 50 ms: a KeyboardInterrupt stops a
-//! `simulate` before its next profile (its temporary file removed) and a `validate`
-//! before its next block of 256 realizations, a `sweep` before its next grid point,
-//! and is raised; `validate_file` takes no cancel flag and finishes first.
+//! `simulate` before its next profile (its temporary file removed) and a `sweep` before
+//! its next grid point, and is raised; a `validate` (which writes nothing) raises it at
+//! once and stops in the background before its next realization; `validate_file`
+//! takes no cancel flag and finishes first. The library's duration notices come as
+//! `UserWarning`s, printed by nothing.
 
 // PyO3 0.22's #[pyfunction] expansion converts each PyResult's error into itself
 #![allow(clippy::useless_conversion)]
@@ -25,7 +27,7 @@ use lidarsim::output::raw_file::AttrValue;
 use lidarsim::scenario::Lidar;
 use lidarsim::simulate::RunOptions;
 use numpy::{IntoPyArray, PyArrayMethods};
-use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
+use pyo3::exceptions::{PyOSError, PyRuntimeError, PyUserWarning, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyList, PyTuple};
 
@@ -66,13 +68,14 @@ fn interruptible<T: Send>(
             })
             .is_err_and(|e| e == mpsc::RecvTimeoutError::Timeout)
         {
-            if let Err(e) = py.check_signals() {
+            if let Err(e) = py.check_signals().and_then(|_| warn_notices(py)) {
                 cancel.store(true, Ordering::SeqCst);
                 signal = Some(e);
                 break;
             }
         }
         let result = py.allow_threads(|| worker.join());
+        let signal = signal.or_else(|| warn_notices(py).err());
         match (signal, result) {
             (Some(e), _) => Err(e),
             (None, Ok(r)) => r.map_err(raise),
@@ -81,13 +84,60 @@ fn interruptible<T: Send>(
     })
 }
 
+/// [`interruptible`] for work that writes nothing (`validate`): on a Python signal the
+/// cancel flag is set and the signal raised at once, while the work stops in the
+/// background after the realizations under way (an MPL-like realization of 150,000 shots
+/// takes seconds; nothing of it is kept).
+fn interruptible_detached<T: Send + 'static>(
+    py: Python<'_>,
+    work: impl FnOnce(Arc<AtomicBool>) -> lidarsim::error::Result<T> + Send + 'static,
+) -> PyResult<T> {
+    let cancel = Arc::new(AtomicBool::new(false));
+    let (done, finished) = mpsc::channel::<lidarsim::error::Result<T>>();
+    let finished = Mutex::new(finished);
+    let flag = cancel.clone();
+    std::thread::spawn(move || {
+        let _ = done.send(work(flag));
+    });
+    loop {
+        let next = py.allow_threads(|| match finished.lock() {
+            Ok(f) => f.recv_timeout(SIGNAL_POLL),
+            Err(_) => Err(mpsc::RecvTimeoutError::Disconnected),
+        });
+        match next {
+            Ok(result) => {
+                warn_notices(py)?;
+                return result.map_err(raise);
+            }
+            Err(mpsc::RecvTimeoutError::Timeout) => {
+                if let Err(e) = py.check_signals().and_then(|_| warn_notices(py)) {
+                    cancel.store(true, Ordering::SeqCst);
+                    return Err(e);
+                }
+            }
+            Err(mpsc::RecvTimeoutError::Disconnected) => {
+                return Err(PyRuntimeError::new_err("lidarsim: the run panicked"));
+            }
+        }
+    }
+}
+
+/// The library's duration notices ("expected to take about 7 min") as `UserWarning`s:
+/// the module prints nothing (docs/python.md). An error where warnings are errors.
+fn warn_notices(py: Python<'_>) -> PyResult<()> {
+    for notice in lidarsim::resources::take_duration_notices() {
+        PyErr::warn_bound(py, &py.get_type_bound::<PyUserWarning>(), &notice, 1)?;
+    }
+    Ok(())
+}
+
 /// A loaded and checked config: the config file, its overrides (`KEY=VALUE`, as
 /// `--set`) and every channel built, loaded once for every later call.
 #[pyclass(frozen, module = "lidarsim._lidarsim")]
 struct Loaded {
     path: PathBuf,
     overrides: Vec<String>,
-    lidar: Lidar,
+    lidar: Arc<Lidar>,
 }
 
 #[pymethods]
@@ -100,7 +150,7 @@ impl Loaded {
         Ok(Loaded {
             path,
             overrides,
-            lidar,
+            lidar: Arc::new(lidar),
         })
     }
 
@@ -295,7 +345,8 @@ fn validate(
     realizations: usize,
     seed: Option<u64>,
 ) -> PyResult<String> {
-    interruptible(py, |cancel| {
+    let lidar = loaded.lidar.clone();
+    interruptible_detached(py, move |cancel| {
         let opts = lidarsim::validate::ValidateOptions {
             realizations,
             method: None,
@@ -303,9 +354,7 @@ fn validate(
             json: None,
         };
         report_json(&lidarsim::validate::run_cancellable(
-            &loaded.lidar,
-            &opts,
-            &cancel,
+            &lidar, &opts, &cancel,
         )?)
     })
 }
@@ -342,8 +391,25 @@ fn sweep(
     })
 }
 
+/// A whole-number argument parsed as the CLI parses its option of that name
+/// (`profiles`, `realizations`, `seed`: [`lidarsim::cli_values`]), refused with the
+/// CLI's range.
+#[pyfunction]
+fn whole_option(name: &str, value: &str) -> PyResult<u64> {
+    use lidarsim::cli_values;
+    let parsed = match name {
+        "profiles" => cli_values::profiles(value).map(|n| n as u64),
+        "realizations" => cli_values::realizations(value).map(|n| n as u64),
+        "seed" => cli_values::seed(value),
+        _ => Err("is not an option of lidarsim's (profiles, realizations, seed)".to_string()),
+    };
+    parsed.map_err(|why| PyValueError::new_err(format!("{name} = {value}: {why}")))
+}
+
 #[pymodule]
 fn _lidarsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // a library prints nothing: its duration notices become warnings (warn_notices)
+    lidarsim::resources::keep_duration_notices();
     m.add_class::<Loaded>()?;
     m.add_function(wrap_pyfunction!(expect, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
@@ -351,5 +417,6 @@ fn _lidarsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(validate, m)?)?;
     m.add_function(wrap_pyfunction!(validate_file, m)?)?;
     m.add_function(wrap_pyfunction!(sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(whole_option, m)?)?;
     Ok(())
 }

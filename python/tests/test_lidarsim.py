@@ -143,6 +143,8 @@ print("started", flush=True)
 try:
     if what == "validate":
         lidarsim.validate(sys.argv[1], realizations=4_000_000, seed=1)
+    elif what == "validate_slow":  # realizations of seconds each (MPL-like: 150,000 shots)
+        lidarsim.validate(sys.argv[1], realizations=1000, seed=1)
     elif what == "sweep":
         lidarsim.sweep(sys.argv[1], {"instrument.pulse_energy_j": "0.01..1:1000000"},
                        ["snr_at:11km"])
@@ -154,7 +156,11 @@ except KeyboardInterrupt:
 """
 
 
-@pytest.mark.parametrize("call", ["simulate to a file", "simulate", "validate", "sweep"])
+MPL = ROOT / "configs" / "ground" / "mpl_like.toml"
+
+
+@pytest.mark.parametrize("call", ["simulate to a file", "simulate", "validate", "sweep",
+                                  "validate_slow"])
 def test_ctrl_c_stops_a_long_run_within_a_second_and_leaves_no_file(tmp_path, call):
     import signal
     import sys
@@ -162,12 +168,15 @@ def test_ctrl_c_stops_a_long_run_within_a_second_and_leaves_no_file(tmp_path, ca
 
     out = tmp_path / "out"
     out.mkdir()
-    args = [sys.executable, "-c", INTERRUPTED_RUN, str(SCENARIO1), call.split()[0]]
+    config = MPL if call == "validate_slow" else SCENARIO1
+    args = [sys.executable, "-c", INTERRUPTED_RUN, str(config), call.split()[0]]
     if call.endswith("file"):
         args.append(str(out / "raw.nc"))
     p = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     assert p.stdout.readline().strip() == "started"
-    time.sleep(1.5)  # well into the run (each takes over 10 s)
+    # well into the run (each takes over 10 s; MPL-like's model takes ~1 s before its
+    # first realization)
+    time.sleep(4.0 if call == "validate_slow" else 1.5)
     assert p.poll() is None, p.stderr.read()
     sent = time.monotonic()
     p.send_signal(signal.SIGINT)
@@ -208,12 +217,21 @@ def test_bad_input_raises_the_cli_message(tmp_path):
     with pytest.raises(ValueError):
         lidarsim.load_config(SCENARIO1, {"instrument.pulse_energy_j": float("nan")})
     # whole numbers out of range or of another type: ValueError, not Python's own
-    # OverflowError or TypeError
-    for bad in (-1, 2**64, 2.5, True):
-        with pytest.raises(ValueError, match="must be a whole number from 0 to 2\\*\\*64 - 1"):
+    # OverflowError or TypeError; out of range, the CLI's range for its option
+    for option, bad in (("profiles", -1), ("profiles", 0), ("profiles", 2**64),
+                        ("realizations", -1), ("realizations", 10**9), ("seed", -3)):
+        command = ("validate",) if option == "realizations" else ("simulate", "-o",
+                                                                     tmp_path / "x.nc")
+        reason = refusal(command[0], SCENARIO1, *command[1:], f"--{option}", str(bad))
+        # clap's: "invalid value ... '--OPT': WHY (see lidarsim --help)"
+        reason = reason.split("': ", 1)[1].removesuffix(" (see lidarsim --help)")
+        call = lidarsim.validate if option == "realizations" else lidarsim.simulate
+        with pytest.raises(ValueError) as e:
+            call(SCENARIO1, **{option: bad})
+        assert str(e.value) == f"{option} = {bad}: {reason}"
+    for bad in (2.5, True, "3"):
+        with pytest.raises(ValueError, match="must be a whole number"):
             lidarsim.simulate(SCENARIO1, profiles=bad)
-    with pytest.raises(ValueError, match="must be a whole number"):
-        lidarsim.validate(SCENARIO1, realizations=200, seed=-3)
     # an in-memory run larger than the memory: refused before anything is allocated
     with pytest.raises(ValueError, match="in memory needs about .* of memory"):
         lidarsim.simulate(SCENARIO1, profiles=10**9)
@@ -287,3 +305,63 @@ def test_the_dataset_is_decoded_as_xarray_decodes_a_file():
                      attrs={"title": "t"})
     xr.testing.assert_identical(ours, xr.decode_cf(raw))
     assert np.isnan(ours.b.values[2]) and ours.time.dtype.kind == "M"
+
+
+def test_sigterm_stops_a_run_to_a_file_and_leaves_nothing(tmp_path):
+    """SIGTERM (a batch system's stop) during ``simulate(path=...)``: the run stops as
+    Ctrl-C stops it, its temporary and lock files removed, and the process ends by
+    SIGTERM as it would have."""
+    import signal
+    import sys
+    import time
+
+    out = tmp_path / "out"
+    out.mkdir()
+    args = [sys.executable, "-c", INTERRUPTED_RUN, str(SCENARIO1), "simulate",
+            str(out / "raw.nc")]
+    p = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert p.stdout.readline().strip() == "started"
+    time.sleep(1.5)
+    assert p.poll() is None, p.stderr.read()
+    assert list(out.iterdir()) != []  # the run's temporary file (and lock) exist
+    sent = time.monotonic()
+    p.send_signal(signal.SIGTERM)
+    _, stderr = p.communicate(timeout=30)
+    assert time.monotonic() - sent < 2.0
+    assert p.returncode == -signal.SIGTERM, stderr
+    assert list(out.iterdir()) == []
+
+
+def test_a_long_run_is_announced_as_a_warning_not_printed():
+    """The library's duration notice ("expected to take about ...") is a UserWarning;
+    nothing is printed on stderr (docs/python.md). As an error (``-W error``) it stops
+    the run at once."""
+    import sys
+
+    script = (
+        "import warnings, lidarsim\n"
+        "warnings.simplefilter('error')\n"
+        "try:\n"
+        f"    lidarsim.validate({str(SCENARIO1)!r}, realizations=100_000_000, seed=1)\n"
+        "except UserWarning as w:\n"
+        "    print('warned:', w)\n")
+    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.startswith("warned: lidarsim: validating 100000000 realizations"), r.stdout
+    assert "expected to take about" in r.stdout
+    assert r.stderr == ""
+
+
+def test_sweep_takes_one_metric_as_a_string_and_refuses_a_bad_vary():
+    vary = {"instrument.pulse_energy_j": "0.01..1:log:3"}
+    one = lidarsim.sweep(SCENARIO1, vary, "snr_at:11km")
+    assert list(one.data_vars) == ["snr_at:11km"]
+    listed = lidarsim.sweep(SCENARIO1, vary, ["snr_at:11km"])
+    np.testing.assert_array_equal(one["snr_at:11km"], listed["snr_at:11km"])
+    for bad in ("instrument.pulse_energy_j=0.01..1:3", ["instrument.pulse_energy_j"], {},
+                {"instrument.pulse_energy_j": 3}):
+        with pytest.raises(ValueError, match="vary"):
+            lidarsim.sweep(SCENARIO1, bad, "snr_at:11km")
+    with pytest.raises(ValueError, match="metrics"):
+        lidarsim.sweep(SCENARIO1, vary, [3])

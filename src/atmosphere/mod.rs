@@ -723,9 +723,17 @@ impl Atmosphere {
     /// profiles, each with the optical properties of its mid-altitude. Inside a slab the
     /// bin integral is done exactly (see `signal`).
     pub fn slabs(&self, z_lo: f64, z_hi: f64) -> Vec<Slab> {
-        let mut edges = vec![z_lo, z_hi];
+        self.slabs_iter(z_lo, z_hi).collect()
+    }
+
+    /// [`Self::slabs`] one at a time, none held: a window of millions of bins lays its
+    /// beam path from them without a second copy of every slab's optics.
+    pub fn slabs_iter(&self, z_lo: f64, z_hi: f64) -> impl Iterator<Item = Slab> + '_ {
         let first = (z_lo / self.grid_m).ceil() as i64;
         let last = (z_hi / self.grid_m).floor() as i64;
+        let mut edges =
+            Vec::with_capacity((last - first + 1).max(0) as usize + 5 + 2 * self.layers.len());
+        edges.extend([z_lo, z_hi]);
         edges.extend((first..=last).map(|k| k as f64 * self.grid_m));
         edges.push(self.molecules.top_m());
         if self.ozone_cross_section_m2.is_some() {
@@ -741,14 +749,11 @@ impl Atmosphere {
         edges.retain(|z| z.is_finite() && *z >= z_lo && *z <= z_hi);
         edges.sort_by(f64::total_cmp);
         edges.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
-        edges
-            .windows(2)
-            .map(|w| Slab {
-                z_lo: w[0],
-                z_hi: w[1],
-                optics: self.optics_at(0.5 * (w[0] + w[1])),
-            })
-            .collect()
+        (1..edges.len()).map(move |k| Slab {
+            z_lo: edges[k - 1],
+            z_hi: edges[k],
+            optics: self.optics_at(0.5 * (edges[k - 1] + edges[k])),
+        })
     }
 }
 

@@ -161,7 +161,10 @@ impl ShardRegion {
     /// integers holding the values it declares, `time` and `n_shots` (profile), `channel`
     /// (channel), `altitude` (bin), finite coordinates, `shots_averaged` ≥ 1.
     fn of(g: &Group, path: &Path) -> Result<ShardRegion> {
-        use crate::output::raw_file::read::{check_finite, check_storage, is_float, is_unsigned};
+        use crate::output::raw_file::integrity::{check_at_least_one, check_calibration};
+        use crate::output::raw_file::read::{
+            check_finite, check_storage, is_float, is_unsigned, read_text,
+        };
         let region = g.name().trim_start_matches('/').to_string();
         let bad = |why: String| Error::output(path, format!("{region}: {why}"));
         let get = |name: &str| {
@@ -215,6 +218,7 @@ impl ShardRegion {
         for name in ["time", "altitude"] {
             check_finite(path, &format!("{region}/{name}"), &get(name)?)?;
         }
+        check_at_least_one(path, &format!("{region}/n_shots"), &get("n_shots")?)?;
         let columns = get("column")?.shape().first().copied().unwrap_or(0);
         let slots = get("k")?.shape().first().copied().unwrap_or(0);
         let out = ShardRegion {
@@ -227,6 +231,10 @@ impl ShardRegion {
             geolocation: g.dataset("latitude").is_ok(),
         };
         out.check_fixed(g, path, &region)?;
+        // the calibration every reader divides by, as a raw file's
+        let names = read_text(path, g, "channel")?;
+        let analog = vec![false; names.len()];
+        check_calibration(path, g, &format!("{region}/"), &names, &analog)?;
         out.check_truth(g, path, &region)?;
         Ok(out)
     }
@@ -271,6 +279,7 @@ impl ShardRegion {
     /// `column`, one given twice, the first slot unused, a weight outside [0, 1], a
     /// used slot of weight 0 or an unused one of weight ≠ 0, weights not summing to 1).
     fn check_truth(&self, g: &Group, path: &Path, region: &str) -> Result<()> {
+        use crate::output::raw_file::integrity::check_column_rows;
         use crate::output::raw_file::read::{check_finite, check_storage, shape_text};
         let bad = |why: String| Error::output(path, format!("{region}: {why}"));
         if self.columns == 0 || self.slots == 0 || self.slots > self.columns {
@@ -313,26 +322,8 @@ impl ShardRegion {
             }
         }
         let (columns, weights) = (get("profile_column")?, get("profile_column_weight")?);
-        for start in (0..self.rows).step_by(CHECK_ROWS) {
-            let end = (start + CHECK_ROWS).min(self.rows);
-            let read = |e: hdf5::Error| bad(format!("cannot read its profile columns: {e}"));
-            let c = columns
-                .read_slice::<i32, _, ndarray::Ix2>(s![start..end, ..])
-                .map_err(read)?;
-            let w = weights
-                .read_slice::<f64, _, ndarray::Ix2>(s![start..end, ..])
-                .map_err(read)?;
-            for (i, (c, w)) in c.outer_iter().zip(w.outer_iter()).enumerate() {
-                let (c, w) = (c.to_vec(), w.to_vec());
-                if let Err(why) = check_profile_columns(&c, &w, self.columns) {
-                    return Err(bad(format!(
-                        "profile row {}: `profile_column` {c:?} with `profile_column_weight` \
-                         {w:?}: {why}",
-                        start + i
-                    )));
-                }
-            }
-        }
+        let prefix = format!("{region}/");
+        check_column_rows(path, &prefix, &columns, &weights, self.columns)?;
         Ok(())
     }
 
@@ -367,43 +358,15 @@ impl ShardRegion {
     }
 }
 
-/// Rows of `profile_column` checked at once.
-const CHECK_ROWS: usize = 65_536;
-
-/// Why a profile's columns and weights are impossible (docs/file-format.md, the onboard
-/// product's truth), if they are: every used slot a column of `0..columns` seen once,
-/// of weight in (0, 1], the unused slots (−1) after them with weight 0, the weights
-/// summing to 1 (to 1e-9).
-pub fn check_profile_columns(
-    columns: &[i32],
-    weights: &[f64],
-    n_columns: usize,
-) -> std::result::Result<(), String> {
-    let used = columns.iter().take_while(|&&c| c >= 0).count();
-    if used == 0 {
-        return Err("its first slot is unused".into());
-    }
-    if columns[used..].iter().any(|&c| c != -1) {
-        return Err("a used slot after an unused one, or a column below −1".into());
-    }
-    if let Some(c) = columns[..used].iter().find(|&&c| c as usize >= n_columns) {
-        return Err(format!("column {c} is not one of the {n_columns} columns"));
-    }
-    if (1..used).any(|i| columns[..i].contains(&columns[i])) {
-        return Err("a column given twice".into());
-    }
-    if weights[..used].iter().any(|w| !(*w > 0.0 && *w <= 1.0)) {
-        return Err("a used slot's weight is not in (0, 1]".into());
-    }
-    if weights[used..].iter().any(|&w| w != 0.0) {
-        return Err("an unused slot's weight is not 0".into());
-    }
-    let sum: f64 = weights.iter().sum();
-    if (sum - 1.0).abs() > 1e-9 {
-        return Err(format!("the weights sum to {sum}, not 1"));
-    }
-    Ok(())
+/// Checks region group `g` of the product at `path` as `merge` checks every region of
+/// every shard (its counts, coordinates, calibration and truth; [`ShardRegion::of`]):
+/// the one check of a product's integrity every reader applies (`quicklook`).
+pub fn check_region(g: &Group, path: &Path) -> Result<()> {
+    ShardRegion::of(g, path).map(|_| ())
 }
+
+/// Rows of a (profile, n) variable checked at once.
+const CHECK_ROWS: usize = 65_536;
 
 /// Region `k` of the whole product, as the first shard (open as `file`) describes it,
 /// with `profiles`.
@@ -788,24 +751,5 @@ impl ProductMerge {
             file: "product",
             elapsed: self.start.elapsed(),
         })
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::check_profile_columns as check;
-
-    #[test]
-    fn impossible_profile_columns_are_told_apart() {
-        assert!(check(&[1, 0, -1], &[0.25, 0.75, 0.0], 2).is_ok());
-        assert!(check(&[0], &[1.0], 1).is_ok());
-        let why = |c: &[i32], w: &[f64]| check(c, w, 2).unwrap_err();
-        assert!(why(&[-1, 0], &[0.0, 1.0]).contains("first slot is unused"));
-        assert!(why(&[0, -1, 1], &[0.5, 0.0, 0.5]).contains("after an unused one"));
-        assert!(why(&[0, 2], &[0.5, 0.5]).contains("column 2 is not one of the 2"));
-        assert!(why(&[1, 1], &[0.5, 0.5]).contains("twice"));
-        assert!(why(&[0, 1], &[0.0, 1.0]).contains("not in (0, 1]"));
-        assert!(why(&[0, -1], &[1.0, 0.5]).contains("unused slot's weight"));
-        assert!(why(&[0, 1], &[0.5, 0.6]).contains("sum to 1.1"));
     }
 }

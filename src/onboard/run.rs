@@ -629,7 +629,12 @@ fn write_product(
         specs.iter().map(|s| s.first_profile).collect(),
         simulate::orbit_of(&native.lidar)?,
         native.rep_rate_hz,
-        native.lidar.first().loaded.config.instrument.pulse_energy_j,
+        native
+            .lidar
+            .channels
+            .iter()
+            .map(|c| c.loaded.config.instrument.pulse_energy_j)
+            .collect(),
     );
     let fl = native.rep_rate_hz;
     let mut times = |k: usize, rows: Range<usize>| {

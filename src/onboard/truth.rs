@@ -122,9 +122,9 @@ pub fn per_profile_variables(geolocation: bool) -> Vec<RegionVar> {
     };
     let mut vars = vec![var(
         "pulse_energy",
-        Profile,
+        ProfileChannel,
         attributes(
-            "mean emitted pulse energy of the profile's shots, as an energy monitor reports it",
+            "mean emitted pulse energy of the profile's shots at the channel's laser line, as an energy monitor reports it",
             "J",
             &[],
         ),
@@ -312,8 +312,8 @@ pub struct ProfileRows {
     next: Vec<usize>,
     orbit: Option<Orbit>,
     rep_rate_hz: f64,
-    /// The nominal pulse energy of `pulse_energy`, J.
-    nominal_energy_j: f64,
+    /// Each channel's nominal pulse energy (its laser line's), J.
+    nominal_energy_j: Vec<f64>,
 }
 
 impl ProfileRows {
@@ -325,7 +325,7 @@ impl ProfileRows {
         first: Vec<usize>,
         orbit: Option<Orbit>,
         rep_rate_hz: f64,
-        nominal_energy_j: f64,
+        nominal_energy_j: Vec<f64>,
     ) -> Self {
         ProfileRows {
             held: regions
@@ -367,7 +367,12 @@ impl ProfileRows {
         let j = self.next[k];
         self.next[k] += 1;
         let n = p.shots.max(1) as f64;
-        let mut values = vec![self.nominal_energy_j * p.energy / n];
+        // E0_c·(Σf_s/n) of each channel held: exactly E0_c when every factor is 1
+        let factor = p.energy / n;
+        let mut values: Vec<f64> = self.held[k]
+            .iter()
+            .map(|&c| self.nominal_energy_j[c] * factor)
+            .collect();
         if let Some(o) = &self.orbit {
             let g = o.position(super::run::profile_time(j, r.shots, self.rep_rate_hz));
             values.extend([g.latitude_deg, g.longitude_deg, g.along_track_m]);

@@ -397,10 +397,13 @@ pub fn check_kind(
     file: &str,
 ) -> Result<()> {
     match (kind, species) {
-        (ChannelKind::Elastic, Some(_)) => Err(Error::config(
+        (ChannelKind::Elastic | ChannelKind::HsrlMolecular, Some(_)) => Err(Error::config(
             file,
             key("species"),
-            "is for Raman channels (kind = \"raman\"); an elastic channel sees the laser line",
+            format!(
+                "is for Raman channels (kind = \"raman\"); an {} channel sees the laser line",
+                kind.name()
+            ),
         )),
         (ChannelKind::Raman, Some(RamanSpecies::H2O)) if !has_water_vapour => Err(Error::config(
             file,
@@ -416,6 +419,83 @@ pub fn check_kind(
         )),
         _ => Ok(()),
     }
+}
+
+/// A Raman channel's line against the wavelengths the model covers: the Stokes line
+/// `1/λ = 1/λ₀ − shift` ([`crate::atmosphere::raman::shifted_wavelength_nm`]) must
+/// exist (the shift below the laser's wavenumber) and lie within
+/// [`config::WAVELENGTH_RANGE_NM`], like every other wavelength of the model. `laser_key`
+/// names the key that set the laser's wavelength.
+pub fn check_raman_line(
+    kind: ChannelKind,
+    species: RamanSpecies,
+    laser_nm: f64,
+    laser_key: &str,
+    file: &str,
+) -> Result<()> {
+    if kind != ChannelKind::Raman {
+        return Ok(());
+    }
+    let (_, top_nm) = config::WAVELENGTH_RANGE_NM;
+    let shift_per_m = species.shift_per_m();
+    // the longest laser wavelength whose line is at most top_nm
+    let longest_laser_nm = 1.0 / (1.0 / top_nm + shift_per_m * 1e-9);
+    let line_nm = crate::atmosphere::raman::shifted_wavelength_nm(laser_nm, shift_per_m);
+    if line_nm > 0.0 && line_nm <= top_nm {
+        return Ok(());
+    }
+    let line = if line_nm > 0.0 {
+        format!("would be at {line_nm:.0} nm, beyond the {top_nm:.0} nm the model covers")
+    } else {
+        format!(
+            "does not exist: the shift, {:.0} cm⁻¹, exceeds the laser's wavenumber, {:.0} cm⁻¹",
+            shift_per_m / 100.0,
+            1e7 / laser_nm
+        )
+    };
+    Err(Error::config(
+        file,
+        laser_key,
+        format!(
+            "{} nm: the {} Raman line of a channel of kind \"raman\" {line}; its laser must be \
+             at most {longest_laser_nm:.1} nm",
+            crate::error::compact(laser_nm),
+            species.name()
+        ),
+    ))
+}
+
+/// An HSRL channel's filter table needs the air's temperature: refused where
+/// `atmosphere.molecular.model` is `"none"` (no air), as docs/config.md says.
+pub fn check_filter_needs_air(cfg: &ScenarioConfig, key: &str, file: &str) -> Result<()> {
+    match &cfg.atmosphere.molecular.model {
+        config::MolecularModel::Named(n) if n == "none" => Err(Error::config(
+            file,
+            key,
+            "needs the air's temperature (the Cabannes line's width), and \
+             atmosphere.molecular.model = \"none\" has no air: use \"us76\" or a profile of \
+             altitude_km, pressure_hpa, temperature_k",
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// A `both` detector's channel `name` becomes `<name>_an` and `<name>_pc`: those must be
+/// channel names too, at most [`MAX_NAME_CHARS`] characters.
+pub fn check_split_name(name: &str, key: &str, file: &str) -> Result<()> {
+    let most = MAX_NAME_CHARS - "_an".len();
+    let n = name.chars().count();
+    if n <= most {
+        return Ok(());
+    }
+    Err(Error::config(
+        file,
+        key,
+        format!(
+            "has {n} characters: a detector of mode \"both\" makes it `<name>_an` and \
+             `<name>_pc`, which must have at most {MAX_NAME_CHARS}: give it at most {most}"
+        ),
+    ))
 }
 
 /// A channel name: a string of 1–64 printable characters.

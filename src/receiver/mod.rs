@@ -114,8 +114,12 @@ pub fn split_detection_modes(
     file: &str,
 ) -> Result<Vec<ChannelConfig>> {
     let mut out: Vec<ChannelConfig> = Vec::with_capacity(channels.len());
-    for channel in channels {
+    for (k, channel) in channels.into_iter().enumerate() {
         let mode = channel.detector().map(|d| d.mode).unwrap_or_default();
+        if mode == config::DetectionMode::Both {
+            let key = format!("instrument.channels[{k}].name");
+            channel::check_split_name(&channel.name, &key, file)?;
+        }
         match mode {
             config::DetectionMode::PhotonCounting => out.push(channel),
             config::DetectionMode::Analog => out.push(ChannelConfig {
@@ -247,6 +251,21 @@ fn expand_one(
         &key,
         file,
     )?;
+    let laser_key = match entry.contains_key("wavelength_nm") {
+        true => key("wavelength_nm"),
+        false => "instrument.wavelength_nm".to_string(),
+    };
+    let laser_nm = config.instrument.wavelength_nm;
+    channel::check_raman_line(
+        kind,
+        species.unwrap_or_default(),
+        laser_nm,
+        &laser_key,
+        file,
+    )?;
+    if filter_table.is_some() {
+        channel::check_filter_needs_air(&config, &key("spectral_filter"), file)?;
+    }
     let (spectral_filter, lines) = match (&filter_table, lines) {
         (Some(_), (Some(_), _) | (_, Some(_))) => {
             let given = if lines.0.is_some() {

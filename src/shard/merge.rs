@@ -72,7 +72,19 @@ impl ShardFile {
             .ok_or_else(|| fail("its `history` does not start with its `date_created`"))?
             .to_string();
         // the same checks as every reader of raw files (`curtain`, `export-scc`)
-        let rows = crate::output::raw_file::read::check(path, &file)?.n_profiles;
+        let header = crate::output::raw_file::read::check(path, &file)?;
+        let version = crate::output::raw_file::FORMAT_VERSION;
+        if header.format_version != i64::from(version) {
+            return Err(Error::output(
+                path,
+                format!(
+                    "a shard of format version {}; this lidarsim writes format {version}: \
+                     merge with the lidarsim that wrote the shards",
+                    header.format_version
+                ),
+            ));
+        }
+        let rows = header.n_profiles;
         Ok(ShardFile {
             shard: a.shard()?,
             run_profiles: a.whole("run_profiles")?,
@@ -325,7 +337,12 @@ fn copy_rows(f: &ShardFile, spec: &RawFileSpec, writer: &mut RawFileWriter) -> R
             .read_slice::<u64, _, Ix1>(s![a..b])
             .map_err(fail)?
             .into_raw_vec();
-        let energy = rows1(&src.pulse_energy).map_err(fail)?.into_raw_vec();
+        let energy = src
+            .pulse_energy
+            .read_slice::<f64, _, Ix2>(s![a..b, ..])
+            .map_err(fail)?
+            .into_raw_vec();
+        let ch = spec.channels.len();
         let values: Vec<(Vec<f64>, usize)> = src
             .values
             .iter()
@@ -353,7 +370,7 @@ fn copy_rows(f: &ShardFile, spec: &RawFileSpec, writer: &mut RawFileWriter) -> R
                 index: f.first_profile + a + r,
                 time_s: time[r],
                 n_shots: shots[r],
-                pulse_energy_j: energy[r],
+                pulse_energy_j: row(&energy, r, ch),
                 counts: row(&counts, r, n),
                 components: match &parts[..] {
                     [s, bg, d] => Some([row(s, r, n), row(bg, r, n), row(d, r, n)]),

@@ -103,7 +103,7 @@ impl BeamPath {
     ) -> Self {
         let r_max = geometry.max_range_m();
         let z_far = geometry.altitude_at_range(r_max);
-        let ground_m = surface.map_or(0.0, |s| s.altitude_m);
+        let (z_lo, z_hi) = Self::altitude_span(atmosphere, geometry, surface.as_ref());
         let surface = surface
             .filter(|s| geometry.kind == PlatformKind::Spaceborne && s.altitude_m >= z_far)
             .map(|s| SurfaceEcho {
@@ -111,18 +111,9 @@ impl BeamPath {
                 integrated_backscatter_sr: atmosphere.surface_echo_share()
                     * s.integrated_backscatter_sr(geometry.local_cos_at(s.altitude_m)),
             });
-        let (z_lo, z_hi) = match geometry.kind {
-            // The beam stops at the surface.
-            PlatformKind::Spaceborne => (
-                z_far.max(ground_m),
-                geometry.platform_altitude_m.min(atmosphere.top_m()),
-            ),
-            PlatformKind::Ground => (geometry.platform_altitude_m, z_far.min(atmosphere.top_m())),
-        };
         let mut segments: Vec<Segment> = if z_hi > z_lo {
             atmosphere
-                .slabs(z_lo, z_hi)
-                .into_iter()
+                .slabs_iter(z_lo, z_hi)
                 .map(|s| {
                     let (ra, rb) = (
                         geometry.range_at_altitude(s.z_lo),
@@ -147,7 +138,15 @@ impl BeamPath {
         } else {
             vec![]
         };
-        segments.sort_by(|a, b| a.r_start.total_cmp(&b.r_start));
+        // slabs come by altitude: by range already (looking up) or reversed (looking down),
+        // put in order without the sort's scratch copy of a window's segments
+        let by_range = |a: &Segment, b: &Segment| a.r_start.total_cmp(&b.r_start);
+        if segments.is_sorted_by(|a, b| by_range(a, b).is_gt()) {
+            segments.reverse();
+        }
+        if !segments.is_sorted_by(|a, b| by_range(a, b).is_le()) {
+            segments.sort_by(by_range);
+        }
         let mut tau = 0.0;
         for s in &mut segments {
             s.tau_start = tau;
@@ -170,6 +169,28 @@ impl BeamPath {
             surface,
             zero_overlap_until_m,
             kinks_m,
+        }
+    }
+
+    /// The altitudes `(z_lo, z_hi)` the beam's path through the atmosphere spans (empty
+    /// when `z_hi <= z_lo`): a space-borne beam from the platform or the atmosphere's top
+    /// down to the window's end or the `surface` (sea level without one); a ground beam
+    /// from the station up to the window's end or the atmosphere's top.
+    pub fn altitude_span(
+        atmosphere: &Atmosphere,
+        geometry: &Geometry,
+        surface: Option<&Surface>,
+    ) -> (f64, f64) {
+        let r_max = geometry.max_range_m();
+        let z_far = geometry.altitude_at_range(r_max);
+        let ground_m = surface.map_or(0.0, |s| s.altitude_m);
+        match geometry.kind {
+            // The beam stops at the surface.
+            PlatformKind::Spaceborne => (
+                z_far.max(ground_m),
+                geometry.platform_altitude_m.min(atmosphere.top_m()),
+            ),
+            PlatformKind::Ground => (geometry.platform_altitude_m, z_far.min(atmosphere.top_m())),
         }
     }
 

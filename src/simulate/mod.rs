@@ -701,6 +701,13 @@ pub fn plan(lidar: &Lidar, opts: &RunOptions, resolved: Option<ResolvedMethod>) 
         Some(m) => m,
         None => resolve_method(requested, lidar)?,
     };
+    // what the plan holds besides the model (whose estimate was checked when it was
+    // built): the file's variables per bin, before the run's own estimate (check_sizes)
+    let bins = (lidar.channels.len() * first.geometry.n_bins) as f64;
+    crate::resources::require_memory(
+        &format!("planning a run of {bins} bins"),
+        bins * PLAN_BYTES_PER_BIN,
+    )?;
     let expected = lidar.expected()?;
     let shots = first.shots_per_profile();
     let profile_time_s = shots as f64 / first.instrument.rep_rate_hz;
@@ -849,7 +856,6 @@ fn draw_into<S: ProfileSink>(
     sink: &mut S,
 ) -> Result<(u64, Duration)> {
     let first = lidar.first();
-    let cfg = &first.loaded.config;
     let RunPlan {
         seed,
         components,
@@ -874,7 +880,12 @@ fn draw_into<S: ProfileSink>(
             stream_samplers(e, method, energy, components, seed, &c.instrument)
         })
         .collect();
-    let nominal_energy_j = cfg.instrument.pulse_energy_j;
+    // each channel's laser line has its own nominal energy; the shots' factors are shared
+    let nominal_energy_j: Vec<f64> = lidar
+        .channels
+        .iter()
+        .map(|c| c.loaded.config.instrument.pulse_energy_j)
+        .collect();
     let progress = progress_bar(opts.progress, rows.len());
     let streams = channels.len() * channels[0].len();
     // batch size: bounded memory (at most 32 MiB of counts) and a lively progress bar
@@ -939,11 +950,14 @@ fn draw_into<S: ProfileSink>(
                 .map(Vec::as_slice)
                 .chain(place.iter().flat_map(|p| p.iter().map(|v| &v[..])))
                 .collect();
+            // E0_c·(Σf_s/M): exactly E0_c when every factor is 1
+            let factor = d.energy_sum / shots as f64;
+            let pulse_energy_j: Vec<f64> = nominal_energy_j.iter().map(|e0| e0 * factor).collect();
             sink.write_profile(&ProfileRecord {
                 index: index - rows.start,
                 time_s: index as f64 * profile_time_s + 0.5 * profile_time_s,
                 n_shots: shots,
-                pulse_energy_j: nominal_energy_j * d.energy_sum / shots as f64,
+                pulse_energy_j: &pulse_energy_j,
                 counts: &d.counts,
                 components: d
                     .components
@@ -1345,6 +1359,13 @@ fn raw_file_spec(
     })
 }
 
+/// Memory a run's plan holds per bin and channel beyond the model: the raw file's
+/// per-bin variables (the truth, the expectations), bytes. Measured: peak RSS of
+/// `simulate --profiles 2` over `expect --csv` of scenario 1's 40 km window at
+/// `bin_width_s` 2e-9 and 1e-9 (1.33e5 and 2.67e5 bins): 111 and 167 MB more, 418 bytes a
+/// bin (plus 55 MB of buffers the run's own estimate counts), rounded up.
+const PLAN_BYTES_PER_BIN: f64 = 500.0;
+
 /// Bytes per stored count beyond the Poisson entropy: deflate after shuffle stores
 /// ~1.6–1.75 × the entropy (measured: scenario 1 1.46 B against 0.90 B of entropy, the
 /// CALIOP-like config 0.51 B against 0.29 B), rounded up.
@@ -1414,10 +1435,23 @@ fn check_sizes(
         let file = estimated_file_bytes(totals, shots, profiles, streams);
         crate::resources::require_disk("-o", &opts.output, file)?;
     }
+    // the afterpulses, drawn one at a time from each profile's recorded counts
+    let afterpulse_ns: f64 = lidar
+        .channels
+        .iter()
+        .zip(&planned.expected)
+        .filter_map(|(c, e)| {
+            let p = c.instrument.afterpulsing.as_ref()?.probability;
+            Some(crate::resources::afterpulse_ns_per_shot(
+                p,
+                e.recorded.iter().sum(),
+            ))
+        })
+        .sum();
     let draw_ns_per_profile = match method {
         ResolvedMethod::Shot => ShotSampler::new(totals).strategy().est_ns_per_shot * shots as f64,
         _ => bins * cost::AGGREGATE_LARGE_NS,
-    } + dead_time_ns * shots as f64;
+    } + (dead_time_ns + afterpulse_ns) * shots as f64;
     let ns = profiles as f64
         * (draw_ns_per_profile * streams.min(3) as f64 / threads as f64
             + bins * streams as f64 * FILE_NS_PER_COUNT);

@@ -7,6 +7,7 @@
 
 use std::ops::Range;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use serde::{Deserialize, Serialize};
 
@@ -165,19 +166,32 @@ impl<'a> Validation<'a> {
 
     /// Draws realizations `rows` into their sums.
     pub fn draw(&self, rows: Range<usize>) -> Sums {
+        self.draw_until(rows, &AtomicBool::new(false))
+    }
+
+    /// [`Self::draw`], each realization not yet begun skipped (drawn as nothing) once
+    /// `cancel` is set: then the sums are incomplete and are to be thrown away.
+    fn draw_until(&self, rows: Range<usize>, cancel: &AtomicBool) -> Sums {
         let first = self.lidar.first();
+        let go = || !cancel.load(Ordering::Relaxed);
         match &self.kind {
             Kind::Identical {
                 source,
                 models,
                 channels,
                 ..
-            } => Sums::Identical(accumulate(source, rows, models.len(), channels)),
+            } => {
+                let source = UntilCancelled { source, go: &go };
+                Sums::Identical(accumulate(&source, rows, models.len(), channels))
+            }
             Kind::Changing { scene: sc, energy } => {
                 let n_bins = first.geometry.n_bins;
                 let channels = self.lidar.channels.len();
                 let shots = first.shots_per_profile() as f64;
                 let draw = |p: u64| {
+                    if !go() {
+                        return (Vec::new(), Vec::new());
+                    }
                     let d =
                         simulate::draw_scene_profile(sc, self.seed, channels, p, n_bins, energy);
                     let mu = d.values[simulate::RECORDED_ROW]
@@ -244,26 +258,42 @@ pub fn run(lidar: &Lidar, opts: &ValidateOptions) -> Result<Report> {
     v.report(&v.draw(0..opts.realizations))
 }
 
-/// Realizations drawn between two looks at the cancel flag of [`run_cancellable`].
+/// A source whose realizations are drawn only while `go` says so (an empty profile
+/// after: [`run_cancellable`] throws those sums away).
+struct UntilCancelled<'a> {
+    source: &'a dyn super::RealizationSource,
+    go: &'a (dyn Fn() -> bool + Sync),
+}
+
+impl super::RealizationSource for UntilCancelled<'_> {
+    fn draw(&self, p: u64, counts: &mut [u64]) {
+        if (self.go)() {
+            self.source.draw(p, counts);
+        }
+    }
+}
+
+/// Realizations drawn between two looks at the cancel flag of [`run_cancellable`] (the
+/// blocks' sums added; within a block every realization looks at it before it starts).
 const CANCEL_BLOCK: usize = 256;
 
-/// [`run`], stopping with [`Error::Interrupted`] between blocks of
-/// [`CANCEL_BLOCK`] realizations once `cancel` is set (the Python module's Ctrl-C).
-/// The same report as [`run`]: the blocks' sums add exactly ([`Sums::add`]).
+/// [`run`], stopping with [`Error::Interrupted`] once `cancel` is set (the Python
+/// module's Ctrl-C): the realizations under way finish, no other starts. The same
+/// report as [`run`]: the blocks' sums add exactly ([`Sums::add`]).
 pub fn run_cancellable(
     lidar: &Lidar,
     opts: &ValidateOptions,
-    cancel: &std::sync::atomic::AtomicBool,
+    cancel: &AtomicBool,
 ) -> Result<Report> {
     let v = Validation::new(lidar, opts)?;
     v.check_sizes(opts.realizations)?;
     let n = opts.realizations;
     let mut sums: Option<Sums> = None;
     for start in (0..n).step_by(CANCEL_BLOCK) {
-        if cancel.load(std::sync::atomic::Ordering::Relaxed) {
+        let block = v.draw_until(start..(start + CANCEL_BLOCK).min(n), cancel);
+        if cancel.load(Ordering::Relaxed) {
             return Err(Error::Interrupted);
         }
-        let block = v.draw(start..(start + CANCEL_BLOCK).min(n));
         match &mut sums {
             None => sums = Some(block),
             Some(all) => all.add(&block).map_err(Error::Unsupported)?,

@@ -13,6 +13,10 @@ use super::ticks;
 
 /// Width of a panel's colour bar with its ticks and label, pixels.
 pub const BAR_WIDTH: u32 = 120;
+/// About how many intervals a panel's x and y ticks divide the axes into.
+const X_TICKS: usize = 10;
+/// See [`X_TICKS`].
+const Y_TICKS: usize = 8;
 
 /// One axis of a panel.
 #[derive(Debug, Clone, PartialEq)]
@@ -25,6 +29,24 @@ pub struct Axis {
     pub hi: f64,
     /// Logarithmic (both ends > 0).
     pub log: bool,
+    /// A time axis labelled by the UTC clock (`HH:MM`) rather than by its numbers.
+    pub clock: Option<Clock>,
+}
+
+/// What makes a linear axis of times a clock: value `v` is the UTC time
+/// `origin_unix_s + v·seconds_per_unit` (Unix seconds).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Clock {
+    /// Unix time of the axis' value 0, s.
+    pub origin_unix_s: f64,
+    /// Seconds per unit of the axis' values (1 for s, 60 for min).
+    pub seconds_per_unit: f64,
+}
+
+impl Clock {
+    fn unix_s(&self, v: f64) -> f64 {
+        self.origin_unix_s + v * self.seconds_per_unit
+    }
 }
 
 impl Axis {
@@ -36,7 +58,19 @@ impl Axis {
             lo,
             hi,
             log: false,
+            clock: None,
         }
+    }
+
+    /// A linear axis of times labelled by the UTC clock (`clock`), `lo` and `hi` in its
+    /// values.
+    pub fn clock(label: impl Into<String>, lo: f64, hi: f64, clock: Clock) -> Self {
+        let mut a = Axis::linear(label, lo, hi);
+        a.clock = (clock.origin_unix_s.is_finite()
+            && clock.seconds_per_unit.is_finite()
+            && clock.seconds_per_unit > 0.0)
+            .then_some(clock);
+        a
     }
 
     /// A logarithmic axis (falls back to linear unless `0 < lo < hi`).
@@ -56,9 +90,31 @@ impl Axis {
         if self.log { 10f64.powf(c) } else { c }
     }
 
+    /// The tick label of coordinate `c`: the clock time, or the number.
+    fn tick_label(&self, c: f64) -> String {
+        match self.clock {
+            Some(k) => ticks::clock_label(k.unix_s(c), self.clock_ticks(X_TICKS).1),
+            None => ticks::format(self.value(c)),
+        }
+    }
+
+    /// A clock axis' ticks (in its values) about `n` apart, and their step in seconds.
+    fn clock_ticks(&self, n: usize) -> (Vec<f64>, f64) {
+        let Some(k) = self.clock else {
+            return (vec![], 1.0);
+        };
+        let (t, step) = ticks::clock(k.unix_s(self.lo), k.unix_s(self.hi), n as f64 / 2.0);
+        let v = t
+            .into_iter()
+            .map(|t| (t - k.origin_unix_s) / k.seconds_per_unit);
+        (v.collect(), step)
+    }
+
     /// The plotters range in the axis' coordinate, with nice ticks as key points.
     fn range(&self, n: usize) -> ticks::TickedRange {
-        let t = if self.log {
+        let t = if self.clock.is_some() {
+            self.clock_ticks(n).0
+        } else if self.log {
             ticks::log(self.lo, self.hi, n)
         } else {
             ticks::linear(self.lo, self.hi, n as f64)
@@ -165,14 +221,14 @@ impl ImagePanel {
             .margin(10)
             .x_label_area_size(48)
             .y_label_area_size(72)
-            .build_cartesian_2d(x.range(10), y.range(8))?;
+            .build_cartesian_2d(x.range(X_TICKS), y.range(Y_TICKS))?;
         chart
             .configure_mesh()
             .disable_mesh()
             .x_desc(x.label.as_str())
             .y_desc(y.label.as_str())
-            .x_label_formatter(&|c: &f64| ticks::format(x.value(*c)))
-            .y_label_formatter(&|c: &f64| ticks::format(y.value(*c)))
+            .x_label_formatter(&|c: &f64| x.tick_label(*c))
+            .y_label_formatter(&|c: &f64| y.tick_label(*c))
             .label_style((FONT, 13))
             .axis_desc_style((FONT, 15))
             .draw()?;

@@ -32,11 +32,13 @@ impl Ranged for TickedRange {
     }
 
     fn key_points<Hint: KeyPointHint>(&self, hint: Hint) -> Vec<f64> {
-        if hint.max_num_points() >= self.ticks.len() {
-            self.ticks.clone()
-        } else {
-            vec![]
-        }
+        // every k-th tick when there are more than plotters asks for
+        let k = self
+            .ticks
+            .len()
+            .div_ceil(hint.max_num_points().max(1))
+            .max(1);
+        self.ticks.iter().copied().step_by(k).collect()
     }
 
     fn range(&self) -> Range<f64> {
@@ -107,6 +109,51 @@ pub fn log(lo: f64, hi: f64, max_labels: usize) -> Vec<f64> {
     out
 }
 
+/// Steps of a clock axis, s: seconds, minutes and hours a person counts in.
+const CLOCK_STEPS_S: [f64; 17] = [
+    1.0, 2.0, 5.0, 10.0, 15.0, 30.0, 60.0, 120.0, 300.0, 600.0, 900.0, 1800.0, 3600.0, 7200.0,
+    10800.0, 21600.0, 43200.0,
+];
+
+/// Ticks on a clock axis from `lo` to `hi` (Unix seconds, UTC): the multiples of the step
+/// of [`CLOCK_STEPS_S`] (whole days beyond them) giving the number of intervals nearest
+/// `target`, and that step.
+pub fn clock(lo: f64, hi: f64, target: f64) -> (Vec<f64>, f64) {
+    let (lo, hi) = (lo.min(hi), lo.max(hi));
+    if !(lo.is_finite() && hi.is_finite() && hi > lo && target > 0.0) {
+        return (vec![], 1.0);
+    }
+    let span = hi - lo;
+    let days = 86400.0 * nice_step(span / 86400.0, target).max(1.0);
+    let step = CLOCK_STEPS_S
+        .into_iter()
+        .chain([days])
+        .min_by(|a, b| ((span / a - target).abs()).total_cmp(&(span / b - target).abs()))
+        .unwrap_or(days);
+    let (first, last) = ((lo / step).ceil(), (hi / step).floor());
+    if !(last >= first && last - first <= 1000.0) {
+        return (vec![], step);
+    }
+    (
+        (first as i64..=last as i64)
+            .map(|k| k as f64 * step)
+            .collect(),
+        step,
+    )
+}
+
+/// A UTC time of day as a clock axis writes it: `HH:MM`, or `HH:MM:SS` when the ticks
+/// are less than a minute apart (`step_s`).
+pub fn clock_label(unix_s: f64, step_s: f64) -> String {
+    let t = unix_s.round().rem_euclid(86400.0) as u64;
+    let (h, m, s) = (t / 3600, t / 60 % 60, t % 60);
+    if step_s < 60.0 {
+        format!("{h:02}:{m:02}:{s:02}")
+    } else {
+        format!("{h:02}:{m:02}")
+    }
+}
+
 /// A number as a person writes it on an axis: plain decimals from 1e-3 to 1e5 with no
 /// trailing zeros (`0.05`, `250`, `1.5`), else a power of ten (`1e-7`, `3e8`).
 pub fn format(v: f64) -> String {
@@ -151,6 +198,23 @@ mod tests {
         assert_eq!(log(1e-12, 1.0, 4), vec![1e-12, 1e-8, 1e-4, 1.0]);
         assert_eq!(log(1.5, 40.0, 10), vec![2.0, 5.0, 10.0, 20.0]);
         assert!(log(0.0, 1.0, 10).is_empty());
+    }
+
+    #[test]
+    fn clock_ticks_fall_on_whole_minutes_and_read_as_utc() {
+        // 2000-01-01 21:03:20 to 21:08:20 UTC: a tick a minute from 21:04
+        let t0 = 946_760_600.0;
+        let (t, step) = clock(t0, t0 + 300.0, 5.0);
+        assert_eq!(step, 60.0);
+        assert_eq!(t.len(), 5);
+        assert_eq!(clock_label(t[0], step), "21:04");
+        assert_eq!(clock_label(t[4], step), "21:08");
+        assert_eq!(clock_label(t0, 30.0), "21:03:20");
+        // eight hours: every 2 h
+        let (t, step) = clock(0.0, 8.0 * 3600.0, 5.0);
+        assert_eq!((step, t.len()), (7200.0, 5));
+        assert_eq!(clock_label(t[4], step), "08:00");
+        assert!(clock(1.0, f64::INFINITY, 5.0).0.is_empty());
     }
 
     #[test]

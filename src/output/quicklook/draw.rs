@@ -60,7 +60,10 @@ fn panel(
     y_edges.reverse(); // row 0 is the top
     ImagePanel {
         title,
-        x: Axis::linear(q.x_label.clone(), g.x.0, g.x.1),
+        x: match q.x_clock {
+            Some(clock) => Axis::clock(q.x_label.clone(), g.x.0, g.x.1, clock),
+            None => Axis::linear(q.x_label.clone(), g.x.0, g.x.1),
+        },
         y: Axis::linear("altitude (km)", g.z.0, g.z.1),
         x_edges: step(g.x, g.cols),
         y_edges,

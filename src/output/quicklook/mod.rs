@@ -29,6 +29,7 @@ mod raw;
 use std::path::Path;
 
 use crate::error::{Error, Result};
+use crate::output::plot::panel::Clock;
 use crate::output::safe_file::{Outputs, Stream};
 use grid::Grid;
 
@@ -51,6 +52,8 @@ pub struct Quicklook {
     pub background_note: String,
     /// Label of the horizontal axis, with its unit.
     pub x_label: String,
+    /// A time axis with a known start: labelled by the UTC clock.
+    pub x_clock: Option<Clock>,
     /// The estimated attenuated backscatter, [`Grid::means`] layout.
     pub signal: Grid,
     /// The channel's name.
@@ -66,10 +69,8 @@ pub struct Quicklook {
 /// One channel's calibration: counts per shot to attenuated backscatter.
 #[derive(Debug, Clone, Copy)]
 pub struct Calibration {
-    /// The lidar constant `C`, m² sr (per unit of pulse energy at `nominal_energy_j`).
+    /// The lidar constant `C`, m² sr (at the channel's nominal pulse energy).
     pub lidar_constant: f64,
-    /// The nominal pulse energy `E₀`, J.
-    pub nominal_energy_j: f64,
     /// Codes per photoelectron of an analog channel, 1 for a photon counter.
     pub codes_per_photoelectron: f64,
 }
@@ -83,7 +84,8 @@ pub enum Background<'a> {
 }
 
 /// Adds one profile of one channel to `grid`: `(N/M − B)/(C·w·E/E₀)` per bin, each bin
-/// over its rows (`bin_rows`), the profile over `columns`.
+/// over its rows (`bin_rows`), the profile over `columns`; `energy_factor` is the
+/// profile's `E/E₀` at the channel's laser line ([`crate::output::raw_file::read::energy_factors`]).
 #[allow(clippy::too_many_arguments)]
 pub fn add_profile(
     grid: &mut Grid,
@@ -94,7 +96,7 @@ pub fn add_profile(
     background: &Background,
     range_weight: &[f64],
     cal: &Calibration,
-    pulse_energy_j: f64,
+    energy_factor: f64,
 ) {
     if columns.is_empty() || shots.is_nan() || shots <= 0.0 {
         return;
@@ -107,8 +109,8 @@ pub fn add_profile(
         Background::Bins(_) => 0.0,
         Background::Value(v) => *v,
     };
-    let energy = if cal.nominal_energy_j > 0.0 && pulse_energy_j > 0.0 {
-        pulse_energy_j / cal.nominal_energy_j
+    let energy = if energy_factor > 0.0 {
+        energy_factor
     } else {
         1.0
     };
@@ -127,11 +129,42 @@ pub fn add_profile(
 }
 
 /// The horizontal axis from the file's profile coordinate: its values scaled to the
-/// shown unit and the label.
-pub fn x_axis(along_track: bool, span: f64) -> (f64, String) {
+/// shown unit, the label, and for a time axis whose start is known (`start_unix_s`, the
+/// Unix time of `time` 0) the UTC clock that labels it, with the date of `first_s` (the
+/// first profile's time) in the label.
+pub fn x_axis(
+    along_track: bool,
+    span: f64,
+    start_unix_s: Option<f64>,
+    first_s: f64,
+) -> (f64, String, Option<Clock>) {
     if along_track {
-        (1e-3, "along-track distance (km)".into())
-    } else if span < 600.0 {
+        return (1e-3, "along-track distance (km)".into(), None);
+    }
+    if let Some(date) = start_unix_s.and_then(|t0| utc_date(t0 + first_s)) {
+        let clock = Clock {
+            origin_unix_s: start_unix_s.unwrap_or(0.0),
+            seconds_per_unit: 1.0,
+        };
+        return (1.0, format!("time (UTC, {date})"), Some(clock));
+    }
+    let (scale, label) = x_scale(span);
+    (scale, label, None)
+}
+
+/// The UTC date `YYYY-MM-DD` of Unix time `t_s` (None outside years 1970–9999).
+fn utc_date(t_s: f64) -> Option<String> {
+    if !(0.0..2.5e11).contains(&t_s) {
+        return None;
+    }
+    let t = std::time::UNIX_EPOCH.checked_add(std::time::Duration::from_secs_f64(t_s))?;
+    let text = humantime::format_rfc3339_seconds(t).to_string();
+    text.get(..10).map(str::to_string)
+}
+
+/// The unit of a time axis of `span` seconds without a known start: its scale and label.
+fn x_scale(span: f64) -> (f64, String) {
+    if span < 600.0 {
         (1.0, "time since start (s)".into())
     } else if span < 6.0 * 3600.0 {
         (1.0 / 60.0, "time since start (min)".into())

@@ -1,6 +1,7 @@
 //! The quicklook of an onboard product: every region group stitched on one grid at
 //! its own resolution (its bins over the rows they cover, its profiles over the
 //! columns), the background from the product's expected background and dark counts.
+//! Every region is checked first as `merge` checks it ([`crate::onboard::merge::check_region`]).
 
 use std::path::Path;
 
@@ -44,6 +45,9 @@ fn regions(path: &Path, f: &hdf5::File, xname: &str) -> Result<Vec<Region>> {
         let group = f
             .group(&name)
             .map_err(|_| fail(format!("`{name}` is not a group")))?;
+        // the check `merge` applies to every region of every shard: nothing it refuses
+        // is drawn
+        crate::onboard::merge::check_region(&group, path)?;
         let v = Vars { path, f: &group };
         let channels = read_text(path, &group, "channel")?;
         let altitude_km: Vec<f64> = v.f64s("altitude")?.iter().map(|z| z / 1e3).collect();
@@ -113,7 +117,12 @@ pub(super) fn read(
         .iter()
         .map(|r| (r.x_ends.1 - r.x_ends.0).abs())
         .fold(0.0, f64::max);
-    let (x_scale, x_label) = x_axis(along_track, span);
+    let t0 = start_unix_s(f, first.dataset("time").ok().as_ref());
+    let x_first = regions
+        .iter()
+        .map(|r| r.x_ends.0.min(r.x_ends.1))
+        .fold(f64::INFINITY, f64::min);
+    let (x_scale, x_label, x_clock) = x_axis(along_track, span, t0, x_first);
     let (mut xlo, mut xhi, mut zlo, mut zhi) = (
         f64::INFINITY,
         f64::NEG_INFINITY,
@@ -140,7 +149,6 @@ pub(super) fn read(
     let mut has_pair = false;
     let mut truth_grid = truth.then(|| empty.clone());
     let mut day = Vec::new();
-    let t0 = start_unix_s(f, first.dataset("time").ok().as_ref());
     for r in &regions {
         let v = Vars { path, f: &r.group };
         // a product's groups name their channels only: `<wavelength>_<polarization>`
@@ -174,6 +182,7 @@ pub(super) fn read(
             .map(|w| empty.rows_of(w[0], w[1]))
             .collect();
         let range_weight = v.f64s("range_weight")?;
+        let nominal = v.f64s("nominal_pulse_energy")?;
         let dx = spacing(r);
         let mut jobs: Vec<(usize, &mut Grid)> = Vec::new();
         if let Some(c) = c {
@@ -201,9 +210,7 @@ pub(super) fn read(
                 .read_slice::<u64, _, Ix1>(s![p0..p1])
                 .map_err(|e| v.unreadable("n_shots", e))?
                 .to_vec();
-            let energy = v
-                .f64_range("pulse_energy", p0, p1)
-                .unwrap_or_else(|_| vec![0.0; p1 - p0]);
+            let energy = energy_factors(&v, p0, p1, &nominal)?;
             let columns: Vec<Vec<(usize, f64)>> = x
                 .iter()
                 .map(|&x| empty.columns((x - 0.5 * dx) * x_scale, (x + 0.5 * dx) * x_scale))
@@ -224,7 +231,7 @@ pub(super) fn read(
                         &Background::Value(bkg[i] * r.merged),
                         &range_weight,
                         cal,
-                        energy[i],
+                        energy.get(i * nominal.len() + *k).copied().unwrap_or(1.0),
                     );
                 }
             }
@@ -254,6 +261,7 @@ pub(super) fn read(
             regions.len()
         ),
         x_label,
+        x_clock,
         signal,
         channel: name,
         pair: has_pair.then(|| (par, perp, "perpendicular / parallel".to_string())),
@@ -269,6 +277,35 @@ fn spacing(r: &Region) -> f64 {
     } else {
         1.0
     }
+}
+
+/// The energy factors `E/E₀` of a region's profiles `p0..p1`, (profile, channel)
+/// row-major: `pulse_energy[p, c] / nominal_pulse_energy[c]`; a product of an earlier
+/// version kept one energy per profile, at the first channel's nominal energy, whose
+/// factor every channel shares (one laser's shots). A nominal energy of 0: factor 1.
+fn energy_factors(v: &Vars, p0: usize, p1: usize, nominal: &[f64]) -> Result<Vec<f64>> {
+    let d = v.ds("pulse_energy")?;
+    let ratio = |e: f64, e0: f64| if e0 > 0.0 { e / e0 } else { 1.0 };
+    Ok(match d.ndim() {
+        2 => d
+            .read_slice::<f64, _, Ix2>(s![p0..p1, ..])
+            .map_err(|e| v.unreadable("pulse_energy", e))?
+            .outer_iter()
+            .flat_map(|row| {
+                row.iter()
+                    .zip(nominal)
+                    .map(|(&e, &e0)| ratio(e, e0))
+                    .collect::<Vec<_>>()
+            })
+            .collect(),
+        _ => {
+            let e0 = nominal.first().copied().unwrap_or(0.0);
+            v.f64_range("pulse_energy", p0, p1)?
+                .iter()
+                .flat_map(|&e| std::iter::repeat_n(ratio(e, e0), nominal.len()))
+                .collect()
+        }
+    })
 }
 
 /// `expected_background + expected_dark` per shot and native bin, profiles `p0..p1`.

@@ -11,7 +11,7 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::output::plot::panel::{edges, widen};
-use crate::output::raw_file::read::{check, read_text};
+use crate::output::raw_file::read::{check, energy_factors, read_text};
 use crate::output::safe_file::describe_hdf5_error;
 use crate::output::scc::signal_free;
 
@@ -75,7 +75,6 @@ pub(super) fn calibration(v: &Vars, c: usize) -> Result<Calibration> {
         .unwrap_or(false);
     Ok(Calibration {
         lidar_constant: at("lidar_constant")?,
-        nominal_energy_j: at("nominal_pulse_energy")?,
         codes_per_photoelectron: if analog {
             at("analog_counts_per_photoelectron")?
         } else {
@@ -226,7 +225,9 @@ pub(super) fn read(
         v.f64_range(xname, 0, 1)?[0],
         v.f64_range(xname, n_profiles - 1, n_profiles)?[0],
     );
-    let (x_scale, x_label) = x_axis(header.along_track, (x_last - x_first).abs());
+    let t0 = start_unix_s(f, f.dataset("time").ok().as_ref());
+    let (x_scale, x_label, x_clock) =
+        x_axis(header.along_track, (x_last - x_first).abs(), t0, x_first);
     let dx = if n_profiles > 1 {
         (x_last - x_first) / (n_profiles - 1) as f64
     } else {
@@ -273,16 +274,14 @@ pub(super) fn read(
         None
     };
     let counts = v.ds("counts")?;
-    let t0 = start_unix_s(f, f.dataset("time").ok().as_ref());
+    let nominal = v.f64s("nominal_pulse_energy")?;
     let geolocated = f.dataset("latitude").is_ok() && f.dataset("longitude").is_ok();
     let mut day = Vec::new();
     for p0 in (0..n_profiles).step_by(BLOCK_PROFILES) {
         let p1 = (p0 + BLOCK_PROFILES).min(n_profiles);
         let x: Vec<f64> = v.f64_range(xname, p0, p1)?;
         let shots: Vec<u64> = counts_shots(&v, p0, p1)?;
-        let energy = v
-            .f64_range("pulse_energy", p0, p1)
-            .unwrap_or_else(|_| vec![0.0; p1 - p0]);
+        let energy = energy_factors(path, f, &header, p0..p1, &nominal)?;
         let columns: Vec<Vec<(usize, f64)>> = x
             .iter()
             .map(|&x| empty.columns((x - 0.5 * dx) * x_scale, (x + 0.5 * dx) * x_scale))
@@ -306,7 +305,7 @@ pub(super) fn read(
                     &Background::Bins(bins),
                     &range_weight,
                     cal,
-                    energy[i],
+                    energy.get(i * names.len() + k).copied().unwrap_or(1.0),
                 );
             }
         }
@@ -345,6 +344,7 @@ pub(super) fn read(
         ),
         background_note,
         x_label,
+        x_clock,
         signal,
         channel: names[c].clone(),
         pair,

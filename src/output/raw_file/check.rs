@@ -10,6 +10,8 @@ pub struct RecordShape {
     pub n_profiles: usize,
     /// Counts per profile: channels × bins.
     pub n_per_profile: usize,
+    /// Channels: the pulse energies of a profile.
+    pub n_channels: usize,
     /// The counts' integer width.
     pub count_width: CountWidth,
     /// Whether records carry signal, background and dark counts.
@@ -37,6 +39,7 @@ impl RecordShape {
         RecordShape {
             n_profiles: spec.n_profiles,
             n_per_profile: spec.counts_per_profile(),
+            n_channels: spec.channels.len(),
             count_width: spec.count_width,
             components: spec.components,
             per_profile: spec
@@ -71,8 +74,8 @@ impl RecordShape {
         (rows, columns)
     }
 
-    /// The record's columns: as many as the file's slots, each a column of the file at
-    /// most once or −1 (unused, weight 0), weights in [0, 1] summing to 1 (to 1e-12).
+    /// The record's columns: as many as the file's slots, and possible
+    /// ([`super::integrity::check_profile_columns`], the rule every reader applies).
     fn check_columns(&self, rec: &ProfileRecord) -> Result<(), String> {
         let i = rec.index;
         let k = self.column_slots;
@@ -86,27 +89,13 @@ impl RecordShape {
         if k == 0 {
             return Ok(());
         }
-        for (j, (&c, &w)) in rec.columns.iter().zip(rec.column_weights).enumerate() {
-            let used = c >= 0;
-            let repeated = used && rec.columns[..j].contains(&c);
-            let valid = (0.0..=1.0).contains(&w)
-                && i64::from(c) < self.n_columns as i64
-                && c >= -1
-                && (used || w == 0.0)
-                && !repeated;
-            if !valid {
-                return Err(format!(
-                    "profile {i}: slot {j} holds column {c} of weight {w} (the file has {} columns; \
-                     −1 for an unused slot of weight 0, each column once)",
-                    self.n_columns
-                ));
-            }
-        }
-        let sum: f64 = rec.column_weights.iter().sum();
-        if (sum - 1.0).abs() > 1e-12 {
-            return Err(format!("profile {i}: column weights sum to {sum}, not 1"));
-        }
-        Ok(())
+        super::integrity::check_profile_columns(rec.columns, rec.column_weights, self.n_columns)
+            .map_err(|why| {
+                format!(
+                    "profile {i}: columns {:?} of weights {:?} (the file has {} columns): {why}",
+                    rec.columns, rec.column_weights, self.n_columns
+                )
+            })
     }
 
     /// Every check of a record but whether its profile was written before: its index is
@@ -156,10 +145,20 @@ impl RecordShape {
                 self.n_profiles
             ));
         }
-        if !rec.pulse_energy_j.is_finite() || rec.pulse_energy_j < 0.0 {
+        if rec.pulse_energy_j.len() != self.n_channels {
             return Err(format!(
-                "profile {i}: pulse energy {} J is not a finite non-negative number",
-                rec.pulse_energy_j
+                "profile {i}: {} pulse energies given, the file has {} channels",
+                rec.pulse_energy_j.len(),
+                self.n_channels
+            ));
+        }
+        if let Some(e) = rec
+            .pulse_energy_j
+            .iter()
+            .find(|e| !(e.is_finite() && **e >= 0.0))
+        {
+            return Err(format!(
+                "profile {i}: pulse energy {e} J is not a finite non-negative number"
             ));
         }
         if rec.values.len() != self.per_profile.len() {

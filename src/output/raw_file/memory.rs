@@ -256,7 +256,7 @@ impl MemoryWriter {
                 },
                 (PerProfile::Time, Array::F64(a)) => a.push(rec.time_s),
                 (PerProfile::NShots, Array::U64(a)) => a.push(rec.n_shots),
-                (PerProfile::PulseEnergy, Array::F64(a)) => a.push(rec.pulse_energy_j),
+                (PerProfile::PulseEnergy, Array::F64(a)) => a.extend_from_slice(rec.pulse_energy_j),
                 (PerProfile::Value, Array::F64(a)) => a.extend(values.next()),
                 (PerProfile::Columns, Array::I32(a)) => a.extend_from_slice(rec.columns),
                 (PerProfile::ColumnWeights, Array::F64(a)) => {
@@ -345,7 +345,7 @@ mod tests {
             index: i,
             time_s: 10.0 * i as f64,
             n_shots: 7,
-            pulse_energy_j: 0.1,
+            pulse_energy_j: &[0.1, 0.2],
             counts: &counts,
             components: Some([&signal, &background, &dark]),
             values: &[&latitude, &expected],
@@ -408,7 +408,7 @@ mod tests {
             index: 1,
             time_s: 0.0,
             n_shots: 1,
-            pulse_energy_j: 0.1,
+            pulse_energy_j: &[0.1, 0.2],
             counts: &wide,
             components: Some([&wide, &none, &none]),
             values: &[&[0.0], &[0.0; 6]],
@@ -453,7 +453,13 @@ mod tests {
         assert_eq!(fixed[6].shape, [1, 2, 3]);
         assert_eq!(
             memory_bytes(&self::spec()),
-            (4.0 * 6.0 * 2.0) * 4.0 + 4.0 * 8.0 * 4.0 + 4.0 * 6.0 * 8.0 + 4.0 * (4.0 + 8.0)
+            // counts and components; time, n_shots, latitude; pulse_energy (profile,
+            // channel); expected_signal; the column slots
+            (4.0 * 6.0 * 2.0) * 4.0
+                + 4.0 * 8.0 * 3.0
+                + 4.0 * 2.0 * 8.0
+                + 4.0 * 6.0 * 8.0
+                + 4.0 * (4.0 + 8.0)
         );
     }
 }

@@ -1,4 +1,4 @@
-//! The raw lidar file, format version 3: HDF5 readable as netCDF-4, with CF-1.10
+//! The raw lidar file, format version 4: HDF5 readable as netCDF-4, with CF-1.10
 //! metadata (`docs/file-format.md` lists every variable and attribute).
 //!
 //! | name | dims | type |
@@ -9,7 +9,7 @@
 //! | `signal_counts`, `background_counts`, `dark_counts` | (profile, channel, bin) | as `counts`, only with [`RawFileSpec::components`] |
 //! | `time` | (profile) | f64, CF time (`seconds since <start>`) |
 //! | `n_shots` | (profile) | u64 |
-//! | `pulse_energy` | (profile) | f64, J |
+//! | `pulse_energy` | (profile, channel) | f64, J: each channel's laser line |
 //! | one per [`Variable`] | (bin), (channel), (channel, bin), (column, bin) or (column, channel, bin) | f64 |
 //! | one per [`TextVariable`] | (channel) | string |
 //! | `column` | (column) | i64 index coordinate of the scene's distinct columns, with [`RawFileSpec::n_columns`] |
@@ -33,6 +33,7 @@ pub mod chunk;
 pub mod content;
 pub mod detection;
 pub(crate) mod hdf5_ds;
+pub mod integrity;
 pub mod layout;
 pub mod memory;
 pub mod planes;
@@ -46,7 +47,7 @@ pub use writer::RawFileWriter;
 use crate::error::{Error, Result};
 
 /// `lidarsim_format_version` of the files this code writes.
-pub const FORMAT_VERSION: i32 = 3;
+pub const FORMAT_VERSION: i32 = 4;
 /// The CF version the files declare (CF-1.9 and later allow the unsigned counts).
 pub const CONVENTIONS: &str = "CF-1.10";
 /// Name of the profile dimension (and of its coordinate variable).
@@ -289,8 +290,10 @@ pub struct ProfileRecord<'a> {
     pub time_s: f64,
     /// Shots accumulated in this profile.
     pub n_shots: u64,
-    /// Mean emitted pulse energy of the profile's shots, J (the energy monitor's reading).
-    pub pulse_energy_j: f64,
+    /// Mean emitted pulse energy of the profile's shots at each channel's laser line, J
+    /// (the energy monitor's reading), one per channel: `E0_c·Σf_s/M` with `E0_c` the
+    /// channel's nominal energy (`nominal_pulse_energy`).
+    pub pulse_energy_j: &'a [f64],
     /// Accumulated raw counts, channel-major: `counts[c·n_bins + b]`.
     pub counts: &'a [u64],
     /// Signal, background and dark counts laid out as `counts`; present exactly when the

@@ -6,8 +6,9 @@
 //!
 //! [`check`] looks at the file before anything sized by it is allocated:
 //!
-//! 1. the root attribute `lidarsim_format_version` is [`FORMAT_VERSION`] or 2 (whose
-//!    files have the same counts, coordinates and per-profile variables);
+//! 1. the root attribute `lidarsim_format_version` is 2 to [`FORMAT_VERSION`] (whose
+//!    files have the same counts and coordinates; `pulse_energy` is (profile) before
+//!    format 4, [`energy_factors`] reads either);
 //! 2. `counts` is (profile, channel, bin) of unsigned integers, no dimension empty;
 //! 3. every dataset is stored with the filters lidarsim uses (shuffle, deflate,
 //!    Fletcher-32) and holds the values it declares: its declared bytes are at most
@@ -22,6 +23,9 @@
 //!    `along_track_distance` are finite, `pulse_energy` finite and ≥ 0, and every
 //!    `n_shots` ≥ 1, read [`SCAN_BLOCK`] values at a time (memory does not grow with
 //!    the file).
+//!
+//! 6. then what its values mean ([`super::integrity`]: the channel's words, the
+//!    calibration, every profile's columns, the per-profile floats, the components).
 //!
 //! Every refusal is one line naming the file and the variable or attribute.
 
@@ -63,6 +67,8 @@ pub struct RawHeader {
     pub count_bytes: usize,
     /// Whether the file has `along_track_distance` (an orbit).
     pub along_track: bool,
+    /// Its `lidarsim_format_version`, 2 to [`FORMAT_VERSION`].
+    pub format_version: i64,
 }
 
 impl RawHeader {
@@ -291,7 +297,7 @@ fn dims_name(dims: &[Dim]) -> String {
 /// naming the file and what is wrong.
 pub fn check(path: &Path, f: &hdf5::File) -> Result<RawHeader> {
     let bad = |why: String| Error::output(path, why);
-    check_version(path, f)?;
+    let version = check_version(path, f)?;
     let counts = f
         .dataset("counts")
         .map_err(|_| bad("has no `counts`: not a lidarsim raw file".into()))?;
@@ -345,7 +351,7 @@ pub fn check(path: &Path, f: &hdf5::File) -> Result<RawHeader> {
                         k.class.name()
                     )));
                 }
-                vec![k.dims]
+                vec![dims_in(k, version)]
             }
             None => {
                 if class != Class::Float {
@@ -396,17 +402,89 @@ pub fn check(path: &Path, f: &hdf5::File) -> Result<RawHeader> {
             scan(path, k.name, k.values, &d)?;
         }
     }
-    Ok(RawHeader {
+    let header = RawHeader {
         n_profiles,
         channels,
         n_bins,
         count_bytes,
         along_track: f.dataset("along_track_distance").is_ok(),
-    })
+        format_version: version,
+    };
+    super::integrity::check_raw(path, f, &header)?;
+    Ok(header)
 }
 
-/// The root attribute `lidarsim_format_version` must be [`FORMAT_VERSION`] or 2.
-fn check_version(path: &Path, f: &hdf5::File) -> Result<()> {
+/// The dimensions of known variable `k` in a file of format `version`: `pulse_energy` is
+/// (profile, channel) from format 4 on, one energy per channel's laser line; (profile),
+/// the first channel's, before.
+fn dims_in(k: &Known, version: i64) -> &'static [Dim] {
+    if k.name == "pulse_energy" && version >= 4 {
+        &[Dim::P, Dim::C]
+    } else {
+        k.dims
+    }
+}
+
+/// The energy factors `E/E₀` of profiles `rows` of raw file `f` (accepted by [`check`],
+/// header `h`), (profile, channel) row-major: from format 4, `pulse_energy[p, c] /
+/// nominal_pulse_energy[c]`; formats 2 and 3 kept one energy per profile, at the first
+/// channel's nominal energy, and every channel shares its factor (the shots of one
+/// laser), `pulse_energy[p] / nominal_pulse_energy[0]`. `nominal` is the file's
+/// `nominal_pulse_energy`; a nominal energy of 0 gives the factor 1 (no pulse, no
+/// signal to scale).
+pub fn energy_factors(
+    path: &Path,
+    f: &hdf5::Group,
+    h: &RawHeader,
+    rows: std::ops::Range<usize>,
+    nominal: &[f64],
+) -> Result<Vec<f64>> {
+    let channels = h.channels.len();
+    let d = f
+        .dataset("pulse_energy")
+        .map_err(|_| Error::output(path, "has no `pulse_energy`"))?;
+    let unreadable = |e: hdf5::Error| {
+        Error::output(
+            path,
+            format!(
+                "cannot read `pulse_energy`: {}",
+                crate::output::safe_file::describe_hdf5_error(&e.to_string())
+            ),
+        )
+    };
+    let ratio = |e: f64, e0: f64| if e0 > 0.0 { e / e0 } else { 1.0 };
+    if nominal.len() != channels {
+        return Err(Error::output(
+            path,
+            format!(
+                "`nominal_pulse_energy` has {} values for {channels} channels",
+                nominal.len()
+            ),
+        ));
+    }
+    if h.format_version >= 4 {
+        let e = d
+            .read_slice::<f64, _, ndarray::Ix2>(s![rows, ..])
+            .map_err(unreadable)?;
+        Ok(e.outer_iter()
+            .flat_map(|row| {
+                row.iter()
+                    .zip(nominal)
+                    .map(|(&e, &e0)| ratio(e, e0))
+                    .collect::<Vec<_>>()
+            })
+            .collect())
+    } else {
+        let e = d.read_slice::<f64, _, Ix1>(s![rows]).map_err(unreadable)?;
+        Ok(e.iter()
+            .flat_map(|&e| std::iter::repeat_n(ratio(e, nominal[0]), channels))
+            .collect())
+    }
+}
+
+/// The root attribute `lidarsim_format_version` must be 2 to [`FORMAT_VERSION`]; the
+/// version.
+fn check_version(path: &Path, f: &hdf5::File) -> Result<i64> {
     let bad = |why: String| Error::output(path, why);
     let attr = f.attr("lidarsim_format_version").map_err(|_| {
         bad("not a lidarsim raw file (no `lidarsim_format_version` attribute)".into())
@@ -431,7 +509,7 @@ fn check_version(path: &Path, f: &hdf5::File) -> Result<()> {
              to {FORMAT_VERSION} (re-run `lidarsim simulate` with this version)"
         )));
     }
-    Ok(())
+    Ok(v)
 }
 
 /// Whether dataset `d` holds unsigned integers.
@@ -548,6 +626,26 @@ fn scan(path: &Path, name: &str, values: Values, d: &Dataset) -> Result<()> {
                     ));
                 }
             }
+            Values::Finite | Values::NonNegative if d.ndim() == 2 => {
+                let v = d
+                    .read_slice::<f64, _, ndarray::Ix2>(s![a..b, ..])
+                    .map_err(unreadable)?;
+                let ok = |x: f64| x.is_finite() && (values == Values::Finite || x >= 0.0);
+                if let Some(((i, j), x)) = v.indexed_iter().find(|(_, x)| !ok(**x)) {
+                    return Err(Error::output(
+                        path,
+                        format!(
+                            "`{name}` value ({}, {j}) is {x}; it must be finite{}",
+                            a + i,
+                            if values == Values::Finite {
+                                ""
+                            } else {
+                                " and not negative"
+                            }
+                        ),
+                    ));
+                }
+            }
             Values::Finite | Values::NonNegative => {
                 let v = d.read_slice::<f64, _, Ix1>(s![a..b]).map_err(unreadable)?;
                 let ok = |x: f64| x.is_finite() && (values == Values::Finite || x >= 0.0);
@@ -603,7 +701,12 @@ mod tests {
         u("counts", &[p, 1, b], &vec![3; p * b]);
         u("n_shots", &[p], &vec![10; p]);
         x("time", &(0..p).map(|i| i as f64).collect::<Vec<_>>());
-        x("pulse_energy", &vec![0.1; p]);
+        f.new_dataset::<f64>()
+            .shape([p, 1])
+            .create("pulse_energy")
+            .unwrap()
+            .write_raw(&vec![0.1; p])
+            .unwrap();
         x(
             "altitude",
             &(0..b).map(|i| 30.0 * i as f64).collect::<Vec<_>>(),
@@ -687,10 +790,10 @@ mod tests {
         let e = refusal("version", |f| {
             f.attr("lidarsim_format_version")
                 .unwrap()
-                .write_scalar(&4)
+                .write_scalar(&5)
                 .unwrap()
         });
-        assert!(e.contains("format version 4"), "{e}");
+        assert!(e.contains("format version 5"), "{e}");
         let e = refusal("float-counts", |f| {
             f.unlink("counts").unwrap();
             f.new_dataset::<f64>()

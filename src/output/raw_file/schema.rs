@@ -271,19 +271,23 @@ pub fn schema(spec: &RawFileSpec) -> Vec<VarSchema<'_>> {
             ("coordinates", &coords_profile),
         ]),
     ));
-    vars.push(profile_var(
-        "pulse_energy",
-        Element::F64,
-        PerProfile::PulseEnergy,
-        text(&[
-            (
-                "long_name",
-                "mean emitted pulse energy of the profile's shots (energy monitor)",
-            ),
-            ("units", "J"),
-            ("coordinates", &coords_profile),
-        ]),
-    ));
+    vars.push(VarSchema {
+        dims: vec![PROFILE_DIM, CHANNEL_DIM],
+        shape: vec![p, c],
+        ..profile_var(
+            "pulse_energy",
+            Element::F64,
+            PerProfile::PulseEnergy,
+            text(&[
+                (
+                    "long_name",
+                    "mean emitted pulse energy of the profile's shots at the channel's laser line (energy monitor)",
+                ),
+                ("units", "J"),
+                ("coordinates", &coords_profile),
+            ]),
+        )
+    });
 
     for var in &spec.variables {
         let (n, coords_profile_bin, coords_profile) =

@@ -86,6 +86,7 @@ type Completed = (usize, usize, usize, Vec<u8>);
 struct ColumnBlock {
     time: Vec<f64>,
     n_shots: Vec<u64>,
+    /// `pulse_energy`, channels × profiles, row-major.
     pulse_energy: Vec<f64>,
     /// The spec's (profile) variables, in its order.
     values: Vec<Vec<f64>>,
@@ -409,7 +410,7 @@ impl RawFileWriter {
         let block = self.blocks.entry(b).or_insert_with(|| ColumnBlock {
             time: vec![0.0; len],
             n_shots: vec![0; len],
-            pulse_energy: vec![0.0; len],
+            pulse_energy: vec![0.0; len * self.shape.n_channels],
             values: vec![vec![0.0; len]; values.len()],
             columns: vec![0; len * slots],
             weights: vec![0.0; len * slots],
@@ -419,7 +420,8 @@ impl RawFileWriter {
         block.weights[r * slots..(r + 1) * slots].copy_from_slice(rec.column_weights);
         block.time[r] = rec.time_s;
         block.n_shots[r] = rec.n_shots;
-        block.pulse_energy[r] = rec.pulse_energy_j;
+        let ch = self.shape.n_channels;
+        block.pulse_energy[r * ch..(r + 1) * ch].copy_from_slice(rec.pulse_energy_j);
         for (column, &v) in block.values.iter_mut().zip(values) {
             column[r] = v;
         }
@@ -436,8 +438,10 @@ impl RawFileWriter {
             open.time.write_slice(&block.time[..], range.clone())?;
             open.n_shots
                 .write_slice(&block.n_shots[..], range.clone())?;
-            open.pulse_energy
-                .write_slice(&block.pulse_energy[..], range.clone())?;
+            let as_2d = |e: ndarray::ShapeError| hdf5::Error::from(e.to_string());
+            let energy = ndarray::ArrayView2::from_shape((len, ch), &block.pulse_energy[..])
+                .map_err(as_2d)?;
+            open.pulse_energy.write_slice(energy, (range.clone(), ..))?;
             for (ds, column) in open.columns.iter().zip(&block.values) {
                 ds.write_slice(&column[..], range.clone())?;
             }

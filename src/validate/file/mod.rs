@@ -3,9 +3,10 @@
 //! a merge, a copy or a file another tool has touched can be checked without its config.
 //!
 //! Per profile p, channel k and bin i the file gives the count `c`, the shots `M_p =
-//! n_shots`, the energy factor `f_p = pulse_energy_p / nominal_pulse_energy[0]` (the mean
-//! of exactly the shots' factors the counts were drawn with; every channel sees the same
-//! pulses) and the per-shot expectations at the nominal energy (`expected_*`, (channel,
+//! n_shots`, the energy factor `f_pk = pulse_energy[p, k] / nominal_pulse_energy[k]` (the
+//! mean of exactly the shots' factors the counts were drawn with; every channel sees the
+//! same pulses, each at its own laser line's energy; [`read::energy_factors`], which
+//! reads the one energy per profile of formats 2 and 3 too) and the per-shot expectations at the nominal energy (`expected_*`, (channel,
 //! bin) or, in a changing scene, (profile, channel, bin)). The law of `c`:
 //!
 //! * **ideal detector** (`dead_time` 0): given the shots' energies, a sum of independent
@@ -80,8 +81,8 @@ impl Sums {
 /// What the file says of its channels.
 struct Channels {
     names: Vec<String>,
-    /// `nominal_pulse_energy` of the first channel: the energy `pulse_energy` is relative to.
-    reference_energy: f64,
+    /// `nominal_pulse_energy` of each channel: the energy its `pulse_energy` is relative to.
+    nominal_energy: Vec<f64>,
     /// Each channel's dead time, None for an ideal detector.
     dead: Vec<Option<DeadTime>>,
 }
@@ -106,7 +107,7 @@ pub fn check_file(path: &Path) -> Result<(Report, Vec<String>)> {
     let rows = (BLOCK_VALUES / header.counts_per_profile()).max(1);
     for first in (0..header.n_profiles).step_by(rows) {
         let end = (first + rows).min(header.n_profiles);
-        let block = reader.block(first..end)?;
+        let block = reader.block(first..end, &channels.nominal_energy)?;
         block.validate(path, &header)?;
         block.accumulate(path, &channels, header.n_bins, &mut sums, &mut judged)?;
     }
@@ -261,7 +262,7 @@ fn channels(path: &Path, f: &hdf5::File, h: &RawHeader) -> Result<Channels> {
     };
     Ok(Channels {
         names: h.channels.clone(),
-        reference_energy: energy[0],
+        nominal_energy: energy,
         dead,
     })
 }

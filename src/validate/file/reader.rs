@@ -8,7 +8,7 @@ use ndarray::{Ix1, Ix2, Ix3, s};
 
 use super::{Channels, Sums};
 use crate::error::{Error, Result};
-use crate::output::raw_file::read::RawHeader;
+use crate::output::raw_file::read::{self, RawHeader};
 use crate::output::safe_file::describe_hdf5_error;
 
 /// A (channel) or (bin) variable of floats, whole (bounded by the header's lengths).
@@ -50,12 +50,14 @@ pub(super) struct Reader<'a> {
     fixed: Vec<Option<Vec<f64>>>,
     has_weights: bool,
     pub(super) first_shots: u64,
+    header: RawHeader,
 }
 
 /// The profiles of one block: counts and what the law needs, row-major.
 pub(super) struct Block {
     counts: Vec<u64>,
     shots: Vec<u64>,
+    /// The energy factors `E/E₀`, (profile, channel) row-major.
     energy: Vec<f64>,
     /// Per expectation variable: its values of every row (one row when static).
     expected: Vec<(Vec<f64>, bool)>,
@@ -98,6 +100,7 @@ impl<'a> Reader<'a> {
             fixed,
             has_weights: f.dataset("profile_column_weight").is_ok(),
             first_shots,
+            header: h.clone(),
         })
     }
 
@@ -121,7 +124,8 @@ impl<'a> Reader<'a> {
         read.map_err(|e| unreadable(self.path, name, e))
     }
 
-    pub(super) fn block(&mut self, rows: std::ops::Range<usize>) -> Result<Block> {
+    /// Rows `rows`, the energy factors at the channels' `nominal` energies.
+    pub(super) fn block(&mut self, rows: std::ops::Range<usize>, nominal: &[f64]) -> Result<Block> {
         let mut expected = Vec::new();
         for (name, fixed) in EXPECTED.iter().zip(&self.fixed) {
             expected.push(match fixed {
@@ -146,7 +150,7 @@ impl<'a> Reader<'a> {
         Ok(Block {
             counts: self.rows::<u64>("counts", rows.clone())?,
             shots: self.rows::<u64>("n_shots", rows.clone())?,
-            energy: self.rows::<f64>("pulse_energy", rows.clone())?,
+            energy: read::energy_factors(self.path, self.f, &self.header, rows.clone(), nominal)?,
             expected,
             mixed,
             first: rows.start,
@@ -208,10 +212,11 @@ impl Block {
         judged: &mut [usize],
     ) -> Result<()> {
         let per = ch.names.len() * n_bins;
-        for (r, (&shots, &energy)) in self.shots.iter().zip(&self.energy).enumerate() {
-            let factor = energy / ch.reference_energy;
-            let constant = factor == 1.0;
+        let channels = ch.names.len();
+        for (r, &shots) in self.shots.iter().enumerate() {
             for (k, dead) in ch.dead.iter().enumerate() {
+                let factor = self.energy[r * channels + k];
+                let constant = factor == 1.0;
                 let ok = match dead {
                     None => constant || !self.mixed[r],
                     Some(_) => constant && !self.mixed[r],
@@ -242,7 +247,7 @@ impl Block {
                             path,
                             format!(
                                 "the expected count of profile {}, channel {}, bin {i} is \
-                                 {mu:e}: `pulse_energy` {energy:e} J or `n_shots` {shots} \
+                                 {mu:e}: its energy factor {factor:e} or `n_shots` {shots} \
                                  is impossible",
                                 self.first + r,
                                 ch.names[k]
