@@ -317,7 +317,7 @@ fn strings(f: &hdf5::File, name: &str) -> Vec<String> {
 }
 
 /// The CALIOP-like three-channel preset writes counts (profile, channel, bin) with the
-/// channels' names, constants, wavelengths and dead times; the point truth is per
+/// channels' names, constants, wavelengths and (analog) detection modes; the point truth is per
 /// channel because the wavelengths differ; a one-wavelength run keeps it per bin; the
 /// counts do not depend on the thread count.
 #[test]
@@ -355,8 +355,13 @@ fn three_channels_in_one_file() {
     );
     let wl: Vec<f64> = f.dataset("wavelength").unwrap().read_raw().unwrap();
     assert_eq!(wl, [532.0, 532.0, 1064.0]);
+    // CALIOP's detectors are analog (the preset as flown): no dead time on any channel
     let dead: Vec<f64> = f.dataset("dead_time").unwrap().read_raw().unwrap();
-    assert_eq!(dead, [3.5e-9, 3.5e-9, 5e-9]);
+    assert_eq!(dead, [0.0, 0.0, 0.0]);
+    assert_eq!(
+        strings(&f, "detection_mode"),
+        ["analog", "analog", "analog"]
+    );
     assert_eq!(f.dataset("lidar_constant").unwrap().shape(), vec![3]);
     // the truth: one column (a static scene), per channel
     assert_eq!(f.dataset("beta_mol").unwrap().shape(), vec![1, 3, bins]);

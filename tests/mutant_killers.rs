@@ -27,9 +27,12 @@ fn signal_constant_and_dark_counts_with_no_unit_factor() {
     assert!((dark / 7e-4 - 1.0).abs() < 1e-12, "{dark}");
 }
 
-/// `configs/instruments/caliop_3ch.toml` with `from` replaced by `to` (once), loaded.
+/// `tests/configs/caliop_3ch_photon_counting.toml` (the CALIOP-like three channels as
+/// photon counters with a per-channel dead-time table) with `from` replaced by `to`
+/// (once), loaded.
 fn three_channels(from: &str, to: &str) -> lidarsim::error::Result<lidarsim::loaded::LoadedConfig> {
-    let path = common::config_path("instruments/caliop_3ch.toml");
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/configs/caliop_3ch_photon_counting.toml");
     let text = std::fs::read_to_string(&path).unwrap();
     assert!(from.is_empty() || text.contains(from), "{from}");
     lidarsim::loaded::load_str(&text.replacen(from, to, 1), &path, &[])

@@ -6,7 +6,7 @@
 
 use lidarsim::config::{
     ExtinctionSource, LayerKind, MolecularLine, MolecularModel, OverlapConfig, PlatformKind,
-    ScenarioConfig,
+    ScenarioConfig, StratosphericAerosol,
 };
 use lidarsim::scenario::Scenario;
 
@@ -289,6 +289,55 @@ pub fn aerosol_shape(z_m: f64) -> f64 {
         / ELTERMAN_340[0]
 }
 
+/// The present-day background stratosphere of docs/model.md §4 ("Present-day
+/// stratosphere", `atmosphere.aerosol.stratosphere = "background"`), written from that
+/// text: km and km⁻¹ at 532 nm, log-linear between, `(532/λ)²` elsewhere, 0 above 50 km.
+const BACKGROUND_STRATOSPHERE: [(f64, f64); 10] = [
+    (17.0, 3.0e-4),
+    (20.0, 1.6e-4),
+    (22.5, 1.1e-4),
+    (25.0, 6.5e-5),
+    (27.5, 3.0e-5),
+    (30.0, 1.0e-5),
+    (32.5, 4.0e-6),
+    (35.0, 1.6e-6),
+    (40.0, 2.5e-7),
+    (50.0, 6.0e-9),
+];
+
+/// The background aerosol's extinction, m⁻¹, at `z_m` for a surface extinction
+/// `surface_per_m` at `wavelength_nm`: Eq. 6 with Elterman's shape, or (a present-day
+/// stratosphere) that shape to 12 km, the table above from 17 km, and log-linear in
+/// extinction between 12 and 17 km.
+pub fn background_aerosol_per_m(
+    surface_per_m: f64,
+    z_m: f64,
+    wavelength_nm: f64,
+    present_day: bool,
+) -> f64 {
+    if !present_day || z_m <= 12_000.0 {
+        return surface_per_m * aerosol_shape(z_m);
+    }
+    let table = |km: f64| -> f64 {
+        let t = &BACKGROUND_STRATOSPHERE;
+        if km > 50.0 {
+            return 0.0;
+        }
+        let km = km.max(17.0);
+        let i = (1..t.len()).find(|&i| km <= t[i].0).unwrap_or(t.len() - 1);
+        let f = (km - t[i - 1].0) / (t[i].0 - t[i - 1].0);
+        (t[i - 1].1.ln() + f * (t[i].1.ln() - t[i - 1].1.ln())).exp()
+            * 1e-3
+            * (532.0 / wavelength_nm).powi(2)
+    };
+    if z_m >= 17_000.0 {
+        return table(z_m / 1e3);
+    }
+    let (low, high) = (surface_per_m * aerosol_shape(12_000.0), table(17.0));
+    let f = (z_m - 12_000.0) / 5_000.0;
+    (low.ln() + f * (high.ln() - low.ln())).exp()
+}
+
 /// Surface aerosol extinction at the laser wavelength, m⁻¹ (Eq. 5: 3.91/V·(550/λ)^q with
 /// Kruse's q; or the given extinction scaled by the Ångström exponent).
 pub fn aerosol_surface_extinction_per_m(cfg: &ScenarioConfig) -> f64 {
@@ -507,7 +556,8 @@ impl RefAtmosphere {
             ..PointOptics::default()
         };
         if let Some(a) = &self.cfg.atmosphere.aerosol {
-            let alpha = self.aerosol_surface * aerosol_shape(z_m);
+            let present_day = a.stratosphere == StratosphericAerosol::Background;
+            let alpha = background_aerosol_per_m(self.aerosol_surface, z_m, wl, present_day);
             o.alpha += alpha;
             o.alpha_total += alpha;
             o.beta_aer += alpha / a.lidar_ratio_sr;

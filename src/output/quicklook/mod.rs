@@ -73,6 +73,18 @@ pub struct Calibration {
     pub lidar_constant: f64,
     /// Codes per photoelectron of an analog channel, 1 for a photon counter.
     pub codes_per_photoelectron: f64,
+    /// The baseline of an analog channel's record in ADC codes per shot,
+    /// `analog_offset/adc_volts_per_count`; 0 for a photon counter.
+    pub offset_codes: f64,
+}
+
+impl Calibration {
+    /// The record's mean per shot and native bin where only the sky background and the
+    /// dark current reach the detector at `photons` (counts per shot and bin): the
+    /// offset plus the codes of those photoelectrons (a constant is its own low-pass).
+    pub fn record_of(&self, photons: f64) -> f64 {
+        self.offset_codes + self.codes_per_photoelectron * photons
+    }
 }
 
 /// A profile's background per shot and bin.

@@ -228,7 +228,7 @@ pub(super) fn read(
                         &bin_rows,
                         row,
                         shots[i] as f64,
-                        &Background::Value(bkg[i] * r.merged),
+                        &Background::Value(cal.record_of(bkg[i]) * r.merged),
                         &range_weight,
                         cal,
                         energy.get(i * nominal.len() + *k).copied().unwrap_or(1.0),
@@ -308,7 +308,8 @@ fn energy_factors(v: &Vars, p0: usize, p1: usize, nominal: &[f64]) -> Result<Vec
     })
 }
 
-/// `expected_background + expected_dark` per shot and native bin, profiles `p0..p1`.
+/// `expected_background + expected_dark` per shot and native bin, profiles `p0..p1`
+/// (photoelectrons: an analog channel's record of them is [`Calibration::record_of`]).
 fn noise_block(v: &Vars, c: usize, p0: usize, p1: usize) -> Result<Vec<f64>> {
     let read = |name: &str| -> Result<Vec<f64>> {
         Ok(v.ds(name)?

@@ -80,6 +80,11 @@ pub(super) fn calibration(v: &Vars, c: usize) -> Result<Calibration> {
         } else {
             1.0
         },
+        offset_codes: if analog {
+            at("analog_offset")? / at("adc_volts_per_count")?
+        } else {
+            0.0
+        },
     })
 }
 

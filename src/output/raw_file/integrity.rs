@@ -52,21 +52,23 @@ pub const CHANNEL_WORDS: [(&str, &[&str]); 6] = [
     ),
 ];
 
-/// What a calibration value must be: finite and ≥ 0, or finite and > 0.
+/// What a calibration value must be: finite, finite and ≥ 0, or finite and > 0.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Sign {
+    Finite,
     NonNegative,
     Positive,
 }
 
-/// The calibration a reader divides by, and what each must be; `true`: of analog
-/// channels only (NaN in the others).
-const CALIBRATION: [(&str, Sign, bool); 5] = [
+/// The calibration a reader divides by (or, the analog offset, subtracts), and what
+/// each must be; `true`: of analog channels only (NaN in the others).
+const CALIBRATION: [(&str, Sign, bool); 6] = [
     ("lidar_constant", Sign::NonNegative, false),
     ("nominal_pulse_energy", Sign::Positive, false),
     ("range_weight", Sign::NonNegative, false),
     ("analog_counts_per_photoelectron", Sign::Positive, true),
     ("adc_volts_per_count", Sign::Positive, true),
+    ("analog_offset", Sign::Finite, true),
 ];
 
 /// Why a profile's columns and weights are impossible, if they are: every used slot a
@@ -227,6 +229,7 @@ pub fn check_calibration(
             }
             let ok = x.is_finite()
                 && match sign {
+                    Sign::Finite => true,
                     Sign::NonNegative => x >= 0.0,
                     Sign::Positive => x > 0.0,
                 };
@@ -236,12 +239,13 @@ pub fn check_calibration(
                     false => format!("of bin {i}"),
                 };
                 let want = match sign {
+                    Sign::Finite => "finite",
                     Sign::NonNegative => "finite and not negative",
                     Sign::Positive => "finite and positive",
                 };
                 return Err(Error::output(
                     path,
-                    format!("`{full}` {at} is {x}; a reader divides by it: it must be {want}"),
+                    format!("`{full}` {at} is {x}; a reader calibrates with it: it must be {want}"),
                 ));
             }
         }
