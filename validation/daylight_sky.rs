@@ -275,7 +275,7 @@ fn shipped() {
          with `background.model = \"solar\"`. The sky radiance L (photons m⁻² s⁻¹ sr⁻¹ nm⁻¹) \
          at a few profiles, with `background.path_radiance = false` beside it (the reflected \
          term alone, itself changed by the spherical path and the single-scattered diffuse \
-         light down and up); the former model's reflected term was 0.13–0.93 of the \
+         light down and up); the former model's reflected term was 0.13–0.94 of the \
          reference's total in §1.\n"
     );
     println!("| config | profile | θ_s | L | reflected only | L / reflected |");
