@@ -287,6 +287,7 @@ enum Command {
 static ALLOCATOR: lidarsim::resources::NoAbortAllocator = lidarsim::resources::NoAbortAllocator;
 
 fn main() -> ExitCode {
+    lidarsim::resources::one_heap_under_an_address_space_limit();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => return usage_error(e),

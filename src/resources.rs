@@ -20,12 +20,35 @@ pub const ANNOUNCE_AFTER_S: f64 = 60.0;
 
 /// Address space kept free for what a run maps besides its estimated data (HDF5's and
 /// the allocator's small mappings, the output's buffers). glibc's per-thread arenas
-/// reserve 64 MiB each but fall back to the main heap when that reservation fails, so
-/// they are not counted: a 334-bin `simulate` runs under `ulimit -v 50000` (measured).
+/// reserve 64 MiB each; under such a limit there are none
+/// ([`one_heap_under_an_address_space_limit`]), so they are not counted: a 334-bin
+/// `simulate` runs under `ulimit -v 50000` (measured).
 pub const ADDRESS_SPACE_MARGIN_BYTES: f64 = 16.0 * 1048576.0;
 /// Address space per thread of the process (rayon's pool, the signal watcher, the
 /// writer): its stack (2 MiB by default) and guard page, rounded up, bytes.
 pub const ADDRESS_SPACE_PER_THREAD_BYTES: f64 = 4.0 * 1048576.0;
+
+/// Under an address-space limit (`RLIMIT_AS`, `ulimit -v`), makes every thread allocate
+/// from glibc's main heap (`mallopt(M_ARENA_MAX, 1)`), so that the up-front memory
+/// check holds: a worker thread's own arena reserves 64 MiB of address space when it is
+/// first used, after the check (measured: `expect` of 133,426 bins, estimated 175 MB,
+/// refused or run at will under `ulimit -v 350000` until then, sometimes dying "out of
+/// memory" partway). Without such a limit nothing changes. Call it once, first thing
+/// in `main`, before any thread is started.
+pub fn one_heap_under_an_address_space_limit() {
+    let limited = std::fs::read_to_string("/proc/self/limits")
+        .ok()
+        .and_then(|t| parse_address_space_limit(&t))
+        .is_some();
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    if limited {
+        // SAFETY: mallopt only sets an allocator parameter; no thread runs yet.
+        unsafe {
+            libc::mallopt(libc::M_ARENA_MAX, 1);
+        }
+    }
+    let _ = limited;
+}
 
 /// The limits on the memory this process may still take, bytes (`None`: no such limit
 /// or not known).
