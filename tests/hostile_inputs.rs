@@ -1176,9 +1176,9 @@ fn judge(case: &Case, o: &Outcome) -> Result<(), String> {
     Ok(())
 }
 
-/// Held by each test that runs cases: one at a time (the cases edit files with this
-/// process's HDF5 while the binary under test opens others with its own, and HDF5's file
-/// locks meet).
+/// Held by each test of this file that runs the binary: one at a time (the cases edit
+/// files with this process's HDF5 while the binary under test opens others with its own,
+/// and HDF5's file locks meet; the signal storms time the end of a run).
 static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 #[test]
