@@ -79,7 +79,8 @@ for config in $(find configs -name '*.toml' | sort); do
   run "$name-raw" simulate "$config" --profiles "$profiles" -o "@/$name-raw.h5"
   run "$name-shot" simulate "$config" --profiles 2 --method shot -o "@/$name-shot.h5"
   if [ -f "$out/old/$name-raw.h5" ]; then
-    run "$name-quicklook" quicklook "$out/old/$name-raw.h5" -o "@/$name-quicklook.png"
+    run "$name-quicklook" quicklook "$out/old/$name-raw.h5" --png "@/$name-quicklook.png"
+    run "$name-truth" quicklook "$out/old/$name-raw.h5" --truth --png "@/$name-truth.png"
   fi
 done
 echo "$compared outputs compared, $differ differ"
