@@ -5,9 +5,10 @@ use std::path::{Path, PathBuf};
 
 use crate::config::PlatformKind;
 use crate::error::{Error, Result};
-use crate::output::safe_file::{Outputs, ScratchFile, Stream};
-use crate::output::{expect, scc, snr_map};
+use crate::figures::snr_map;
+use crate::output::{expect, scc};
 use crate::resources;
+use crate::safe_file::{Outputs, ScratchFile, Stream};
 use crate::scenario::{ExpectedProfile, Lidar, Scenario};
 use crate::simulate;
 use crate::snr;
@@ -438,7 +439,7 @@ pub fn sweep(
         Ok(())
     })?;
     if let Some(id) = png_id {
-        let bytes = crate::output::sweep_plot::png_bytes(&axes, metrics, &rows)
+        let bytes = crate::figures::sweep_plot::png_bytes(&axes, metrics, &rows)
             .map_err(|r| Error::output(outputs.shown_path(id), r))?;
         outputs.write(id, |w| w.write_all(&bytes))?;
     }
@@ -454,8 +455,8 @@ pub fn sweep(
 pub fn curtain(raw: &Path, png: &Path, channel: Option<&str>) -> Result<()> {
     let mut outputs = Outputs::new([raw]);
     let id = outputs.add("--png", png, Stream::Binary)?;
-    let c = crate::output::curtain::read(raw, channel)?;
-    let bytes = crate::output::curtain::png_bytes(&c)
+    let c = crate::figures::curtain::read(raw, channel)?;
+    let bytes = crate::figures::curtain::png_bytes(&c)
         .map_err(|r| Error::output(outputs.shown_path(id), r))?;
     outputs.write(id, |w| w.write_all(&bytes))?;
     outputs.commit()
@@ -553,7 +554,7 @@ type Table<'a> = &'a dyn Fn(&mut dyn Write, &validate::Report) -> std::io::Resul
 /// its table (on stderr when the JSON holds stdout) and warning; `Ok(consistent)`.
 fn publish_report(
     outputs: Outputs,
-    json: Option<crate::output::safe_file::OutputId>,
+    json: Option<crate::safe_file::OutputId>,
     json_path: Option<&Path>,
     report: &validate::Report,
 ) -> Result<bool> {
@@ -565,7 +566,7 @@ fn publish_report(
 /// [`publish_report`] with the table `table`.
 fn publish(
     mut outputs: Outputs,
-    json: Option<crate::output::safe_file::OutputId>,
+    json: Option<crate::safe_file::OutputId>,
     json_path: Option<&Path>,
     report: &validate::Report,
     table: Table,

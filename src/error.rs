@@ -124,6 +124,38 @@ impl Error {
     }
 }
 
+/// The OS reason inside an HDF5 error message, in plain words: HDF5 reports a failed
+/// system call as `... errno = 28, error message = 'No space left on device' ...`;
+/// any other message is returned as it is.
+pub fn describe_hdf5_error(message: &str) -> String {
+    let errno = message
+        .split("errno = ")
+        .nth(1)
+        .and_then(|rest| rest.split(|c: char| !c.is_ascii_digit()).next())
+        .and_then(|digits| digits.parse::<i32>().ok());
+    match errno {
+        Some(n) => describe_io(&std::io::Error::from_raw_os_error(n)),
+        // no errno: the library's words without its function names and trace details
+        None => {
+            let core = message
+                .split(", time =")
+                .next()
+                .unwrap_or(message)
+                .split(" time = ")
+                .next()
+                .unwrap_or(message);
+            let words: Vec<&str> = core
+                .split(": ")
+                .filter(|part| !(part.starts_with("H5") && part.ends_with("()")))
+                .collect();
+            words
+                .join(": ")
+                .trim_end_matches([':', ',', ' '])
+                .to_string()
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -146,5 +178,22 @@ mod tests {
         assert_eq!(describe_io(&e), "input/output error");
         let e = std::io::Error::from_raw_os_error(36);
         assert_eq!(describe_io(&e), "file name too long or invalid");
+    }
+
+    #[test]
+    fn hdf5_errors_read_as_their_os_reason() {
+        let m = "H5Dwrite(): can't write data: file write failed: time = Sun Nov 22, \
+                 filename = 'x.h5', file descriptor = 5, errno = 28, error message = \
+                 'No space left on device', buf = 0x1, total write size = 4096";
+        assert_eq!(describe_hdf5_error(m), "no space left on device");
+        assert_eq!(describe_hdf5_error("bad chunk"), "bad chunk");
+        // no errno: the library's words, without its function names or trace details
+        assert_eq!(
+            describe_hdf5_error(
+                "H5Dcreate2(): unable to create dataset: H5D__create(): chunk size too large, \
+                 time = Sun Nov 22"
+            ),
+            "unable to create dataset: chunk size too large"
+        );
     }
 }

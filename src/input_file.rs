@@ -10,7 +10,7 @@
 //!
 //! Which files a command reads, so that no output replaces one, is the other half of
 //! the rule: `LoadedConfig::files_read` (`src/loaded.rs`) for a config and the files it
-//! names, and the inputs each command passes to `Outputs` (`src/output/safe_file.rs`):
+//! names, and the inputs each command passes to `Outputs` (`src/safe_file/`):
 //! both read through this module, which names neither.
 
 use std::fs;

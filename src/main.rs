@@ -292,7 +292,7 @@ fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(e) => return usage_error(e),
     };
-    if let Err(e) = lidarsim::output::safe_file::install_signal_handlers() {
+    if let Err(e) = lidarsim::safe_file::install_signal_handlers() {
         eprintln!("lidarsim: error: {e}");
         return ExitCode::from(2);
     }
@@ -419,7 +419,9 @@ fn main() -> ExitCode {
             png,
             channel,
             truth,
-        } => lidarsim::output::quicklook::run(file, png, channel.as_deref(), *truth).map(|()| true),
+        } => {
+            lidarsim::figures::quicklook::run(file, png, channel.as_deref(), *truth).map(|()| true)
+        }
         Command::ExportScc {
             raw,
             out,

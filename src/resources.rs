@@ -264,7 +264,7 @@ pub fn check_memory(what: &str, bytes: f64, limits: &MemoryLimits) -> Result<()>
 /// Refuses to write `bytes` (an estimate) into the directory of `target` when its file
 /// system has less free space: "OUT.h5: needs about 536 GB, 80 GB free on its file system".
 pub fn require_disk(option: &str, target: &Path, bytes: f64) -> Result<()> {
-    let dir = crate::output::safe_file::parent_dir(target);
+    let dir = crate::safe_file::parent_dir(target);
     let Ok(free) = fs4::available_space(dir) else {
         return Ok(());
     };
@@ -432,7 +432,7 @@ fn checked(ptr: *mut u8, size: usize) -> *mut u8 {
 /// allocating), the process's temporary and lock files deleted, exit status 2 without
 /// exit handlers (as a signal ends it).
 fn out_of_memory(size: usize) -> ! {
-    let removed = crate::output::safe_file::remove_files_for_exit();
+    let removed = crate::safe_file::remove_files_for_exit();
     let what = if removed {
         "; partial output removed"
     } else {

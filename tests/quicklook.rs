@@ -11,7 +11,7 @@ use std::path::Path;
 use common::cli::{lidarsim, ok, refused, scratch};
 use common::config_path;
 use common::image::Image;
-use lidarsim::output::quicklook::{self, COLUMNS, ROWS};
+use lidarsim::figures::quicklook::{self, COLUMNS, ROWS};
 
 /// The CALIOP-like three channels (532 ∥ and ⊥, 1064), 40 profiles up to 40 km, the
 /// 532 nm detectors without dead time (the quicklook shows the counts as recorded: it
@@ -296,7 +296,7 @@ fn memory_stays_bounded_on_a_large_file() {
 /// `text` as the figures draw their tick labels (the embedded font, 13 px, black on
 /// white): the dark pixels (any channel below 128) of its box, row by row.
 fn rendered(text: &str) -> Vec<Vec<bool>> {
-    use lidarsim::output::plot::{FONT, ensure_font};
+    use lidarsim::figures::plot::{FONT, ensure_font};
     use plotters::prelude::*;
     ensure_font().unwrap();
     let (w, h) = (120u32, 40u32);

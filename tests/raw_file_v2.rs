@@ -366,7 +366,7 @@ fn a_format_3_file_is_still_read_by_every_reader() {
     run(&["export-scc", "v3.h5", "scc.nc"]);
     for channel in ["532_total", "1064_total"] {
         let means = |p: &Path| {
-            lidarsim::output::quicklook::read(p, Some(channel), false)
+            lidarsim::figures::quicklook::read(p, Some(channel), false)
                 .unwrap()
                 .signal
                 .means()

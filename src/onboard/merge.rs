@@ -22,11 +22,12 @@ use ndarray::{Ix1, Ix2, Ix3, s};
 use super::run::{METHOD, ProductIdentity, product_attributes, source};
 use super::shard::{FRAME_ATTRIBUTE, profiles_within, shard_shots};
 use super::truth::{fixed_variables, per_profile_variables, profile_coordinates};
+use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
 use crate::output::product::{ProductHeader, ProductWriter, RegionSpec};
 use crate::output::product::{ProfileRow, RegionTruth};
 use crate::output::raw_file::AttrValue;
-use crate::output::safe_file::{OutputId, Outputs, describe_hdf5_error};
+use crate::safe_file::{OutputId, Outputs};
 use crate::shard::merge::MergeSummary;
 use crate::shard::{
     FileAttributes, Piece, RunIdentity, Shard, ShardKind, check_pieces, open_shard,

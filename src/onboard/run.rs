@@ -17,7 +17,7 @@ use crate::config::Method;
 use crate::error::{Error, Result};
 use crate::output::product::{ProductHeader, ProductWriter, ProfileRow, RegionSpec};
 use crate::output::raw_file::AttrValue;
-use crate::output::safe_file::{OutputId, Outputs, Stream};
+use crate::safe_file::{OutputId, Outputs, Stream};
 use crate::scenario::{ExpectedProfile, Lidar};
 use crate::shard::{SHARD_ATTRIBUTES, Shard, fingerprint_with};
 use crate::simulate;

@@ -22,8 +22,8 @@ use hdf5::{Dataset, File, Group};
 use super::raw_file::chunk::{self, Filling};
 use super::raw_file::layout::{create_file, create_group, create_var, write_index};
 use super::raw_file::{AttrValue, check::Row, hdf5_ds};
+use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
-use crate::output::safe_file::describe_hdf5_error;
 
 /// Elements of one chunk of a region's `counts` (16 KiB of u32).
 const CHUNK_ELEMS: usize = 4096;

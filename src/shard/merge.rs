@@ -21,12 +21,13 @@ use super::{
     FileAttributes, Piece, RunIdentity, Shard, ShardKind, check_pieces, open_shard,
     require_disk_for_merge, run_id, stored_lidar,
 };
+use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
 use crate::output::raw_file::check::RecordShape;
 use crate::output::raw_file::{
     COMPONENT_NAMES, Dims, PROFILE_COLUMN_NAMES, ProfileRecord, RawFileSpec, RawFileWriter,
 };
-use crate::output::safe_file::{OutputId, Outputs, describe_hdf5_error};
+use crate::safe_file::{OutputId, Outputs};
 use crate::scenario::Lidar;
 use crate::simulate::{self, ResolvedMethod, RunOptions, RunPlan};
 
@@ -224,7 +225,7 @@ pub fn prepare(out: &Path, shards: &[PathBuf]) -> Result<Merge> {
 
 impl Merge {
     /// Writes the whole run's raw file as output `id` of `outputs` (complete or absent,
-    /// through [`crate::output::safe_file`]), streaming the shards' rows in order.
+    /// through [`crate::safe_file`]), streaming the shards' rows in order.
     pub fn write(self, outputs: Outputs, id: OutputId) -> Result<MergeSummary> {
         require_disk_for_merge(&self.out, self.files.iter().map(|f| f.path.as_path()))?;
         let spec = &self.plan.spec;

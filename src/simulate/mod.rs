@@ -25,7 +25,7 @@ use crate::output::raw_file::memory::{MemoryFile, MemoryWriter};
 use crate::output::raw_file::{
     AttrValue, CountWidth, ProfileRecord, ProfileSink, RawFileSpec, RawFileWriter,
 };
-use crate::output::safe_file::{OutputId, Outputs};
+use crate::safe_file::{OutputId, Outputs};
 use crate::sampling::approx;
 use crate::sampling::jitter::ModulatedShots;
 use crate::sampling::{self, ShotSampler};

@@ -26,8 +26,8 @@ use ndarray::{Ix1, Ix2, Ix3, s};
 
 use super::read::{RawHeader, is_float, read_text};
 use super::{COMPONENT_NAMES, PROFILE_COLUMN_NAMES};
+use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
-use crate::output::safe_file::describe_hdf5_error;
 
 /// Profiles whose rows are checked at once (at most 2^20 values of a row variable).
 pub const ROWS: usize = 65_536;

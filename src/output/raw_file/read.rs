@@ -448,7 +448,7 @@ pub fn energy_factors(
             path,
             format!(
                 "cannot read `pulse_energy`: {}",
-                crate::output::safe_file::describe_hdf5_error(&e.to_string())
+                crate::error::describe_hdf5_error(&e.to_string())
             ),
         )
     };
@@ -605,7 +605,7 @@ fn scan(path: &Path, name: &str, values: Values, d: &Dataset) -> Result<()> {
             format!(
                 "cannot read `{}`: {}",
                 name,
-                crate::output::safe_file::describe_hdf5_error(&e.to_string())
+                crate::error::describe_hdf5_error(&e.to_string())
             ),
         )
     };

@@ -42,8 +42,8 @@ use super::hdf5_ds::write_chunk;
 use super::layout::{self, OpenFile};
 use super::planes;
 use super::{ProfileRecord, RawFileSpec};
+use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
-use crate::output::safe_file::describe_hdf5_error;
 
 /// Raw (uncompressed) bytes of complete chunks that trigger their compression and
 /// writing: a fixed size, not a function of the thread count, so that the sequence of
@@ -122,7 +122,7 @@ pub struct RawFileWriter {
 
 impl RawFileWriter {
     /// Creates the file at exactly `path` (a fresh temporary name from
-    /// [`crate::output::safe_file`]) and writes everything known up front. `display` is
+    /// [`crate::safe_file`]) and writes everything known up front. `display` is
     /// the path the user asked for, used in messages only.
     ///
     /// Errors (as [`Error::Output`] naming `display`) if the spec is inconsistent or the
@@ -230,7 +230,7 @@ impl RawFileWriter {
 
     /// Checks that every profile was written, writes what is still buffered and closes
     /// the file, flushing it. The caller syncs and renames it (through
-    /// [`crate::output::safe_file`]).
+    /// [`crate::safe_file`]).
     pub fn finish(mut self) -> Result<()> {
         self.usable()?;
         let n_profiles = self.shape.n_profiles;
@@ -509,7 +509,7 @@ impl RawFileWriter {
 }
 
 impl Drop for RawFileWriter {
-    /// An unfinished writer closes its file; [`crate::output::safe_file`] deletes it.
+    /// An unfinished writer closes its file; [`crate::safe_file`] deletes it.
     fn drop(&mut self) {
         if let Some(open) = self.open.take() {
             let _ = open.close();

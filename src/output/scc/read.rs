@@ -5,9 +5,9 @@ use std::path::Path;
 
 use hdf5::types::VarLenUnicode;
 
+use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
 use crate::output::raw_file::{self, BIN_DIM, CHANNEL_DIM, PROFILE_DIM};
-use crate::output::safe_file::describe_hdf5_error;
 
 /// The parts of a raw file the SCC export uses, as read (no SCC meaning yet).
 #[derive(Debug, Clone)]

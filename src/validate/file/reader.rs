@@ -7,9 +7,9 @@ use hdf5::types::{VarLenAscii, VarLenUnicode};
 use ndarray::{Ix1, Ix2, Ix3, s};
 
 use super::{Channels, Sums};
+use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
 use crate::output::raw_file::read::{self, RawHeader};
-use crate::output::safe_file::describe_hdf5_error;
 
 /// A (channel) or (bin) variable of floats, whole (bounded by the header's lengths).
 pub(super) fn read_all(path: &Path, f: &hdf5::File, name: &str) -> Result<Vec<f64>> {

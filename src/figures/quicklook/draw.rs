@@ -5,9 +5,9 @@ use plotters::prelude::*;
 
 use super::Quicklook;
 use super::grid::Grid;
-use crate::output::plot::colour::ColourScale;
-use crate::output::plot::panel::{Axis, ImagePanel};
-use crate::output::plot::text::{FONT, encode_png, ensure_font};
+use crate::figures::plot::colour::ColourScale;
+use crate::figures::plot::panel::{Axis, ImagePanel};
+use crate::figures::plot::text::{FONT, encode_png, ensure_font};
 
 /// Figure width, pixels.
 const WIDTH: u32 = 1400;

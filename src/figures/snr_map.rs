@@ -6,7 +6,7 @@
 //! The shared pieces (embedded font and text, PNG encoding, ticks, viridis,
 //! isolines) come from [`super::plot`]; this file holds the figure's layout. The
 //! PNG is encoded in memory and written by the caller through
-//! [`super::safe_file`] (complete or not at all).
+//! [`crate::safe_file`] (complete or not at all).
 
 use plotters::prelude::*;
 use plotters::style::FontTransform;
@@ -52,7 +52,7 @@ const SNR_COLOUR_CAP: f64 = 1e6;
 /// Invalid input (empty grid, fewer than 2 altitudes or times, ragged rows, NaN,
 /// infinite or negative S/N, non-increasing or non-positive TC, duplicate
 /// altitudes) is an error message; the caller writes the bytes through
-/// [`super::safe_file`].
+/// [`crate::safe_file`].
 pub fn png_bytes(map: &SnrMap) -> std::result::Result<Vec<u8>, String> {
     let grid = Grid::new(map)?;
     ensure_font()?;
@@ -804,7 +804,7 @@ mod tests {
     #[test]
     fn axis_ticks_are_round() {
         // plot's 1-2-5 steps (this file's own had 2.5 too; none of these spans used it)
-        use crate::output::plot::ticks::nice_step;
+        use crate::figures::plot::ticks::nice_step;
         assert_eq!(nice_step(30.0, 7.0), 5.0);
         assert_eq!(nice_step(39.9, 7.0), 5.0);
         assert_eq!(nice_step(6.0, 7.0), 1.0);

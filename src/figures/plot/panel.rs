@@ -345,7 +345,7 @@ impl ImagePanel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::output::plot::text::{encode_png, ensure_font};
+    use crate::figures::plot::text::{encode_png, ensure_font};
 
     /// A synthetic S/N-like field (log colour, log x axis, labelled isolines), drawn:
     /// the PNG decodes to the right size and holds many colours.

@@ -14,9 +14,9 @@ use plotters::prelude::*;
 use super::plot::panel::{Axis, ImagePanel, edges};
 use super::plot::text::{encode_png, ensure_font};
 use super::plot::{ColourScale, DrawResult};
-use super::raw_file;
-use super::safe_file::describe_hdf5_error;
+use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
+use crate::output::raw_file;
 use crate::resources::try_vec;
 
 /// Image width and height, pixels.

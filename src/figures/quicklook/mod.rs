@@ -29,8 +29,8 @@ mod raw;
 use std::path::Path;
 
 use crate::error::{Error, Result};
-use crate::output::plot::panel::Clock;
-use crate::output::safe_file::{Outputs, Stream};
+use crate::figures::plot::panel::Clock;
+use crate::safe_file::{Outputs, Stream};
 use grid::Grid;
 
 /// The figure's grid: pixel columns and rows of one panel's field.

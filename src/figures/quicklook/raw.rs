@@ -9,10 +9,10 @@ use super::grid::Grid;
 use super::{
     BLOCK_PROFILES, Background, COLUMNS, Calibration, Quicklook, ROWS, TOP_KM, add_profile, x_axis,
 };
+use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
-use crate::output::plot::panel::{edges, widen};
+use crate::figures::plot::panel::{edges, widen};
 use crate::output::raw_file::read::{check, energy_factors, read_text};
-use crate::output::safe_file::describe_hdf5_error;
 use crate::output::scc::signal_free;
 
 /// The file's variables the quicklook reads, opened.

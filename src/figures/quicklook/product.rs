@@ -14,7 +14,7 @@ use super::{
     BLOCK_PROFILES, Background, COLUMNS, Calibration, Quicklook, ROWS, TOP_KM, add_profile, x_axis,
 };
 use crate::error::Result;
-use crate::output::plot::panel::{edges, widen};
+use crate::figures::plot::panel::{edges, widen};
 use crate::output::raw_file::read::read_text;
 
 /// One region group as the quicklook reads it.
