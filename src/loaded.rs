@@ -126,7 +126,29 @@ mod tests {
     /// plus `LoadedConfig::path`.
     #[test]
     fn every_path_key_is_a_named_file() {
-        let source = [include_str!("config.rs"), include_str!("loaded.rs")];
+        let source = [
+            include_str!("config/acquisition.rs"),
+            include_str!("config/atmosphere.rs"),
+            include_str!("config/background.rs"),
+            include_str!("config/defaults.rs"),
+            include_str!("config/detector.rs"),
+            include_str!("config/instrument.rs"),
+            include_str!("config/load.rs"),
+            include_str!("config/mod.rs"),
+            include_str!("config/multiple_scattering.rs"),
+            include_str!("config/overrides.rs"),
+            include_str!("config/scenario.rs"),
+            include_str!("config/scene.rs"),
+            include_str!("config/simulation.rs"),
+            include_str!("config/warnings.rs"),
+            include_str!("config/check/atmosphere.rs"),
+            include_str!("config/check/background.rs"),
+            include_str!("config/check/geometry.rs"),
+            include_str!("config/check/instrument.rs"),
+            include_str!("config/check/mod.rs"),
+            include_str!("config/check/scene.rs"),
+            include_str!("loaded.rs"),
+        ];
         let path_fields = source
             .iter()
             .flat_map(|s| s.lines())

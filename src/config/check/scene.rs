@@ -1,0 +1,86 @@
+//! The checks of `[surface]` and `[scene]`: the albedo and height, the segments (their
+//! layers, aerosol and surface) and the curtain.
+
+use crate::config::scenario::ScenarioConfig;
+use crate::config::scene::{PlatformKind, SceneConfig, SegmentAerosol, SurfaceConfig};
+use crate::error::Result;
+
+use super::Checker;
+
+impl ScenarioConfig {
+    /// The surface: an albedo in [0, 1], within the window's reach, space-borne only.
+    pub(super) fn validate_surface(&self, c: &Checker, s: &SurfaceConfig) -> Result<()> {
+        if self.platform.kind == PlatformKind::Ground {
+            return Err(c.fail(
+                "surface",
+                "a ground-based lidar looks up and sees no surface; remove [surface]",
+            ));
+        }
+        if let Some(a) = s.albedo {
+            c.range("surface.albedo", a, 0.0, 1.0)?;
+        }
+        c.range("surface.altitude_km", s.altitude_km, -0.5, 9.0)?;
+        Ok(())
+    }
+
+    /// The scene's segments: positive lengths; their layers, aerosol and surface as the
+    /// `[atmosphere]` and `[surface]` ones.
+    pub(super) fn validate_scene(&self, c: &Checker, scene: &SceneConfig) -> Result<()> {
+        if self.platform.kind == PlatformKind::Ground && !scene.segments.is_empty() {
+            return Err(c.fail(
+                "scene.segments",
+                "a scene along the track needs a space-borne platform",
+            ));
+        }
+        if scene.curtain.is_some() && !scene.segments.is_empty() {
+            return Err(c.fail(
+                "scene.curtain",
+                "gives the scene along the track: use it or scene.segments, not both",
+            ));
+        }
+        if scene.curtain.is_some() && self.platform.kind == PlatformKind::Ground {
+            return Err(c.fail("scene.curtain", "a curtain needs a space-borne platform"));
+        }
+        if scene.segments.len() > 10_000 {
+            return Err(c.fail("scene.segments", "at most 10,000 segments"));
+        }
+        for (i, seg) in scene.segments.iter().enumerate() {
+            let key = |k: &str| format!("scene.segments[{i}].{k}");
+            c.positive(&key("length_km"), seg.length_km, 1e6)?;
+            for (n, l) in seg.layers.iter().flatten().enumerate() {
+                let k = key(&format!("layers[{n}]."));
+                if l.top_km <= l.base_km {
+                    return Err(c.fail(&format!("{k}top_km"), "must be above base_km"));
+                }
+                c.range(
+                    &format!("{k}extinction_per_km"),
+                    l.extinction_per_km,
+                    0.0,
+                    1e4,
+                )?;
+                c.range(&format!("{k}lidar_ratio_sr"), l.lidar_ratio_sr, 1.0, 1e4)?;
+                c.range(&format!("{k}depolarization"), l.depolarization, 0.0, 1.0)?;
+                self.validate_broken(c, &k, l)?;
+            }
+            if seg
+                .layers
+                .iter()
+                .flatten()
+                .filter(|l| l.cloud_fraction.is_some())
+                .count()
+                > 3
+            {
+                return Err(c.fail(&key("layers"), "at most 3 broken layers per segment"));
+            }
+            if let Some(SegmentAerosol::Named(name)) = &seg.aerosol
+                && name != "none"
+            {
+                return Err(c.fail(&key("aerosol"), "must be \"none\" or an aerosol table"));
+            }
+            if let Some(surface) = &seg.surface {
+                self.validate_surface(c, surface)?;
+            }
+        }
+        Ok(())
+    }
+}
