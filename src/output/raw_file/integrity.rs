@@ -38,7 +38,7 @@ const VALUES: usize = 1 << 20;
 pub const WEIGHT_SUM_TOLERANCE: f64 = 1e-9;
 
 /// The words each string variable of the channel dimension may hold (the names of the
-/// receiver's and detector's kinds, `src/receiver/channel.rs`, `src/config.rs`): a file
+/// receiver's and detector's kinds, `src/receiver/channel.rs`, `src/config/`): a file
 /// whose word no reader knows is refused, not read as a default.
 pub const CHANNEL_WORDS: [(&str, &[&str]); 6] = [
     ("channel_kind", &["elastic", "hsrl_molecular", "raman"]),
