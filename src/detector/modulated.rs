@@ -7,9 +7,9 @@
 //! and `stream_rng(seed ^ ARRIVAL_STREAM, profile, block)` for their arrival times, so
 //! results depend on the seed only.
 
-use super::ShotRecorder;
 use super::analog::Analog;
 use super::dead_time::{ARRIVAL_STREAM, DeadTime, Scratch};
+use super::recorder::ShotRecorder;
 use crate::sampling::jitter::ModulatedShots;
 use crate::sampling::{SHOT_BLOCK, ShotCounts, add_block_sums, stream_rng};
 
