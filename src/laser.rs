@@ -19,6 +19,7 @@ use rand_distr::{Distribution, StandardNormal};
 
 use crate::config::{Checker, EnergyDriftConfig, InstrumentConfig, ScenarioConfig};
 use crate::error::Result;
+use crate::sampling::jitter::EnergyFactors;
 use crate::sampling::{SHOT_BLOCK, stream_rng};
 
 /// Largest relative rms pulse-energy jitter σ supported: up to it the clamp at
@@ -182,6 +183,13 @@ impl PulseEnergy {
     }
 }
 
+/// The shots of a jittered run are drawn at this law's factors (`sampling::jitter`).
+impl EnergyFactors for PulseEnergy {
+    fn block_factors(&self, seed: u64, profile: u64, shots: u64, block: u64, out: &mut Vec<f64>) {
+        PulseEnergy::block_factors(self, seed, profile, shots, block, out)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -249,5 +257,73 @@ mod tests {
         assert!((m[0] - 1.0).abs() < 1e-9, "{m:?}");
         assert!((m[1] - 1.01).abs() < 1e-9, "{m:?}");
         assert!((m[2] - 1.03).abs() < 1e-9, "{m:?}");
+    }
+}
+
+/// The jitter sampler (`sampling::jitter`) at this law's factors.
+#[cfg(test)]
+mod jittered_shots {
+    use super::*;
+    use crate::sampling::jitter::ModulatedShots;
+
+    fn laser(jitter: f64) -> PulseEnergy {
+        PulseEnergy {
+            jitter,
+            drift: None,
+            rep_rate_hz: 10.0,
+        }
+    }
+
+    /// Mean and variance of a jittered bin: E = M·λ, Var = M·λ + M·σ²·λ² (law of total
+    /// variance over the shots' energies). 100,000 profiles; |z| < 5 is a false-alarm
+    /// rate below 1e-6 per check. Power: the variance without jitter (M·λ = 100 against
+    /// 108) is 16 standard deviations of the sample variance away, and is rejected at
+    /// z > 4.
+    #[test]
+    fn jitter_adds_the_expected_variance() {
+        let (lambda, sigma, m, profiles) = (2.0, 0.2, 50u64, 100_000u64);
+        let js = ModulatedShots::new(&[lambda], &[0.0], laser(sigma), None, 1.0 + 6.0 * sigma);
+        let draws: Vec<f64> = (0..profiles)
+            .map(|p| {
+                let mut acc = [0u64];
+                js.profile(11, p, m, &mut acc);
+                acc[0] as f64
+            })
+            .collect();
+        let n = profiles as f64;
+        let mean = draws.iter().sum::<f64>() / n;
+        let var = draws.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        let mu = m as f64 * lambda;
+        let v = mu + m as f64 * sigma * sigma * lambda * lambda;
+        assert!(
+            ((mean - mu) / (v / n).sqrt()).abs() < 5.0,
+            "mean {mean} vs {mu}"
+        );
+        // var of the sample variance ≈ 2v²/(n−1) (near-normal counts)
+        assert!(
+            ((var - v) / (2.0 * v * v / (n - 1.0)).sqrt()).abs() < 5.0,
+            "var {var} vs {v}"
+        );
+        // and it is distinguishable from no jitter (v = 100 vs 108): the test has power
+        let sd_var = (2.0 * v * v / (n - 1.0)).sqrt();
+        assert!((var - mu) / sd_var > 4.0, "var {var} vs no jitter {mu}");
+    }
+
+    #[test]
+    fn zero_jitter_is_plain_poisson_and_deterministic() {
+        let js = ModulatedShots::new(
+            &[0.3, 0.0, 1e-300],
+            &[1e-3, 1e-3, 0.0],
+            laser(0.0),
+            None,
+            1.0,
+        );
+        let mut a = vec![0u64; 3];
+        let mut b = vec![0u64; 3];
+        js.profile(3, 1, 70_000, &mut a);
+        js.profile(3, 1, 70_000, &mut b);
+        assert_eq!(a, b);
+        assert_eq!(a[2], 0);
+        assert!((a[0] as f64 - 70_000.0 * 0.301).abs() < 5.0 * (70_000.0f64 * 0.301).sqrt());
     }
 }

@@ -9,9 +9,10 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::config::{self, OwnerChecks, ScenarioConfig};
+use crate::config::{self, Checker, OwnerChecks, ScenarioConfig, SimulationConfig};
 use crate::error::{Error, Result};
 use crate::receiver::{self, ChannelConfig};
+use crate::sampling::approx::MAX_TOLERANCE;
 
 /// A loaded, overridden and validated configuration with its provenance.
 #[derive(Debug, Clone)]
@@ -105,9 +106,18 @@ const OWNERS: OwnerChecks = OwnerChecks {
     ozone: crate::atmosphere::ozone::validate,
     water_vapour: crate::atmosphere::water_vapour::validate,
     orbit: crate::scene::orbit::validate,
-    simulation: |config, c| crate::sampling::approx::validate(&config.simulation, c),
+    simulation: |config, c| validate_tolerance(&config.simulation, c),
     multiple_scattering: crate::atmosphere::multiple_scattering::validate,
 };
+
+/// Checks `simulation.tolerance`: a KS distance in (0, [`MAX_TOLERANCE`]] (the sampler's
+/// limit, `sampling::approx`).
+fn validate_tolerance(simulation: &SimulationConfig, c: &Checker) -> Result<()> {
+    if let Some(t) = simulation.tolerance {
+        c.positive("simulation.tolerance", t, MAX_TOLERANCE)?;
+    }
+    Ok(())
+}
 
 /// Checks a whole config, `file` naming it in errors: the config's own checks
 /// ([`ScenarioConfig::validate`]) with, each in its place among them, the checks of

@@ -23,7 +23,9 @@ if [ ${#files[@]} -eq 0 ]; then
         src/atmosphere/mod.rs src/atmosphere/aerosol_profile.rs
         src/atmosphere/profile_file.rs src/signal.rs src/instrument.rs src/receiver/mod.rs
         src/receiver/channel.rs
-        src/detector/mod.rs src/detector/dead_time.rs src/geometry.rs
+        src/detector/mod.rs src/detector/recorder.rs src/detector/dead_time/mod.rs
+        src/detector/dead_time/model.rs src/detector/dead_time/record.rs
+        src/detector/dead_time/shots.rs src/geometry.rs
         src/scene/sun.rs src/scene/track.rs src/scene/orbit.rs src/scene/curtain.rs
     )
 fi

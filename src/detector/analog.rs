@@ -25,7 +25,7 @@
 //! ADC's range with a probability above 1e-6 a shot (bounded from the law of the code,
 //! [`super::analog_range`]).
 //!
-//! **Shot path** ([`Analog::record_shot`], through [`super::recorded_profile`]: its gains
+//! **Shot path** ([`Analog::record_shot`], through [`super::recorder::recorded_profile`]: its gains
 //! and noise from `stream_rng(seed ^ ANALOG_STREAM, profile, block)`, the photons the
 //! photon-counting draw's own): exact, per shot and bin, as above.
 //! **Aggregate path** ([`Analog::record_profile`]): the photoelectrons of the M shots
@@ -405,7 +405,7 @@ impl Analog {
     }
 }
 
-impl super::ShotRecorder for Analog {
+impl super::recorder::ShotRecorder for Analog {
     type Scratch = AnalogScratch;
     const STREAM: u64 = ANALOG_STREAM;
 

@@ -27,7 +27,7 @@
 //! where `|Σ_j h_j λ_{b−j} / λ_b − 1| ≤` [`PROPORTIONAL_TOLERANCE`] (at layer edges the
 //! 10 MHz low-pass of the PollyXT-like preset moves the ratio to 0.70–1.41).
 
-use super::Analog;
+use super::analog::Analog;
 
 /// Largest probability a shot's code may leave the ADC's range in a bin that is called
 /// linear (and no clipping warning printed).

@@ -7,9 +7,10 @@
 //! and `stream_rng(seed ^ ARRIVAL_STREAM, profile, block)` for their arrival times, so
 //! results depend on the seed only.
 
-use super::ShotRecorder;
 use super::analog::Analog;
 use super::dead_time::{ARRIVAL_STREAM, DeadTime, Scratch};
+use super::recorder::ShotRecorder;
+use crate::laser::PulseEnergy;
 use crate::sampling::jitter::ModulatedShots;
 use crate::sampling::{SHOT_BLOCK, ShotCounts, add_block_sums, stream_rng};
 
@@ -17,7 +18,7 @@ use crate::sampling::{SHOT_BLOCK, ShotCounts, add_block_sums, stream_rng};
 /// detector) or through its dead time.
 #[derive(Debug, Clone)]
 pub struct DetectedShots {
-    photons: ModulatedShots,
+    photons: ModulatedShots<PulseEnergy>,
     dead: Option<DeadTime>,
     analog: Option<Analog>,
 }
@@ -43,7 +44,7 @@ impl Buffers {
 
 impl DetectedShots {
     /// The shots of `photons` recorded by an ideal linear detector.
-    pub fn new(photons: ModulatedShots) -> Self {
+    pub fn new(photons: ModulatedShots<PulseEnergy>) -> Self {
         DetectedShots {
             photons,
             dead: None,

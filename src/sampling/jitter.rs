@@ -1,11 +1,11 @@
-//! Shots whose signal varies with the emitted energy (jitter, drift: [`crate::laser`]),
+//! Shots whose signal varies with the emitted energy (jitter, drift: the laser's law),
 //! drawn exactly by thinning. The counts of an ideal linear detector; a dead-time
 //! detector records the same shots' photons through its own wrapper
 //! (`DetectedShots` in `src/detector/modulated.rs`).
 //!
 //! **Model.** Shot `s` emits `f_s·E0`; its signal counts are Poisson(`f_s·λ_sig,i`),
 //! background and dark unchanged; the factors `f_s` come from the laser's own stream
-//! ([`PulseEnergy::block_factors`]), shared by every channel.
+//! ([`EnergyFactors::block_factors`], the laser's `PulseEnergy`), shared by every channel.
 //!
 //! **Algorithm (exact thinning).** The signal sampler is built once at the envelope
 //! `f_max·λ_sig` (`f_max` bounds every factor of the run); each shot's draw is thinned,
@@ -21,28 +21,35 @@ use rand::Rng;
 use rand_distr::{Binomial, Distribution};
 
 use super::{CountSink, SHOT_BLOCK, ShotCounts, ShotSampler, add_block_sums, stream_rng};
-use crate::laser::PulseEnergy;
+
+/// The energy factors of a run's shots, relative to the nominal energy: what the laser's
+/// law (`PulseEnergy`) draws from its own stream; shared by the threads that draw blocks.
+pub trait EnergyFactors: Sync {
+    /// The energy factors of block `block` of profile `profile` (`shots` shots per
+    /// profile), written to `out` (cleared first): a function of the arguments only.
+    fn block_factors(&self, seed: u64, profile: u64, shots: u64, block: u64, out: &mut Vec<f64>);
+}
 
 /// Samplers for shots of varying energy: the signal at its envelope, the rest unchanged.
 #[derive(Debug, Clone)]
-pub struct ModulatedShots {
+pub struct ModulatedShots<E> {
     signal_envelope: ShotSampler,
     rest: ShotSampler,
-    energy: PulseEnergy,
+    energy: E,
     /// The run's seed, from which the energy factors are drawn (`None`: the stream's own).
     energy_seed: Option<u64>,
     /// `f_max`: no factor of the run exceeds it.
     envelope: f64,
 }
 
-impl ModulatedShots {
+impl<E: EnergyFactors> ModulatedShots<E> {
     /// `signal` and `rest` (background + dark) are per-shot means per bin at the nominal
     /// energy; `envelope` bounds every energy factor of the run
-    /// ([`PulseEnergy::envelope`]); `energy_seed` is the run's seed.
+    /// (the laser's `PulseEnergy::envelope`); `energy_seed` is the run's seed.
     pub fn new(
         signal: &[f64],
         rest: &[f64],
-        energy: PulseEnergy,
+        energy: E,
         energy_seed: Option<u64>,
         envelope: f64,
     ) -> Self {
@@ -157,71 +164,5 @@ fn thin<R: Rng + ?Sized>(rng: &mut R, n: u32, p: f64) -> u64 {
         Binomial::new(u64::from(n), p)
             .map(|b| b.sample(rng))
             .unwrap_or(0)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn laser(jitter: f64) -> PulseEnergy {
-        PulseEnergy {
-            jitter,
-            drift: None,
-            rep_rate_hz: 10.0,
-        }
-    }
-
-    /// Mean and variance of a jittered bin: E = M·λ, Var = M·λ + M·σ²·λ² (law of total
-    /// variance over the shots' energies). 100,000 profiles; |z| < 5 is a false-alarm
-    /// rate below 1e-6 per check. Power: the variance without jitter (M·λ = 100 against
-    /// 108) is 16 standard deviations of the sample variance away, and is rejected at
-    /// z > 4.
-    #[test]
-    fn jitter_adds_the_expected_variance() {
-        let (lambda, sigma, m, profiles) = (2.0, 0.2, 50u64, 100_000u64);
-        let js = ModulatedShots::new(&[lambda], &[0.0], laser(sigma), None, 1.0 + 6.0 * sigma);
-        let draws: Vec<f64> = (0..profiles)
-            .map(|p| {
-                let mut acc = [0u64];
-                js.profile(11, p, m, &mut acc);
-                acc[0] as f64
-            })
-            .collect();
-        let n = profiles as f64;
-        let mean = draws.iter().sum::<f64>() / n;
-        let var = draws.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-        let mu = m as f64 * lambda;
-        let v = mu + m as f64 * sigma * sigma * lambda * lambda;
-        assert!(
-            ((mean - mu) / (v / n).sqrt()).abs() < 5.0,
-            "mean {mean} vs {mu}"
-        );
-        // var of the sample variance ≈ 2v²/(n−1) (near-normal counts)
-        assert!(
-            ((var - v) / (2.0 * v * v / (n - 1.0)).sqrt()).abs() < 5.0,
-            "var {var} vs {v}"
-        );
-        // and it is distinguishable from no jitter (v = 100 vs 108): the test has power
-        let sd_var = (2.0 * v * v / (n - 1.0)).sqrt();
-        assert!((var - mu) / sd_var > 4.0, "var {var} vs no jitter {mu}");
-    }
-
-    #[test]
-    fn zero_jitter_is_plain_poisson_and_deterministic() {
-        let js = ModulatedShots::new(
-            &[0.3, 0.0, 1e-300],
-            &[1e-3, 1e-3, 0.0],
-            laser(0.0),
-            None,
-            1.0,
-        );
-        let mut a = vec![0u64; 3];
-        let mut b = vec![0u64; 3];
-        js.profile(3, 1, 70_000, &mut a);
-        js.profile(3, 1, 70_000, &mut b);
-        assert_eq!(a, b);
-        assert_eq!(a[2], 0);
-        assert!((a[0] as f64 - 70_000.0 * 0.301).abs() < 5.0 * (70_000.0f64 * 0.301).sqrt());
     }
 }
