@@ -120,7 +120,7 @@ impl DetectionMode {
     }
 }
 
-/// How the dead period behaves (the detector's law, `src/detector/dead_time.rs`).
+/// How the dead period behaves (the detector's law, `src/detector/dead_time/`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum DeadTimeModel {
