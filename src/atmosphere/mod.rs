@@ -1,11 +1,15 @@
 //! The atmosphere (model.md §4): molecules, a background aerosol profile (paper
 //! Eq. 5–6) and any number of aerosol or cloud layers, as point optical properties and
-//! as the piecewise-constant slabs on which the bin integral is exact.
+//! as the piecewise-constant slabs on which the bin integral is exact. Here: the whole
+//! [`Atmosphere`] of a scenario built from its config, and a Raman channel's return.
 
 pub mod aerosol_profile;
 pub mod cabannes_line;
+mod molecules;
 pub mod multiple_scattering;
+mod optics;
 pub mod ozone;
+mod particles;
 pub mod profile_file;
 pub mod raman;
 pub mod rayleigh;
@@ -13,14 +17,16 @@ pub mod us76;
 pub mod water_vapour;
 pub mod wide_angle;
 
-use crate::config::{
-    Channel, ExtinctionSource, LayerKind, MolecularLine, MolecularModel, MultipleScatteringModel,
-    ScenarioConfig, StratosphericAerosol,
-};
-use crate::constants::BOLTZMANN_J_PER_K;
+pub use molecules::{MolecularSource, MolecularState, Molecules};
+pub use optics::{Optics, Slab};
+pub use particles::{BackgroundAerosol, Layer};
+
+use crate::config::{Channel, LayerKind, MolecularLine, MolecularModel};
 use crate::error::Result;
 use crate::loaded::LoadedConfig;
 use crate::receiver::{ChannelKind, LineTransmission, PolarizationOptics, RamanSpecies};
+use optics::perpendicular;
+use particles::{background_aerosol, layers};
 use profile_file::MolecularProfile;
 
 /// Temperature at which a Raman channel's band cross-section is taken, K: the band
@@ -81,329 +87,6 @@ impl RamanReturn {
             ..down
         }
     }
-}
-
-/// Where the molecular number density comes from.
-#[derive(Debug, Clone)]
-pub enum MolecularSource {
-    /// No molecules.
-    None,
-    /// U.S. Standard Atmosphere 1976 (embedded, up to 86 km).
-    Us76,
-    /// A tabulated profile read from a file.
-    Profile(MolecularProfile),
-}
-
-/// Molecular scattering: Bucholtz (1995) cross-section and lidar ratio at the laser wavelength.
-#[derive(Debug, Clone)]
-pub struct Molecules {
-    /// Number density source.
-    pub source: MolecularSource,
-    /// Rayleigh cross-section per molecule σ(λ), m².
-    pub cross_section_m2: f64,
-    /// Molecular lidar ratio of the part of the line the filter passes, sr:
-    /// `S_mol = (8π/3)(1+2γ)/(1+γ)` for the whole line, divided by the Cabannes fraction
-    /// for the Cabannes line.
-    pub lidar_ratio_sr: f64,
-    /// Linear depolarization ratio of that part's backscatter: `γ = ρn/(2−ρn)` for the
-    /// whole line, `3ε/(180+4ε)` for the Cabannes line.
-    pub depolarization: f64,
-    /// Whether the channel's filter passes the Cabannes line only (else the whole
-    /// Rayleigh line, rotational Raman wings included).
-    pub cabannes: bool,
-    /// For a profile file that ends below the US76 top (86 km): the factor by which US76
-    /// continues it above its top row, `N_file(top)/N_US76(top)`, so that the density is
-    /// continuous there.
-    pub us76_above_scale: Option<f64>,
-}
-
-impl Molecules {
-    /// Number density at altitude `z_m`, m⁻³.
-    pub fn number_density_m3(&self, z_m: f64) -> f64 {
-        match &self.source {
-            MolecularSource::None => 0.0,
-            MolecularSource::Us76 => us76::number_density_m3(z_m),
-            MolecularSource::Profile(p) => match self.us76_above_scale {
-                Some(scale) if z_m > p.top_altitude_m() => scale * us76::number_density_m3(z_m),
-                _ => p.number_density_m3(z_m),
-            },
-        }
-    }
-
-    /// A note for the run summary when a profile file is continued with US76 above its
-    /// top.
-    pub fn continuation_note(&self) -> Option<String> {
-        let (MolecularSource::Profile(p), Some(scale)) = (&self.source, self.us76_above_scale)
-        else {
-            return None;
-        };
-        Some(format!(
-            "lidarsim: note: the molecular profile ends at {:.1} km; above it the US Standard \
-             Atmosphere 1976 continues it (to 86 km), scaled by {scale:.4} to match at the junction",
-            p.top_altitude_m() / 1e3
-        ))
-    }
-
-    /// Altitude above which there are no molecules, m.
-    pub fn top_m(&self) -> f64 {
-        match &self.source {
-            MolecularSource::None => f64::NEG_INFINITY,
-            MolecularSource::Us76 => us76::TOP_ALTITUDE_M,
-            MolecularSource::Profile(p) => match self.us76_above_scale {
-                Some(_) => us76::TOP_ALTITUDE_M,
-                None => p.top_altitude_m(),
-            },
-        }
-    }
-
-    /// The molecular state at altitude `z_m`: US76's pressure and temperature, a
-    /// profile file's (interpolated log-linearly in p, `T = p/(k_B·N)`), or scaled US76
-    /// above a profile's top (p scaled as N is, US76's T).
-    pub fn state_at(&self, z_m: f64) -> MolecularState {
-        let n = self.number_density_m3(z_m);
-        // US76 has a state up to its top (where its N > 0), none above
-        let us76 = |z: f64, scale: f64| match us76::state(z.max(us76::BOTTOM_ALTITUDE_M)) {
-            Some(s) => (scale * s.pressure_pa, s.temperature_k),
-            None => (f64::NAN, f64::NAN),
-        };
-        let (pressure_pa, temperature_k) = match &self.source {
-            MolecularSource::None => (f64::NAN, f64::NAN),
-            MolecularSource::Us76 => us76(z_m, 1.0),
-            MolecularSource::Profile(p) => match self.us76_above_scale {
-                Some(scale) if z_m > p.top_altitude_m() => us76(z_m, scale),
-                _ => match p.pressure_pa(z_m) {
-                    Some(pa) if n > 0.0 => (pa, pa / (BOLTZMANN_J_PER_K * n)),
-                    _ => (f64::NAN, f64::NAN),
-                },
-            },
-        };
-        MolecularState {
-            pressure_pa,
-            temperature_k,
-            number_density_m3: n,
-            water_vapour_mixing_ratio: f64::NAN,
-        }
-    }
-
-    /// `α_mol = N·σ`, m⁻¹.
-    pub fn extinction_per_m(&self, z_m: f64) -> f64 {
-        self.number_density_m3(z_m) * self.cross_section_m2
-    }
-}
-
-/// The molecular state at one altitude (model.md §8): what the number density comes
-/// from. Pressure and temperature are NaN where the source does not give them (a profile
-/// file of number densities, no molecules, above the US76 top); the raw file marks them
-/// missing there (`_FillValue`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct MolecularState {
-    /// Pressure, Pa.
-    pub pressure_pa: f64,
-    /// Temperature, K.
-    pub temperature_k: f64,
-    /// Number density, m⁻³: the one the model uses, `p/(k_B·T)` where p and T are known.
-    pub number_density_m3: f64,
-    /// Mass mixing ratio of water vapour to dry air, kg kg⁻¹ (NaN where the scene has no
-    /// water-vapour profile; `Atmosphere::state_at` fills it).
-    pub water_vapour_mixing_ratio: f64,
-}
-
-/// The background aerosol of Eq. 5–6: `α_aer(z) = α_aer(0)·Np(z)/Np(0)`.
-#[derive(Debug, Clone)]
-pub struct BackgroundAerosol {
-    /// Near-surface extinction at the laser wavelength, m⁻¹.
-    pub surface_extinction_per_m: f64,
-    /// Lidar ratio, sr.
-    pub lidar_ratio_sr: f64,
-    /// Linear depolarization ratio.
-    pub depolarization: f64,
-    /// Its particles' forward-lobe 1/e half-width Θ, rad (`multiple_scattering`).
-    pub forward_lobe_rad: f64,
-    /// With a present-day background stratosphere, the laser wavelength, nm (the
-    /// stratosphere's extinction is its own, not Elterman's scaled with the surface's).
-    pub background_stratosphere_nm: Option<f64>,
-}
-
-impl BackgroundAerosol {
-    /// Its particles' asymmetry factor (`wide_angle`).
-    pub const ASYMMETRY: f64 = multiple_scattering::DEFAULT_AEROSOL_ASYMMETRY;
-
-    /// `α_aer(z)`, m⁻¹ (Eq. 6; with a background stratosphere,
-    /// `aerosol_profile::with_background_stratosphere_per_m`).
-    pub fn extinction_per_m(&self, z_m: f64) -> f64 {
-        match self.background_stratosphere_nm {
-            None => self.surface_extinction_per_m * aerosol_profile::relative_concentration(z_m),
-            Some(wl) => aerosol_profile::with_background_stratosphere_per_m(
-                self.surface_extinction_per_m,
-                z_m,
-                wl,
-            ),
-        }
-    }
-}
-
-/// A homogeneous aerosol or cloud layer.
-#[derive(Debug, Clone)]
-pub struct Layer {
-    /// Cloud or aerosol.
-    pub kind: LayerKind,
-    /// Base altitude, m.
-    pub base_m: f64,
-    /// Top altitude, m.
-    pub top_m: f64,
-    /// Extinction, m⁻¹.
-    pub extinction_per_m: f64,
-    /// Lidar ratio, sr.
-    pub lidar_ratio_sr: f64,
-    /// Linear depolarization ratio.
-    pub depolarization: f64,
-    /// Multiple-scattering factor η_ms on the layer's optical depth (1 but in the
-    /// `constant` model).
-    pub multiple_scattering: f64,
-    /// Its particles' forward-lobe 1/e half-width Θ, rad (`multiple_scattering`).
-    pub forward_lobe_rad: f64,
-    /// Its particles' asymmetry factor g (`wide_angle`).
-    pub asymmetry_factor: f64,
-    /// A cloud of liquid droplets (`multiple_scattering::phase`).
-    pub water: bool,
-}
-
-impl Layer {
-    fn contains(&self, z_m: f64) -> bool {
-        z_m >= self.base_m && z_m < self.top_m
-    }
-}
-
-/// Point optical properties at one altitude, by species (model.md §4 and §8): what the
-/// model integrates and what a retrieval compares with.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Optics {
-    /// Molecular backscatter of the part of the line the channel sees, m⁻¹ sr⁻¹.
-    pub beta_mol: f64,
-    /// Aerosol backscatter (profile and aerosol layers), m⁻¹ sr⁻¹.
-    pub beta_aer: f64,
-    /// Cloud backscatter, m⁻¹ sr⁻¹.
-    pub beta_cld: f64,
-    /// Molecular (Rayleigh) extinction, m⁻¹.
-    pub alpha_mol: f64,
-    /// Aerosol extinction (profile and aerosol layers), m⁻¹.
-    pub alpha_aer: f64,
-    /// Cloud extinction, m⁻¹.
-    pub alpha_cld: f64,
-    /// Ozone absorption, m⁻¹.
-    pub alpha_o3: f64,
-    /// Total extinction, `α_mol + α_o3 + α_aer + α_cld`, m⁻¹.
-    pub alpha_total: f64,
-    /// Aerosol extinction weighted by each contribution's multiple-scattering factor,
-    /// `Σ η·α` (the background profile has η = 1), m⁻¹.
-    pub ms_alpha_aer: f64,
-    /// Cloud extinction weighted by each layer's multiple-scattering factor, m⁻¹.
-    pub ms_alpha_cld: f64,
-    /// Extinction that attenuates the signal, `α_mol + α_o3 + Σ η·α`, m⁻¹.
-    pub alpha_effective: f64,
-    /// Extinction of water-droplet clouds, m⁻¹ (their multiply scattered return
-    /// depolarizes, `multiple_scattering::water_cloud_depolarization`).
-    pub alpha_water: f64,
-    /// Extinction of the particles whose forward lobe is narrow enough for the
-    /// small-angle model (`multiple_scattering.wide_angle_cutoff_rad`), m⁻¹.
-    pub alpha_lobe: f64,
-    /// The same weighted by each species' squared forward-lobe width, `Σ α·Θ²`,
-    /// m⁻¹ rad².
-    pub alpha_theta2: f64,
-    /// The same weighted by each species' asymmetry factor, `Σ α·g`, m⁻¹.
-    pub alpha_lobe_g: f64,
-    /// Cross-polarized part of the aerosol backscatter, `Σ β·δ/(1+δ)`, m⁻¹ sr⁻¹.
-    pub beta_perp_aer: f64,
-    /// Cross-polarized part of the cloud backscatter, m⁻¹ sr⁻¹.
-    pub beta_perp_cld: f64,
-    /// Linear depolarization ratio of the molecular backscatter the channel sees.
-    pub depol_mol: f64,
-    /// Backscatter seen by the receiver channel, m⁻¹ sr⁻¹.
-    pub beta_channel: f64,
-    /// The share of the Cabannes line the channel's filter passes here, `f_m`: 1 but in
-    /// an HSRL molecular channel, where a filter table makes it follow the temperature.
-    pub molecular_transmission: f64,
-}
-
-impl Optics {
-    /// Adds particles of extinction `alpha`, forward-lobe half-width `theta_rad` and
-    /// asymmetry factor `g` to the multiple-scattering models' sums, if their lobe is not
-    /// wider than `cutoff_rad`.
-    fn add_forward_lobe(&mut self, alpha: f64, theta_rad: f64, g: f64, cutoff_rad: f64) {
-        if theta_rad <= cutoff_rad {
-            self.alpha_lobe += alpha;
-            self.alpha_theta2 += alpha * theta_rad * theta_rad;
-            self.alpha_lobe_g += alpha * g;
-        }
-    }
-}
-
-/// `a/b`, or `absent` where `b` is 0 (the species is not there).
-fn ratio_or(a: f64, b: f64, absent: f64) -> f64 {
-    if b > 0.0 { a / b } else { absent }
-}
-
-/// Linear depolarization ratio `δ = β⊥/β∥` of a backscatter `beta` whose
-/// cross-polarized part is `perp`; 0 where there is no backscatter.
-fn depolarization(perp: f64, beta: f64) -> f64 {
-    ratio_or(perp, beta - perp, 0.0)
-}
-
-/// The cross-polarized part `β·δ/(1+δ)` of a backscatter `beta` of depolarization `delta`.
-fn perpendicular(beta: f64, delta: f64) -> f64 {
-    beta * delta / (1.0 + delta)
-}
-
-impl Optics {
-    /// Aerosol extinction-to-backscatter ratio `α_aer/β_aer`, sr (0 without aerosol).
-    pub fn lidar_ratio_aer(&self) -> f64 {
-        ratio_or(self.alpha_aer, self.beta_aer, 0.0)
-    }
-
-    /// Cloud extinction-to-backscatter ratio, sr (0 without cloud).
-    pub fn lidar_ratio_cld(&self) -> f64 {
-        ratio_or(self.alpha_cld, self.beta_cld, 0.0)
-    }
-
-    /// Effective multiple-scattering factor of the aerosol, `Σηα/Σα` (1 without aerosol).
-    pub fn ms_factor_aer(&self) -> f64 {
-        ratio_or(self.ms_alpha_aer, self.alpha_aer, 1.0)
-    }
-
-    /// Effective multiple-scattering factor of the cloud (1 without cloud).
-    pub fn ms_factor_cld(&self) -> f64 {
-        ratio_or(self.ms_alpha_cld, self.alpha_cld, 1.0)
-    }
-
-    /// Particle linear depolarization ratio of the aerosol, `β⊥/β∥` (0 without aerosol).
-    pub fn depol_aer(&self) -> f64 {
-        depolarization(self.beta_perp_aer, self.beta_aer)
-    }
-
-    /// Particle linear depolarization ratio of the cloud (0 without cloud).
-    pub fn depol_cld(&self) -> f64 {
-        depolarization(self.beta_perp_cld, self.beta_cld)
-    }
-
-    /// Volume linear depolarization ratio, `Σβ⊥/Σβ∥` over molecules (the line the
-    /// channel sees), aerosol and cloud: what an ideal ∥/⊥ pair of channels measures.
-    pub fn depol_volume(&self) -> f64 {
-        let beta = self.beta_mol + self.beta_aer + self.beta_cld;
-        let perp =
-            perpendicular(self.beta_mol, self.depol_mol) + self.beta_perp_aer + self.beta_perp_cld;
-        depolarization(perp, beta)
-    }
-}
-
-/// A slab `[z_lo, z_hi)` of constant optical properties.
-#[derive(Debug, Clone, Copy)]
-pub struct Slab {
-    /// Lower altitude, m.
-    pub z_lo: f64,
-    /// Upper altitude, m.
-    pub z_hi: f64,
-    /// Optical properties (evaluated at the slab's mid-altitude).
-    pub optics: Optics,
 }
 
 /// The whole atmosphere of a scenario.
@@ -813,70 +496,4 @@ fn molecular_filter(
         ));
     }
     Ok(Some((filter, loaded.config.instrument.wavelength_nm)))
-}
-
-/// Eq. 5 near-surface extinction at the laser wavelength, from the visibility or from
-/// the given surface extinction (scaled by the Ångström exponent), as the config selects.
-fn background_aerosol(cfg: &ScenarioConfig) -> Option<BackgroundAerosol> {
-    let a = cfg.atmosphere.aerosol.as_ref()?;
-    let wl = cfg.instrument.wavelength_nm;
-    let source = a
-        .extinction_from
-        .unwrap_or(if a.surface_extinction_per_km.is_some() {
-            ExtinctionSource::SurfaceExtinction
-        } else {
-            ExtinctionSource::Visibility
-        });
-    let surface_extinction_per_m = match (source, a.surface_extinction_per_km) {
-        (ExtinctionSource::SurfaceExtinction, Some(e)) => {
-            let q = a
-                .angstrom_exponent
-                .unwrap_or_else(|| aerosol_profile::kruse_exponent(a.visibility_km));
-            e * 1e-3 * (a.reference_wavelength_nm / wl).powf(q)
-        }
-        _ => aerosol_profile::surface_extinction_per_m(a.visibility_km, wl),
-    };
-    Some(BackgroundAerosol {
-        surface_extinction_per_m,
-        lidar_ratio_sr: a.lidar_ratio_sr,
-        depolarization: a.depolarization,
-        forward_lobe_rad: multiple_scattering::forward_lobe_half_width_rad(
-            wl,
-            a.effective_radius_um
-                .unwrap_or(multiple_scattering::DEFAULT_AEROSOL_RADIUS_UM),
-        ),
-        background_stratosphere_nm: (a.stratosphere == StratosphericAerosol::Background)
-            .then_some(wl),
-    })
-}
-
-fn layers(cfg: &ScenarioConfig) -> Vec<Layer> {
-    cfg.atmosphere
-        .layers
-        .iter()
-        .map(|l| {
-            let wl = cfg.instrument.wavelength_nm;
-            let (extinction_per_km, lidar_ratio_sr) = l.at_wavelength(wl, wl);
-            Layer {
-                kind: l.kind,
-                base_m: l.base_km * 1e3,
-                top_m: l.top_km * 1e3,
-                extinction_per_m: extinction_per_km * 1e-3,
-                lidar_ratio_sr,
-                depolarization: l.depolarization,
-                // the other models compute the multiply scattered return instead
-                multiple_scattering: match cfg.multiple_scattering.model {
-                    MultipleScatteringModel::Constant => l.multiple_scattering,
-                    _ => 1.0,
-                },
-                forward_lobe_rad: multiple_scattering::forward_lobe_half_width_rad(
-                    wl,
-                    multiple_scattering::effective_radius_um(l),
-                ),
-                asymmetry_factor: multiple_scattering::asymmetry_factor(l),
-                water: l.kind == LayerKind::Cloud
-                    && multiple_scattering::phase(l) == crate::config::CloudPhase::Water,
-            }
-        })
-        .collect()
 }
