@@ -1,5 +1,5 @@
 //! Files: the `expect` CSV and terminal table, the raw HDF5 file, the onboard product,
-//! the SCC export. Every output, the figures of [`crate::figures`] too, goes through
+//! the SCC export. Every output, the figures (`src/figures/`) too, goes through
 //! [`safe_file`]: one rule for temporary names, renames, locks, special files, standard
 //! output and signals.
 

@@ -65,7 +65,7 @@ pub(super) fn clean_for_exit(wait: bool, paths: Option<&mut Vec<PathBuf>>) -> Op
     Some(ending)
 }
 
-/// For a run ending on an allocation failure ([`crate::resources::NoAbortAllocator`]):
+/// For a run ending on an allocation failure (the `NoAbortAllocator` of `resources`):
 /// deletes every temporary, lock and scratch file of the process, unless the registry
 /// is busy; `true` when a partial output was among them.
 pub fn remove_files_for_exit() -> bool {

@@ -14,13 +14,15 @@
 //! per shot is that of the envelope draw plus one Bernoulli per signal count, with no
 //! per-shot rebuild. With dead time the detector takes each shot's photons (thinned
 //! signal and the rest, [`ModulatedShots::draw_shot`]) and records them. Blocks of [`SHOT_BLOCK`] shots
-//! use [`stream_rng`]`(seed, profile, block)`, as in [`super::shot_profile`], so results
+//! use [`stream_rng`]`(seed, profile, block)`, as in [`super::profile::shot_profile`], so results
 //! depend on the seed only.
 
 use rand::Rng;
 use rand_distr::{Binomial, Distribution};
 
-use super::{CountSink, SHOT_BLOCK, ShotCounts, ShotSampler, add_block_sums, stream_rng};
+use super::shot::ShotSampler;
+use super::sink::{CountSink, ShotCounts};
+use super::streams::{SHOT_BLOCK, add_block_sums, stream_rng};
 
 /// The energy factors of a run's shots, relative to the nominal energy: what the laser's
 /// law (`PulseEnergy`) draws from its own stream; shared by the threads that draw blocks.

@@ -61,234 +61,25 @@ pub mod approx;
 pub mod jitter;
 mod pmf_alias;
 mod pmf_cells;
+mod poisson;
+mod profile;
 mod shot;
+mod sink;
+mod streams;
 mod table;
 #[cfg(test)]
 mod tests;
 
-pub use aggregate::{
-    AGGREGATE_CHUNK, AGGREGATE_INVERSION_MAX, AGGREGATE_PREBUILT_MAX, AggregateSampler,
-    add_aggregate, poisson_u64,
-};
+pub use aggregate::{AGGREGATE_PREBUILT_MAX, AggregateSampler, add_aggregate};
 pub(crate) use alias::AliasTable;
 pub use pmf_alias::{PmfAlias, pmf_alias_columns};
 pub use pmf_cells::{CELLS_PER_SIGMA, PmfCells, pmf_cells_bytes};
+pub use poisson::{AGGREGATE_CHUNK, AGGREGATE_INVERSION_MAX, poisson_u64};
+pub use profile::{aggregate_profile, aggregate_profile_fixed, shot_profile};
 pub use shot::{
     ALIAS_BUDGET_BYTES, DENSE_ALIAS_MAX, DENSE_TABLE_MAX, DenseMethod, PathChoice, ShotSampler,
     ShotStrategy, StrategyKind, TOTAL_TABLE_MAX, cost, table_bytes_bound,
 };
+pub use sink::{CountSink, ShotCounts};
+pub use streams::{AGGREGATE_STREAM, SHOT_BLOCK, add_block_sums, stream_rng};
 pub(crate) use table::count_above;
-
-use rand_pcg::Pcg64Mcg;
-use rayon::prelude::*;
-
-/// Receiver of one shot's counts as `(bin, count)` events, `count ≥ 1`. A bin
-/// may be reported more than once per shot (the sparse path reports one count
-/// at a time); the shot's count in a bin is the sum of its events.
-pub trait CountSink {
-    fn add(&mut self, bin: usize, count: u32);
-
-    /// A count that may be 0 (reported only when it is not, unless the sink can take a
-    /// zero for free: an accumulator adds it without a branch that the draws of a bin
-    /// with `P(K = 0)` near ½ would mispredict).
-    #[inline(always)]
-    fn add_any(&mut self, bin: usize, count: u32) {
-        if count > 0 {
-            self.add(bin, count);
-        }
-    }
-}
-
-/// Accumulator: adds every event into `acc[bin]`.
-impl CountSink for [u64] {
-    #[inline(always)]
-    fn add(&mut self, bin: usize, count: u32) {
-        self[bin] += u64::from(count);
-    }
-
-    #[inline(always)]
-    fn add_any(&mut self, bin: usize, count: u32) {
-        self[bin] += u64::from(count);
-    }
-}
-
-/// One shot's counts: a dense `u32` per bin plus the list of bins hit, cleared
-/// in O(bins hit). Capacity is reserved up front: no allocation per shot.
-#[derive(Clone, Debug)]
-pub struct ShotCounts {
-    counts: Vec<u32>,
-    hit: Vec<u32>,
-}
-
-impl ShotCounts {
-    pub fn new(bins: usize) -> Self {
-        ShotCounts {
-            counts: vec![0; bins],
-            hit: Vec::with_capacity(bins),
-        }
-    }
-
-    /// Counts of every bin in this shot.
-    pub fn counts(&self) -> &[u32] {
-        &self.counts
-    }
-
-    /// Bins with a non-zero count, in first-hit order.
-    pub fn hit_bins(&self) -> &[u32] {
-        &self.hit
-    }
-
-    /// `(bin, count)` of the bins with a non-zero count, in first-hit order.
-    pub fn nonzero(&self) -> impl Iterator<Item = (usize, u32)> + '_ {
-        self.hit
-            .iter()
-            .map(|&b| (b as usize, self.counts[b as usize]))
-    }
-
-    /// Total number of counts in this shot.
-    pub fn total(&self) -> u64 {
-        self.nonzero().map(|(_, c)| u64::from(c)).sum()
-    }
-
-    /// Reset to zero counts (O(bins hit)).
-    pub fn clear(&mut self) {
-        for &b in &self.hit {
-            self.counts[b as usize] = 0;
-        }
-        self.hit.clear();
-    }
-}
-
-impl CountSink for ShotCounts {
-    #[inline(always)]
-    fn add(&mut self, bin: usize, count: u32) {
-        let c = &mut self.counts[bin];
-        if *c == 0 {
-            self.hit.push(bin as u32);
-        }
-        *c += count;
-    }
-}
-
-/// Shots per block in [`shot_profile`]: block `b` covers shots
-/// `[b·SHOT_BLOCK, (b+1)·SHOT_BLOCK)` and has its own [`stream_rng`].
-pub const SHOT_BLOCK: u64 = 1 << 16;
-
-/// Block index of the stream used by [`aggregate_profile`] (never reached by
-/// shot blocks, which stay below `2^48`).
-pub const AGGREGATE_STREAM: u64 = u64::MAX;
-
-const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
-
-/// SplitMix64's output function (Steele, Lea & Flood 2014, "Fast splittable
-/// pseudorandom number generators", OOPSLA; constants of Stafford's Mix13):
-/// a bijection of `u64` with full avalanche.
-#[inline]
-fn mix64(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
-/// Deterministic generator for `(seed, profile, block)`.
-///
-/// `Pcg64Mcg` (O'Neill 2014, "PCG: a family of simple fast space-efficient
-/// statistically good algorithms for random number generation", HMC-CS-2014-0905;
-/// 128-bit MCG, XSL-RR output) whose state is the three numbers absorbed one
-/// after the other by SplitMix64's mixer: `h = mix(mix(mix(seed+γ) ^
-/// mix(profile+2γ)) ^ mix(block+3γ))`, state `= h·2^64 + mix(h+4γ)`. For a
-/// fixed `(seed, profile)` distinct blocks always give distinct states (the
-/// chain is a bijection of `block`); any two other triples collide with
-/// probability `2^-64`. Streams start at effectively random points of the
-/// `2^126` period, so overlaps are negligible.
-pub fn stream_rng(seed: u64, profile: u64, block: u64) -> Pcg64Mcg {
-    let a = mix64(seed.wrapping_add(GOLDEN));
-    let b = mix64(a ^ mix64(profile.wrapping_add(GOLDEN.wrapping_mul(2))));
-    let h = mix64(b ^ mix64(block.wrapping_add(GOLDEN.wrapping_mul(3))));
-    let lo = mix64(h.wrapping_add(GOLDEN.wrapping_mul(4)));
-    Pcg64Mcg::new((u128::from(h) << 64) | u128::from(lo))
-}
-
-/// Adds into `acc` the counts of blocks `0..nblocks`, each drawn by `block` into a
-/// buffer of its own (of `acc.len()` bins), the blocks in parallel (rayon): integer sums,
-/// so the result does not depend on the thread count.
-pub fn add_block_sums(
-    acc: &mut [u64],
-    nblocks: u64,
-    block: impl Fn(u64) -> Vec<u64> + Sync + Send,
-) {
-    let bins = acc.len();
-    let sum = (0..nblocks).into_par_iter().map(block).reduce(
-        || vec![0u64; bins],
-        |mut x, y| {
-            x.iter_mut().zip(&y).for_each(|(a, b)| *a += b);
-            x
-        },
-    );
-    acc.iter_mut().zip(&sum).for_each(|(a, s)| *a += s);
-}
-
-/// Accumulate one profile of `shots` shots by the shot path into `acc`.
-///
-/// Shots are cut into blocks of [`SHOT_BLOCK`]; block `b` is drawn with
-/// `stream_rng(seed, profile, b)` into its own buffer and the integer sums are
-/// added, so the result is identical whatever the rayon thread count. Blocks
-/// run in parallel (rayon) when there is more than one.
-pub fn shot_profile(sampler: &ShotSampler, seed: u64, profile: u64, shots: u64, acc: &mut [u64]) {
-    assert_eq!(
-        acc.len(),
-        sampler.bins(),
-        "accumulator length != number of bins"
-    );
-    let nblocks = shots.div_ceil(SHOT_BLOCK);
-    let block_shots = |b: u64| SHOT_BLOCK.min(shots - b * SHOT_BLOCK);
-    if nblocks <= 1 {
-        if shots > 0 {
-            sampler.add_shots(&mut stream_rng(seed, profile, 0), shots, acc);
-        }
-        return;
-    }
-    let bins = sampler.bins();
-    let sum = (0..nblocks)
-        .into_par_iter()
-        .fold(
-            || vec![0u64; bins],
-            |mut part, b| {
-                sampler.add_shots(&mut stream_rng(seed, profile, b), block_shots(b), &mut part);
-                part
-            },
-        )
-        .reduce_with(|mut x, y| {
-            x.iter_mut().zip(&y).for_each(|(a, b)| *a += b);
-            x
-        })
-        .expect("at least one block");
-    acc.iter_mut().zip(&sum).for_each(|(a, b)| *a += b);
-}
-
-/// Accumulate one profile of `shots` shots by an [`AggregateSampler`] (samplers built
-/// once for the fixed means) into `acc`, from `stream_rng(seed, profile, AGGREGATE_STREAM)`.
-pub fn aggregate_profile_fixed(
-    sampler: &AggregateSampler,
-    seed: u64,
-    profile: u64,
-    shots: u64,
-    acc: &mut [u64],
-) {
-    let mut rng = stream_rng(seed, profile, AGGREGATE_STREAM);
-    sampler.add_profile(&mut rng, shots, acc);
-}
-
-/// Accumulate one profile of `shots` shots by [`add_aggregate`] (one exact
-/// Poisson(`shots·λ_i`) per bin) into `acc`, from
-/// `stream_rng(seed, profile, AGGREGATE_STREAM)`.
-pub fn aggregate_profile(
-    lambda_per_bin: &[f64],
-    seed: u64,
-    profile: u64,
-    shots: u64,
-    acc: &mut [u64],
-) {
-    let mut rng = stream_rng(seed, profile, AGGREGATE_STREAM);
-    add_aggregate(&mut rng, lambda_per_bin, shots, acc);
-}

@@ -21,7 +21,7 @@
 //! # Cost
 //!
 //! One `u64`, one column load and a compare per draw (measured in
-//! [`super::shot::cost`]); the table takes 16 bytes per column, `≈ 2^⌈log2(19.2·√μ)⌉`
+//! `cost` (`sampling::shot`)); the table takes 16 bytes per column, `≈ 2^⌈log2(19.2·√μ)⌉`
 //! columns for large means (`μ = 100`: 256 columns, 4 KiB), which is what limits it
 //! (the shot sampler's `DENSE_ALIAS_MAX` and alias budget).
 

@@ -34,7 +34,7 @@
 //!
 //! # Cost
 //!
-//! Measured in [`super::shot::cost`] (`cargo run --release --example sampler_costs`):
+//! Measured in `cost` (`sampling::shot`) (`cargo run --release --example sampler_costs`):
 //! 6.0–8.3 ns per draw in the caches for λ = 30 … 10^6, 10.3 ns at 10^7 (Ahrens–Dieter:
 //! 19–21 ns). Per bin an alias table of `≈ 20σ/w` (80–160) cells, 16 bytes per
 //! power-of-two column, 16 bytes per cell for the exact test, and a byte per count of

@@ -8,10 +8,10 @@ use std::fmt;
 use rand::Rng;
 use rand_distr::{Distribution, Poisson};
 
-use super::CountSink;
 use super::alias::AliasTable;
 use super::pmf_alias::{PmfAlias, pmf_alias_columns};
 use super::pmf_cells::{PmfCells, pmf_cells_bytes};
+use super::sink::CountSink;
 use super::table::{count_above, tail_thresholds};
 
 /// Largest per-bin mean drawn densely by table inversion (one compare when the
@@ -91,7 +91,7 @@ pub mod cost {
     pub const DENSE_PER_THRESHOLD: f64 = 0.35;
     /// Per dense Ahrens–Dieter bin (`rand_distr::Poisson`).
     pub const DENSE_PD: f64 = 21.0;
-    /// Per draw by rejection from a step envelope ([`super::PmfCells`]).
+    /// Per draw by rejection from a step envelope ([`super::pmf_cells::PmfCells`]).
     pub const CELLS: f64 = 7.5;
     /// Per draw from an alias table over a PMF of at most 64 columns (1 KiB).
     pub const ALIAS_BASE: f64 = 2.4;
@@ -581,16 +581,16 @@ impl ShotSampler {
         }
     }
 
-    /// Draw `shots` shots and hand each one, as a [`ShotCounts`](super::ShotCounts), to `f`:
+    /// Draw `shots` shots and hand each one, as a [`ShotCounts`](super::sink::ShotCounts), to `f`:
     /// the per-shot consumer form (onboard processing, detector models).
     /// Uses the same random stream as [`add_shots`](Self::add_shots); one buffer is
     /// allocated up front, none per shot.
     pub fn for_each_shot<R, F>(&self, rng: &mut R, shots: u64, mut f: F)
     where
         R: Rng + ?Sized,
-        F: FnMut(&super::ShotCounts),
+        F: FnMut(&super::sink::ShotCounts),
     {
-        let mut buf = super::ShotCounts::new(self.bins);
+        let mut buf = super::sink::ShotCounts::new(self.bins);
         for _ in 0..shots {
             self.sample_shot(rng, &mut buf);
             f(&buf);

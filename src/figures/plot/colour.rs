@@ -114,7 +114,7 @@ pub fn draw_colour_bar<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     scale: &ColourScale,
     label: &str,
-) -> super::DrawResult
+) -> super::result::DrawResult
 where
     DB::ErrorType: 'static,
 {

@@ -80,7 +80,7 @@ pub fn draw_labelled<DB: DrawingBackend>(
     lines: &[Vec<(i32, i32)>],
     style: &IsolineStyle,
     text: &str,
-) -> super::DrawResult
+) -> super::result::DrawResult
 where
     DB::ErrorType: 'static,
 {

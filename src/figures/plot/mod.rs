@@ -10,13 +10,12 @@ pub mod colour;
 pub mod isolines;
 pub mod labels;
 pub mod panel;
+mod result;
 pub mod text;
 pub mod ticks;
 
 pub use colour::ColourScale;
 pub use labels::{Label, describe};
 pub use panel::{Axis, ImagePanel};
+pub use result::DrawResult;
 pub use text::{FONT, encode_png, ensure_font};
-
-/// The result of drawing: plotters' errors, boxed.
-pub type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;

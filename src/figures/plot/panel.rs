@@ -196,7 +196,10 @@ impl ImagePanel {
     }
 
     /// Draws the panel into `area`: the field on the left, its colour bar on the right.
-    pub fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> super::DrawResult
+    pub fn draw<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+    ) -> super::result::DrawResult
     where
         DB::ErrorType: 'static,
     {
@@ -209,7 +212,7 @@ impl ImagePanel {
         &self,
         area: &DrawingArea<DB, Shift>,
         marks: &[(f64, f64, RGBColor)],
-    ) -> super::DrawResult
+    ) -> super::result::DrawResult
     where
         DB::ErrorType: 'static,
     {
@@ -256,7 +259,7 @@ impl ImagePanel {
     fn fill<DB: DrawingBackend>(
         &self,
         plot: &DrawingArea<DB, Cartesian2d<ticks::TickedRange, ticks::TickedRange>>,
-    ) -> super::DrawResult
+    ) -> super::result::DrawResult
     where
         DB::ErrorType: 'static,
     {

@@ -3,7 +3,7 @@
 
 use plotters::prelude::*;
 
-use super::Quicklook;
+use super::figure::Quicklook;
 use super::grid::Grid;
 use crate::figures::plot::colour::ColourScale;
 use crate::figures::plot::panel::{Axis, ImagePanel};

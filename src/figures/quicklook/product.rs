@@ -8,11 +8,11 @@ use std::path::Path;
 use hdf5::Dataset;
 use ndarray::{Axis, Ix1, Ix2, Ix3, s};
 
-use super::grid::Grid;
-use super::raw::{Vars, calibration, day_night, extend_spans, pair, start_unix_s};
-use super::{
+use super::figure::{
     BLOCK_PROFILES, Background, COLUMNS, Calibration, Quicklook, ROWS, TOP_KM, add_profile, x_axis,
 };
+use super::grid::Grid;
+use super::raw::{Vars, calibration, day_night, extend_spans, pair, start_unix_s};
 use crate::error::Result;
 use crate::figures::plot::panel::{edges, widen};
 use crate::output::raw_file::read::read_text;

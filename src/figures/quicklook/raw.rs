@@ -5,10 +5,10 @@ use std::path::Path;
 use hdf5::Dataset;
 use ndarray::{Axis, Ix1, Ix3, s};
 
-use super::grid::Grid;
-use super::{
+use super::figure::{
     BLOCK_PROFILES, Background, COLUMNS, Calibration, Quicklook, ROWS, TOP_KM, add_profile, x_axis,
 };
+use super::grid::Grid;
 use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
 use crate::figures::plot::panel::{edges, widen};

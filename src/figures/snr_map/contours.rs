@@ -5,7 +5,7 @@ use plotters::style::text_anchor::{HPos, VPos};
 
 use super::super::plot::text::{font, label};
 use super::super::plot::{DrawResult, ticks};
-use super::draw::{Area, LevelStyle, PLOT_B, PLOT_L, PLOT_R, PLOT_T};
+use super::layout::{Area, LevelStyle, PLOT_B, PLOT_L, PLOT_R, PLOT_T};
 
 pub(super) fn seg_len(a: (f64, f64), b: (f64, f64)) -> f64 {
     ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt()

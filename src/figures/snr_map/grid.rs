@@ -2,8 +2,8 @@
 
 use super::super::plot::isolines::isolines;
 use super::super::plot::ticks;
-use super::draw::{PLOT_B, PLOT_L, PLOT_R, PLOT_T};
-use super::{SNR_COLOUR_CAP, SNR_COLOUR_MAX, SNR_COLOUR_MIN, SnrMap, check};
+use super::layout::{PLOT_B, PLOT_L, PLOT_R, PLOT_T};
+use super::map::{SNR_COLOUR_CAP, SNR_COLOUR_MAX, SNR_COLOUR_MIN, SnrMap, check};
 
 /// The map sorted by ascending altitude, with x = log10(TC), and its mapping to
 /// the figure's pixels.

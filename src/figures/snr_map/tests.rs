@@ -1,7 +1,7 @@
 //! Tests of the S/N map.
 
 use super::contours::{dash, seg_len};
-use super::draw::{PLOT_B, PLOT_L, PLOT_R, PLOT_T};
+use super::layout::{PLOT_B, PLOT_L, PLOT_R, PLOT_T};
 use super::*;
 use std::path::{Path, PathBuf};
 

@@ -4,7 +4,7 @@
 use std::path::Path;
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
-use super::SccOptions;
+use super::options::SccOptions;
 use super::read::{RawRun, bad};
 use crate::config::DetectorConfig;
 use crate::constants::SPEED_OF_LIGHT_M_PER_S;

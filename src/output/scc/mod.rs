@@ -57,37 +57,18 @@
 //! * No `Latitude`/`Longitude`/`Location`: lidarsim configs have none.
 
 mod fields;
+mod options;
 mod read;
 mod write;
 
 use std::path::Path;
 
 pub use fields::{SIGNAL_FREE_SHARE, SccChannel, SccContent, background_bins, signal_free};
+pub use options::SccOptions;
 pub use read::{RawRun, read_raw};
 pub use write::{SCC_VARIABLES, SccType};
 
 use crate::error::Result;
-
-/// Options of the SCC export.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct SccOptions {
-    /// `Measurement_ID` (`YYYYMMDDccNN`); `None` = start date + station ID + `00`.
-    pub measurement_id: Option<String>,
-    /// Two-character EARLINET station call sign; default `ls`.
-    pub station_id: String,
-    /// SCC `channel_ID` of each channel, in the raw file's order; `None` = 1, 2, ….
-    pub channel_ids: Option<Vec<i32>>,
-}
-
-impl Default for SccOptions {
-    fn default() -> Self {
-        SccOptions {
-            measurement_id: None,
-            station_id: "ls".to_string(),
-            channel_ids: None,
-        }
-    }
-}
 
 /// Reads the lidarsim raw file `raw_h5` and writes the SCC raw NetCDF file at exactly
 /// `out_nc` (temporary names and renames are the caller's). Refuses, with a one-line

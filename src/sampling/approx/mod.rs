@@ -41,7 +41,7 @@
 //!
 //! [`add_aggregate_approx`] and [`aggregate_approx_profile`] draw a profile with exact
 //! Poisson below the threshold ([`poisson_u64`], the same stream as
-//! [`aggregate_profile`](super::aggregate_profile): with an infinite threshold the counts
+//! `aggregate_profile` (`sampling::profile`): with an infinite threshold the counts
 //! are identical) and the normal approximation at or above it.
 //!
 //! The bound is on the KS distance only. Well above 1 the approximate law has mean μ
@@ -59,7 +59,8 @@ use rand_distr::{Distribution, StandardNormal};
 use statrs::function::erf::erfc;
 use statrs::function::gamma::ln_gamma;
 
-use super::{AGGREGATE_STREAM, poisson_u64, stream_rng};
+use super::poisson::poisson_u64;
+use super::streams::{AGGREGATE_STREAM, stream_rng};
 
 /// `c = 1/(6√(2π))`: `KS(μ)·√μ → c` as μ → ∞.
 pub const KS_ASYMPTOTE: f64 = 0.066_490_380_066_905_46;
@@ -222,7 +223,7 @@ pub fn poisson_cdf(k: u64, mean: f64) -> f64 {
 /// Poisson ([`poisson_u64`]) below `threshold`, the normal approximation
 /// `max(0, round(mean + √mean·g))` at or above it (`g` from
 /// [`rand_distr::StandardNormal`]; saturates at `u64::MAX`, exact in f64 up to
-/// `2^53`). `threshold = +∞` (or NaN) is exactly [`add_aggregate`](super::add_aggregate);
+/// `2^53`). `threshold = +∞` (or NaN) is exactly `add_aggregate` (`sampling::aggregate`);
 /// take it from [`normal_threshold`].
 pub fn add_aggregate_approx<R: Rng + ?Sized>(
     rng: &mut R,
@@ -250,7 +251,7 @@ pub fn add_aggregate_approx<R: Rng + ?Sized>(
 
 /// [`add_aggregate_approx`] for profile `profile`, from
 /// `stream_rng(seed, profile, AGGREGATE_STREAM)` like
-/// [`aggregate_profile`](super::aggregate_profile).
+/// `aggregate_profile` (`sampling::profile`).
 pub fn aggregate_approx_profile(
     lambda_per_bin: &[f64],
     seed: u64,
