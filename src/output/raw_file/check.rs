@@ -1,7 +1,7 @@
 //! The checks a profile record passes before the writer buffers any of it (one place,
 //! for one record at a time and for a batch checked in parallel).
 
-use super::{COMPONENT_NAMES, CountWidth, Dims, ProfileRecord, RawFileSpec};
+use super::spec::{COMPONENT_NAMES, CountWidth, Dims, ProfileRecord, RawFileSpec};
 
 /// The shape of the records a file takes: what a record is checked against.
 #[derive(Clone, Debug)]
@@ -136,7 +136,7 @@ impl RecordShape {
     }
 
     /// [`RecordShape::check`] but whether the counts fit the file's width (for a caller
-    /// that checks them as it narrows them: [`super::memory`]).
+    /// that checks them as it narrows them: `memory`).
     pub fn check_but_widths(&self, rec: &ProfileRecord) -> Result<(), String> {
         let i = rec.index;
         if i >= self.n_profiles {

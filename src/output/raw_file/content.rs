@@ -4,7 +4,8 @@
 
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
-use super::{AttrValue, CONVENTIONS, Dims, FORMAT_VERSION, Variable, truth};
+use super::spec::{AttrValue, CONVENTIONS, Dims, FORMAT_VERSION, Variable};
+use super::truth;
 use crate::error::{Error, Result};
 use crate::scenario::{ExpectedProfile, Lidar, Scenario};
 

@@ -11,7 +11,7 @@ use std::ffi::CString;
 use hdf5::types::VarLenUnicode;
 use hdf5::{Dataset, H5Type, Location};
 
-use super::AttrValue;
+use super::spec::AttrValue;
 
 mod ffi {
     use hdf5_sys::h5::herr_t;

@@ -25,7 +25,7 @@ use hdf5::{Dataset, Group};
 use ndarray::{Ix1, Ix2, Ix3, s};
 
 use super::read::{RawHeader, is_float, read_text};
-use super::{COMPONENT_NAMES, PROFILE_COLUMN_NAMES};
+use super::spec::{COMPONENT_NAMES, PROFILE_COLUMN_NAMES};
 use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
 
@@ -272,7 +272,7 @@ pub fn check_raw(path: &Path, f: &hdf5::File, h: &RawHeader) -> Result<()> {
     let analog = analog_channels(path, f, h.channels.len())?;
     check_calibration(path, f, "", &h.channels, &analog)?;
     let n_columns = f
-        .dataset(super::COLUMN_DIM)
+        .dataset(super::spec::COLUMN_DIM)
         .map(|d| d.shape().first().copied().unwrap_or(0))
         .unwrap_or(0);
     if let (Ok(c), Ok(w)) = (

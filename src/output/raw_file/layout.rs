@@ -22,7 +22,7 @@ use hdf5::{Dataset, File, Group, H5Type};
 use super::chunk;
 use super::hdf5_ds::{attach_scales, set_scale, write_attr};
 use super::schema::{Element, PerProfile, Storage, Values, schema};
-use super::{CountWidth, Dims, RESERVED_NAMES, RawFileSpec};
+use super::spec::{CountWidth, Dims, RESERVED_NAMES, RawFileSpec};
 
 /// Target size of one chunk of a (profile, channel, bin) variable, in bytes, for that
 /// variable's own element size (u16 counts get four times the rows of f64 truth). Within

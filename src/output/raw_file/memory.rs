@@ -1,12 +1,12 @@
 //! A raw file held in memory: every variable of [`super::schema`] as a flat array, the
 //! per-profile ones filled profile by profile from the same [`ProfileRecord`]s the
-//! [`super::RawFileWriter`] takes, checked the same way ([`RecordShape::check`]). The
+//! `RawFileWriter` takes, checked the same way ([`RecordShape::check`]). The
 //! Python module's in-memory `simulate` (docs/python.md) hands these arrays to numpy
 //! without copying them; nothing is compressed and nothing touches the disk.
 
 use super::check::{RecordShape, Row};
 use super::schema::{Element, PerProfile, Values, VarSchema, schema};
-use super::{AttrValue, CountWidth, ProfileRecord, RawFileSpec};
+use super::spec::{AttrValue, CountWidth, ProfileRecord, RawFileSpec};
 use crate::error::{Error, Result};
 
 /// A variable's values, row-major over its shape.
@@ -158,7 +158,7 @@ pub fn memory_bytes(spec: &RawFileSpec) -> f64 {
         .sum()
 }
 
-/// Fills a [`MemoryFile`] profile by profile, in order, as [`super::RawFileWriter`]
+/// Fills a [`MemoryFile`] profile by profile, in order, as `RawFileWriter`
 /// fills a file: each per-profile array grows by a profile's row (no array is written
 /// twice, none zeroed first).
 pub struct MemoryWriter {
@@ -220,7 +220,7 @@ impl MemoryWriter {
         let (rows, values) = self.shape.split(rec);
         // the counts first, narrowed as their width is checked (one pass over them); a
         // count too wide leaves every array as it was
-        let names = std::iter::once("counts").chain(super::COMPONENT_NAMES);
+        let names = std::iter::once("counts").chain(super::spec::COMPONENT_NAMES);
         for (k, (&at, what)) in self.count_rows.iter().zip(names).enumerate() {
             let Some(&Row::Counts(c)) = rows.get(k) else {
                 break;
@@ -320,7 +320,7 @@ fn truncate(a: &mut Array, len: usize) {
     }
 }
 
-impl super::ProfileSink for MemoryWriter {
+impl super::spec::ProfileSink for MemoryWriter {
     fn write_profile(&mut self, rec: &ProfileRecord) -> Result<()> {
         MemoryWriter::write_profile(self, rec)
     }

@@ -1,11 +1,11 @@
 //! The raw file's variables as data: for each, its name, dimensions, element type,
 //! attributes in the order they are written, and the values known before the first
-//! profile. One description for the two forms of a run: [`super::layout`] creates
-//! exactly these in an HDF5 file, [`super::memory`] holds exactly these in memory (the
+//! profile. One description for the two forms of a run: `layout` creates
+//! exactly these in an HDF5 file, `memory` holds exactly these in memory (the
 //! Python module's in-memory `simulate`, docs/python.md), so that both have the same
 //! variables, dimensions and CF attributes.
 
-use super::{
+use super::spec::{
     AttrValue, BIN_DIM, CHANNEL_DIM, COLUMN_DIM, COMPONENT_NAMES, CountWidth, Dims,
     PROFILE_COLUMN_NAMES, PROFILE_DIM, RawFileSpec, SLOT_DIM,
 };
@@ -28,20 +28,20 @@ pub enum Element {
     I32,
 }
 
-/// Which per-profile field of a [`super::ProfileRecord`] fills a variable.
+/// Which per-profile field of a [`super::spec::ProfileRecord`] fills a variable.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PerProfile {
     /// A (profile, channel, bin) row: `counts`, a component, or the spec's
     /// (profile, channel, bin) variable; rows come in this order
-    /// ([`super::check::RecordShape::split`]).
+    /// (`RecordShape::split` in `check`).
     Row,
-    /// `time`: [`super::ProfileRecord::time_s`].
+    /// `time`: [`super::spec::ProfileRecord::time_s`].
     Time,
     /// `n_shots`.
     NShots,
     /// `pulse_energy`.
     PulseEnergy,
-    /// The spec's (profile) variable: one value of [`super::ProfileRecord::values`].
+    /// The spec's (profile) variable: one value of [`super::spec::ProfileRecord::values`].
     Value,
     /// `profile_column`.
     Columns,
@@ -345,7 +345,7 @@ pub fn schema(spec: &RawFileSpec) -> Vec<VarSchema<'_>> {
 /// components, a per-profile latitude and expected signal, one column of truth.
 #[cfg(test)]
 pub(super) fn example_spec() -> RawFileSpec {
-    use super::Variable;
+    use super::spec::Variable;
     let var = |name: &str, dims, data: Vec<f64>| Variable {
         name: name.into(),
         dims,

@@ -4,7 +4,7 @@
 //! channel's description (kind, polarization, filter, detector, molecular line).
 
 use super::content::var;
-use super::{AttrValue, Dims, TextVariable, Variable};
+use super::spec::{AttrValue, Dims, TextVariable, Variable};
 use crate::detector::DeadTimeModel;
 use crate::scenario::{ExpectedProfile, Lidar, Scenario};
 

@@ -41,7 +41,7 @@ use super::chunk::{self, Filling};
 use super::hdf5_ds::write_chunk;
 use super::layout::{self, OpenFile};
 use super::planes;
-use super::{ProfileRecord, RawFileSpec};
+use super::spec::{ProfileRecord, RawFileSpec};
 use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
 
@@ -181,7 +181,7 @@ impl RawFileWriter {
     /// writer as it was: errors if `rec.index` is out of range or already written, if a
     /// slice's length is not channels × bins, if components are missing or unexpected or
     /// do not sum to `counts`, if `time_s` is not finite, or if a count exceeds the
-    /// file's [`super::CountWidth`] (never wrapped or clamped). A failure to write (a
+    /// file's [`super::spec::CountWidth`] (never wrapped or clamped). A failure to write (a
     /// full disk) leaves the writer unusable: every later call errors, and the caller
     /// drops the file.
     pub fn write_profile(&mut self, rec: &ProfileRecord) -> Result<()> {
@@ -514,5 +514,11 @@ impl Drop for RawFileWriter {
         if let Some(open) = self.open.take() {
             let _ = open.close();
         }
+    }
+}
+
+impl super::spec::ProfileSink for RawFileWriter {
+    fn write_profile(&mut self, rec: &ProfileRecord) -> Result<()> {
+        RawFileWriter::write_profile(self, rec)
     }
 }

@@ -4,7 +4,7 @@
 use hdf5::Dataset;
 use hdf5::types::TypeDescriptor;
 
-use super::super::{
+use super::super::spec::{
     BIN_DIM, CHANNEL_DIM, COLUMN_DIM, COMPONENT_NAMES, PROFILE_COLUMN_NAMES, PROFILE_DIM, SLOT_DIM,
 };
 

@@ -36,7 +36,7 @@ use hdf5::filters::Filter;
 use hdf5::types::{TypeDescriptor, VarLenAscii, VarLenUnicode};
 use ndarray::{Ix1, s};
 
-use super::{CHANNEL_DIM, COLUMN_DIM, FORMAT_VERSION, SLOT_DIM};
+use super::spec::{CHANNEL_DIM, COLUMN_DIM, FORMAT_VERSION, SLOT_DIM};
 use crate::error::{Error, Result};
 
 mod known;
