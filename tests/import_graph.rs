@@ -96,6 +96,35 @@ fn the_sampler_reaches_neither_detector_nor_onboard() {
     }
 }
 
+/// Folders at the bottom of the graph and the only modules outside themselves they may
+/// name: the leaves (`constants`, `error`, `limits`). The sampler knows counts and
+/// means, not lasers, configs or files (a laser hands it energy factors through a trait
+/// of its own); the config parses and holds the typed sections, and each domain module
+/// checks its own keys (docs/architecture.md).
+const LEAF_ONLY: [&str; 2] = ["sampling", "config"];
+const LEAVES: [&str; 3] = ["constants", "error", "limits"];
+
+#[test]
+fn sampling_and_config_import_only_the_leaves() {
+    let graph = import_graph(&Path::new(env!("CARGO_MANIFEST_DIR")).join("src"));
+    let under = |m: &str, top: &str| m == top || m.starts_with(&format!("{top}::"));
+    let mut wrong = Vec::new();
+    for folder in LEAF_ONLY {
+        for (m, edges) in graph.iter().filter(|(m, _)| under(m, folder)) {
+            for e in edges {
+                if !under(e, folder) && !LEAVES.iter().any(|leaf| under(e, leaf)) {
+                    wrong.push(format!("{m} -> {e}"));
+                }
+            }
+        }
+    }
+    assert!(
+        wrong.is_empty(),
+        "sampling and config may name only themselves and {LEAVES:?}: {}",
+        wrong.join(", ")
+    );
+}
+
 /// The graph of every module file under `src`, by module path.
 fn import_graph(src: &Path) -> Graph {
     let mut files = Vec::new();
