@@ -1,6 +1,6 @@
 //! Sums whose value does not depend on the order of their terms, so that the sums of a
 //! validation cut into shards add up to the single run's bit for bit
-//! (`validate --combine`, [`super::partial`]).
+//! (`validate --combine`, `validate::partial`).
 //!
 //! * counts and their squares are summed as 128-bit integers (exact);
 //! * floating-point terms go into an [`ExactSum`]: Shewchuk's non-overlapping partials

@@ -13,7 +13,8 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::{Report, Sums, ValidateOptions, Validation};
+use super::report::Report;
+use super::run::{Sums, ValidateOptions, Validation};
 use crate::config::Method;
 use crate::error::{Error, Result};
 use crate::scenario::Lidar;
@@ -142,7 +143,7 @@ pub fn impossible_sums(sums: &Sums, n: usize) -> Option<String> {
 }
 
 /// [`impossible_sums`] of one bin's sums over `n` realizations.
-fn impossible_bin(s: &super::BinSums, n: u128) -> Option<String> {
+fn impossible_bin(s: &super::bins::BinSums, n: u128) -> Option<String> {
     let square = |x: u128| x.checked_mul(x);
     // (Σx)² ≤ n·Σx²; where a product overflows, in f64 (ample for a refusal)
     let cauchy = |sum: u128, squares: u128| match (square(sum), n.checked_mul(squares)) {
@@ -244,7 +245,7 @@ pub fn combine(paths: &[PathBuf]) -> Result<(Report, Vec<PathBuf>)> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::BinSums;
+    use super::super::bins::BinSums;
     use super::*;
 
     fn sums_of(counts: &[u64], background: &[u64], n_b: usize) -> BinSums {

@@ -2,7 +2,7 @@
 //! into shards: [`Validation::new`] sets it up from the config and options (the models
 //! to compare with, the samplers to draw from), [`Validation::draw`] draws any range of
 //! realizations into exact [`Sums`], and [`Validation::report`] judges the sums of all
-//! of them. Sums add exactly, so the sums of the shards ([`super::partial`]) give the
+//! of them. Sums add exactly, so the sums of the shards (`validate::partial`) give the
 //! single run's report bit for bit.
 
 use std::ops::Range;
@@ -11,11 +11,13 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use serde::{Deserialize, Serialize};
 
-use super::{
-    BinSums, ChannelBins, MIN_REALIZATIONS, Report, SimulatorSource, accumulate,
-    afterpulsed_bin_models, analog_bin_models, bin_models, bin_reports, recorded_bin_models, scene,
-    verdicts,
+use super::bins::{
+    BinSums, ChannelBins, MIN_REALIZATIONS, SimulatorSource, accumulate, bin_reports,
 };
+use super::model::{afterpulsed_bin_models, analog_bin_models, bin_models, recorded_bin_models};
+use super::report::Report;
+use super::scene;
+use super::statistics::verdicts;
 use crate::config::Method;
 use crate::error::{Error, Result};
 use crate::laser::PulseEnergy;
@@ -68,7 +70,7 @@ enum Kind {
     /// Profiles of one law: the simulator's samplers and each bin's model.
     Identical {
         source: SimulatorSource,
-        models: Vec<super::BinModel>,
+        models: Vec<super::model::BinModel>,
         channels: Vec<ChannelBins>,
         totals: Vec<f64>,
         background_bins: usize,
@@ -261,11 +263,11 @@ pub fn run(lidar: &Lidar, opts: &ValidateOptions) -> Result<Report> {
 /// A source whose realizations are drawn only while `go` says so (an empty profile
 /// after: [`run_cancellable`] throws those sums away).
 struct UntilCancelled<'a> {
-    source: &'a dyn super::RealizationSource,
+    source: &'a dyn super::bins::RealizationSource,
     go: &'a (dyn Fn() -> bool + Sync),
 }
 
-impl super::RealizationSource for UntilCancelled<'_> {
+impl super::bins::RealizationSource for UntilCancelled<'_> {
     fn draw(&self, p: u64, counts: &mut [u64]) {
         if (self.go)() {
             self.source.draw(p, counts);
@@ -419,7 +421,11 @@ fn check_sizes(
 /// Refuses a run whose exact sums could overflow 128 bits: `Σu²` over `n` realizations,
 /// `u = n_b·c − B` bounded by `n_b` times a count far beyond any draw
 /// (`κ1 + 20√κ1 + 64`, as [`crate::output::raw_file::CountWidth`] bounds counts).
-fn check_exact_sums(models: &[super::BinModel], channels: &[ChannelBins], n: usize) -> Result<()> {
+fn check_exact_sums(
+    models: &[super::model::BinModel],
+    channels: &[ChannelBins],
+    n: usize,
+) -> Result<()> {
     let k1 = models.iter().map(|m| m.cumulants[0]).fold(0.0, f64::max);
     let count = k1 + 20.0 * k1.sqrt() + 64.0;
     let n_b = channels

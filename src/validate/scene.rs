@@ -14,15 +14,18 @@
 //!   summed over the profiles and turned into an Edgeworth-calibrated interval
 //!   ([`super::calibration`]) where `ΣE[c] ≥ 100`.
 //!
-//! The verdicts are those of [`super::validate_channels`]: per statistic the outside
+//! The verdicts are those of [`super::bins::validate_channels`]: per statistic the outside
 //! count and Σz², each at level 2.5·10⁻⁴.
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::calibration;
+use super::calibration::Check;
 use super::exact::ExactSum;
-use super::{BinModel, BinReport, Check, MIN_TOTAL_COUNTS, Stat, mean_z, verdicts};
+use super::model::BinModel;
+use super::report::{BinReport, Stat};
+use super::statistics::{MIN_TOTAL_COUNTS, mean_z, verdicts};
 
 /// Per-bin sums over the profiles: the count's exactly, the floating-point ones in
 /// [`ExactSum`]s, so that sums over shards add up to the single run's bit for bit.

@@ -5,8 +5,9 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, Gamma, Poisson as PoissonDraw};
 use rand_pcg::Pcg64Mcg;
 
+use super::BinModel;
 use super::calibration::{CHECK_LEVEL, check_calibrated, z_interval};
-use super::{BinModel, mean_z};
+use super::statistics::mean_z;
 
 /// Poisson(μ) PMF over 0..=k_max by the recursion p(k) = p(k−1)·μ/k, from the mode in
 /// log space so that large μ does not underflow.

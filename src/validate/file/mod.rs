@@ -37,7 +37,9 @@
 use std::path::Path;
 
 use super::exact::ExactSum;
-use super::{BinModel, BinReport, MIN_TOTAL_COUNTS, Report, Stat, mean_z, scene};
+use super::scene;
+use super::statistics::{MIN_TOTAL_COUNTS, mean_z};
+use super::{BinModel, BinReport, Report, Stat};
 use crate::detector::{DeadTime, DeadTimeModel};
 use crate::error::{Error, Result};
 use crate::output::raw_file::read::{self, RawHeader};
@@ -129,7 +131,7 @@ pub fn check_file(path: &Path) -> Result<(Report, Vec<String>)> {
             )
         })
         .collect();
-    let checks = super::verdicts(&bins);
+    let checks = super::statistics::verdicts(&bins);
     let notes = not_judged(&channels, &judged, header.n_profiles);
     if judged.iter().all(|&n| n == 0) {
         return Err(Error::output(
@@ -318,7 +320,7 @@ pub fn write_file_table(
         r.channels.join(", ")
     )?;
     writeln!(w)?;
-    super::write_body(w, r)?;
+    super::report::write_body(w, r)?;
     for n in notes {
         writeln!(w, "{n}")?;
     }
