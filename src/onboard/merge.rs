@@ -28,9 +28,8 @@ use crate::output::product::{ProductHeader, ProductWriter, RegionSpec};
 use crate::output::product::{ProfileRow, RegionTruth};
 use crate::output::raw_file::AttrValue;
 use crate::safe_file::{OutputId, Outputs};
-use crate::shard::merge::MergeSummary;
 use crate::shard::{
-    FileAttributes, Piece, RunIdentity, Shard, ShardKind, check_pieces, open_shard,
+    FileAttributes, MergeSummary, Piece, RunIdentity, Shard, ShardKind, check_pieces, open_shard,
     require_disk_for_merge,
 };
 

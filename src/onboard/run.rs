@@ -17,6 +17,7 @@ use crate::config::Method;
 use crate::error::{Error, Result};
 use crate::output::product::{ProductHeader, ProductWriter, ProfileRow, RegionSpec};
 use crate::output::raw_file::AttrValue;
+use crate::output::raw_file::content::PRODUCT_ATTRIBUTE;
 use crate::safe_file::{OutputId, Outputs, Stream};
 use crate::scenario::{ExpectedProfile, Lidar};
 use crate::shard::{SHARD_ATTRIBUTES, Shard, fingerprint_with};
@@ -46,9 +47,6 @@ pub struct OnboardOptions {
     /// [`crate::output::raw_file::content::PRODUCT_HISTORY_OMITS`]).
     pub command_line: String,
 }
-
-/// The root attribute that marks a file as an onboard product.
-pub const PRODUCT_ATTRIBUTE: &str = "lidarsim_product";
 
 /// The method of every onboard run: shot by shot.
 pub const METHOD: &str = "shot";

@@ -13,6 +13,7 @@ use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
+pub mod merge;
 pub mod scene;
 
 use crate::config::Method;
@@ -588,7 +589,7 @@ pub fn run_energy(lidar: &Lidar, seed: u64, duration_s: f64) -> Result<RunEnergy
 
 /// What a run is before any count is drawn: the resolved seed, method, model and scene,
 /// and the raw file of the whole run. `simulate` draws from it; `merge`
-/// ([`crate::shard::merge`]) builds it again from a shard's stored config, so that both
+/// ([`merge`]) builds it again from a shard's stored config, so that both
 /// write the same file.
 pub struct RunPlan {
     /// Seed of the counts.
