@@ -17,7 +17,8 @@ use std::time::Instant;
 use hdf5::Dataset;
 use ndarray::{Ix1, Ix2, Ix3, s};
 
-use super::{ResolvedMethod, RunOptions, RunPlan, plan};
+use super::method::ResolvedMethod;
+use super::plan::{RunOptions, RunPlan, plan};
 use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
 use crate::output::raw_file::check::RecordShape;
