@@ -595,11 +595,11 @@ fn publish(
 }
 
 /// `lidarsim merge OUT.h5 SHARD.h5 ...`: the shards of one run into the file of the
-/// whole run ([`crate::shard::merge`]), then one line on stderr.
+/// whole run ([`crate::simulate::merge`]), then one line on stderr.
 pub fn merge(out: &Path, shards: &[PathBuf]) -> Result<()> {
     let summary = match crate::shard::kind_of_shards(shards)? {
         crate::shard::ShardKind::Raw => {
-            let m = crate::shard::merge::prepare(out, shards)?;
+            let m = crate::simulate::merge::prepare(out, shards)?;
             let inputs = input_files(m.lidar.first());
             let mut outputs = Outputs::new(shards.iter().chain(&inputs).map(PathBuf::as_path));
             let id = outputs.add("OUT.h5", out, Stream::Binary)?;

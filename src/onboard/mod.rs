@@ -6,12 +6,16 @@
 //! broken cloud or with dead time it does not, and that is what averaging studies
 //! measure.
 
+mod draw;
+pub mod identity;
 pub mod merge;
+pub mod native;
 pub mod partial;
 pub mod report;
 pub mod run;
 pub mod scheme;
 pub mod shard;
+mod shard_region;
 pub mod sum;
 pub mod truth;
 

@@ -12,8 +12,9 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::Scheme;
+use super::identity::{METHOD, source};
+use super::native::NativeRun;
 use super::report::SchemeSums;
-use super::run::{METHOD, NativeRun, source};
 use super::shard::shard_shots;
 use crate::error::{Error, Result};
 use crate::shard::{Piece, RunIdentity, Shard, check_pieces, read_partial, stored_lidar};

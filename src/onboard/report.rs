@@ -5,7 +5,7 @@
 //! Its sums are exact, so they do not depend on the order of the profiles: integer sums
 //! of the downlinked counts (each region's first channel) for the empirical S/N, and exact sums
 //! ([`ExactSum`]) of the averaging biases. The single run and the combined partials of
-//! its shards ([`super::partial`]) add the same terms and write the same report, byte for
+//! its shards (`onboard::partial`) add the same terms and write the same report, byte for
 //! byte.
 
 use std::io::Write;

@@ -1,6 +1,6 @@
 //! The onboard summation: native shot-level counts in, integer sums per region out.
 
-use super::RegionLayout;
+use super::scheme::RegionLayout;
 
 /// Sums consecutive single-shot native profiles into each region's downlinked profiles,
 /// every channel (native profiles and sums channel-major).
@@ -16,7 +16,7 @@ pub struct Averager {
 
 impl Averager {
     /// An averager for one channel of `n_bins` native bins (`regions` from
-    /// [`super::Scheme::layout`]).
+    /// [`super::scheme::Scheme::layout`]).
     pub fn new(regions: Vec<RegionLayout>, n_bins: usize) -> Self {
         Self::with_channels(regions, 1, n_bins)
     }

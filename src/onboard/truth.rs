@@ -374,7 +374,7 @@ impl ProfileRows {
             .map(|&c| self.nominal_energy_j[c] * factor)
             .collect();
         if let Some(o) = &self.orbit {
-            let g = o.position(super::run::profile_time(j, r.shots, self.rep_rate_hz));
+            let g = o.position(profile_time(j, r.shots, self.rep_rate_hz));
             values.extend([g.latitude_deg, g.longitude_deg, g.along_track_m]);
         }
         values.extend(p.background.iter().map(|b| b / n));
@@ -383,4 +383,9 @@ impl ProfileRows {
         values.extend(weights);
         (values, columns)
     }
+}
+
+/// Profile-centre time of profile `j` of a region of `shots` shots, s since the start.
+pub fn profile_time(j: usize, shots: u32, rep_rate_hz: f64) -> f64 {
+    (j as f64 + 0.5) * f64::from(shots) / rep_rate_hz
 }

@@ -4,13 +4,13 @@
 //! of its own, as CALIOP's 1064 nm) and `bin` dimension scales, `altitude`, `time`, `n_shots` and
 //! `counts (profile, channel, bin)` (integer sums, u32), and the region's attributes
 //! `altitude_min_km`, `altitude_max_km`, `vertical_resolution_m`, `shots_averaged`,
-//! `native_bins_merged`, and the truth averaged as the counts (`crate::onboard::truth`).
+//! `native_bins_merged`, and the truth averaged as the counts (`onboard::truth`).
 //! Readable as netCDF-4 (groups with dimensions of their own).
 //!
 //! The bytes depend on the content only (as the raw file's, `raw_file::layout`): no
 //! modification times, and `counts` written a whole chunk at a time by HDF5's direct
 //! chunk write, in the order the rows complete their chunks, so that the merge of a
-//! run's shards ([`crate::onboard::merge`]), sending the rows in the whole run's order,
+//! run's shards (`onboard::merge`), sending the rows in the whole run's order,
 //! writes the whole run's file byte for byte.
 
 use std::ops::Range;

@@ -10,7 +10,7 @@
 //! Slurm first; a Slurm array need not start at 0 (`--array=1-8`), so its index counts
 //! from `SLURM_ARRAY_TASK_MIN`, in steps of `SLURM_ARRAY_TASK_STEP` (1 when unset).
 
-use super::Shard;
+use super::cut::Shard;
 use crate::error::{Error, Result};
 
 /// Slurm's array task id.

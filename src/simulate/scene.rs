@@ -15,7 +15,9 @@
 
 use std::collections::HashMap;
 
-use super::{ResolvedMethod, RunEnergy, StreamSampler};
+use super::energy::RunEnergy;
+use super::method::ResolvedMethod;
+use super::sampler::StreamSampler;
 use crate::config::{BackgroundModel, ScenarioConfig};
 use crate::detector::DeadTime;
 use crate::detector::dead_time::{ARRIVAL_STREAM, Scratch};
@@ -155,7 +157,7 @@ impl Sunlight {
             .duration_since(std::time::UNIX_EPOCH)
             .map_or(0.0, |d| d.as_secs_f64());
         Ok(Some(Sunlight {
-            orbit: super::orbit_of(lidar)?,
+            orbit: super::orbit::orbit_of(lidar)?,
             fixed_zenith_deg: b.solar_zenith_deg,
             start_unix_s,
             profile_time_s: first.shots_per_profile() as f64 / first.instrument.rep_rate_hz,
@@ -208,7 +210,7 @@ impl SceneModel {
             .map(|c| with_curtain(&c.loaded))
             .collect::<Result<_>>()?;
         // with an orbit, the length of the track the file's latitudes and longitudes describe
-        let along = match super::orbit_of(lidar)? {
+        let along = match super::orbit::orbit_of(lidar)? {
             Some(o) => AlongTrack::Orbit(o),
             None => AlongTrack::Speed(crate::geometry::ground_track_speed_m_per_s(
                 first.geometry.platform_altitude_m,

@@ -49,7 +49,9 @@ pub fn read(file: &Path, channel: Option<&str>, truth: bool) -> Result<Quicklook
     crate::input_file::check("FILE", file)?;
     let f = hdf5::File::open(file)
         .map_err(|_| Error::output(file, "not a lidarsim raw file or product (not HDF5)"))?;
-    if f.attr(crate::onboard::run::PRODUCT_ATTRIBUTE).is_ok() {
+    if f.attr(crate::output::raw_file::content::PRODUCT_ATTRIBUTE)
+        .is_ok()
+    {
         product::read(file, &f, channel, truth)
     } else {
         raw::read(file, &f, channel, truth)

@@ -41,6 +41,9 @@ pub const HISTORY_OMITS: [&str; 4] = ["-o", "--output", "--shard", "--threads"];
 /// record the same history.
 pub const PRODUCT_HISTORY_OMITS: [&str; 3] = ["--report", "--partial", "--raw"];
 
+/// The root attribute that marks a file as an onboard product.
+pub const PRODUCT_ATTRIBUTE: &str = "lidarsim_product";
+
 /// The command line as `history` records it: the program as `lidarsim`, then every
 /// argument but those of [`HISTORY_OMITS`] (as `-o X`, `--output=X` or `-oX`).
 pub fn history_command(args: impl IntoIterator<Item = String>) -> String {

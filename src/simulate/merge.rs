@@ -2,25 +2,23 @@
 //! run writes, byte for byte when `SOURCE_DATE_EPOCH` is set (docs/scale.md).
 //!
 //! 1. Each shard's root attributes say which run it belongs to and which profiles it
-//!    holds ([`super::SHARD_ATTRIBUTES`]); shards of different runs, a gap, an overlap
-//!    or a file that is not a shard are refused, naming the file.
+//!    holds ([`crate::shard::SHARD_ATTRIBUTES`]); shards of different runs, a gap, an
+//!    overlap or a file that is not a shard are refused, naming the file.
 //! 2. The whole run's [`RawFileSpec`] is built again from the stored config, seed and
-//!    method by [`simulate::plan`], the very code `simulate` uses, and its
-//!    [`run_id`] must be the shards' (else this lidarsim would write another file).
+//!    method by [`plan`], the very code `simulate` uses, and its [`run_id`] must be the
+//!    shards' (else this lidarsim would write another file).
 //! 3. Each shard's rows (counts, components, `time`, `n_shots`, `pulse_energy` and every
 //!    per-profile variable) are streamed in order into [`RawFileWriter`], in blocks of
 //!    at most [`BLOCK_BYTES`]: memory does not grow with the run.
 
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use hdf5::Dataset;
 use ndarray::{Ix1, Ix2, Ix3, s};
 
-use super::{
-    FileAttributes, Piece, RunIdentity, Shard, ShardKind, check_pieces, open_shard,
-    require_disk_for_merge, run_id, stored_lidar,
-};
+use super::method::ResolvedMethod;
+use super::plan::{RunOptions, RunPlan, plan};
 use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
 use crate::output::raw_file::check::RecordShape;
@@ -29,7 +27,10 @@ use crate::output::raw_file::{
 };
 use crate::safe_file::{OutputId, Outputs};
 use crate::scenario::Lidar;
-use crate::simulate::{self, ResolvedMethod, RunOptions, RunPlan};
+use crate::shard::{
+    FileAttributes, MergeSummary, Piece, RunIdentity, Shard, ShardKind, check_pieces, open_shard,
+    require_disk_for_merge, run_id, stored_lidar,
+};
 
 /// Bytes of rows read from a shard at once (every per-profile variable together).
 pub const BLOCK_BYTES: usize = 8 << 20;
@@ -140,38 +141,6 @@ impl ShardFile {
     }
 }
 
-/// What a merge did, for its closing line.
-#[derive(Debug, Clone)]
-pub struct MergeSummary {
-    /// The file written.
-    pub output: PathBuf,
-    /// Shards merged.
-    pub shards: usize,
-    /// Profiles (or shots) of the run.
-    pub profiles: usize,
-    /// What `profiles` counts: `profiles` (raw shards) or `shots` (product shards).
-    pub what: &'static str,
-    /// What was written: `file` (raw) or `product`.
-    pub file: &'static str,
-    /// Wall time.
-    pub elapsed: Duration,
-}
-
-impl std::fmt::Display for MergeSummary {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "Merged {} shards into {}: {} {}, the {} of the whole run; {:.3} s.",
-            self.shards,
-            self.output.display(),
-            self.profiles,
-            self.what,
-            self.file,
-            self.elapsed.as_secs_f64()
-        )
-    }
-}
-
 /// A merge checked and planned, ready to write: the shards in the run's order, and the
 /// whole run as `simulate` would draw it.
 pub struct Merge {
@@ -199,7 +168,7 @@ pub fn prepare(out: &Path, shards: &[PathBuf]) -> Result<Merge> {
     let order = check_pieces(&pieces, "shard", "profiles", |s| s.rows(first.run_profiles))?;
     let lidar = stored_lidar(&first.config, &first.config_file)?;
     let (opts, method) = first.run_options(out)?;
-    let plan = simulate::plan(&lidar, &opts, Some(method))?;
+    let plan = plan(&lidar, &opts, Some(method))?;
     let rebuilt = run_id(&plan.spec);
     if rebuilt != first.run_id {
         return Err(Error::output(

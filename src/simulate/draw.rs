@@ -1,0 +1,186 @@
+//! The drawing loop of a planned run: profiles drawn in parallel batches and handed to a
+//! sink (the raw file, or memory) in order; its progress bar.
+
+use std::time::{Duration, Instant};
+
+use rayon::prelude::*;
+
+use super::changing::{SceneDraw, draw_scene_counts, scene_profile_values};
+use super::drawn::{DrawnProfile, STATIC_COLUMN, draw_profile};
+use super::orbit::orbit_of;
+use super::plan::{RunOptions, RunPlan};
+use super::sampler::{StreamSampler, channel_seed, stream_samplers};
+use crate::error::{Error, Result};
+use crate::output::raw_file::{ProfileRecord, ProfileSink};
+use crate::scenario::Lidar;
+
+/// Whether the caller asked the run to stop ([`RunOptions::cancel`]).
+fn cancelled(opts: &RunOptions) -> bool {
+    opts.cancel
+        .as_ref()
+        .is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed))
+}
+
+/// Draws profiles `rows` of a planned run and hands them to `sink` in order, profile by
+/// profile; returns the sum of their counts and the time spent drawing. Stops with
+/// [`Error::Interrupted`] between batches (and skips the rest of a batch's profiles)
+/// once [`RunOptions::cancel`] is set.
+pub(super) fn draw_into<S: ProfileSink>(
+    lidar: &Lidar,
+    planned: &RunPlan,
+    rows: std::ops::Range<usize>,
+    opts: &RunOptions,
+    sink: &mut S,
+) -> Result<(u64, Duration)> {
+    let first = lidar.first();
+    let RunPlan {
+        seed,
+        components,
+        method,
+        ref expected,
+        energy,
+        ref scene,
+        ..
+    } = *planned;
+    let shots = first.shots_per_profile();
+    let profile_time_s = shots as f64 / first.instrument.rep_rate_hz;
+    let n_bins = first.geometry.n_bins;
+    let orbit = orbit_of(lidar)?;
+
+    let channels: Vec<Vec<(StreamSampler, u64)>> = lidar
+        .channels
+        .iter()
+        .zip(expected)
+        .enumerate()
+        .map(|(k, (c, e))| {
+            let seed = channel_seed(seed, lidar.photon_source(k));
+            stream_samplers(e, method, energy, components, seed, &c.instrument)
+        })
+        .collect();
+    // each channel's laser line has its own nominal energy; the shots' factors are shared
+    let nominal_energy_j: Vec<f64> = lidar
+        .channels
+        .iter()
+        .map(|c| c.loaded.config.instrument.pulse_energy_j)
+        .collect();
+    let progress = progress_bar(opts.progress, rows.len());
+    let streams = channels.len() * channels[0].len();
+    // batch size: bounded memory (at most 32 MiB of counts) and a lively progress bar
+    let batch = ((4 << 20) / (n_bins * streams).max(1)).clamp(1, 64);
+    let mut total_counts = 0u64;
+    let mut drawing = Duration::ZERO;
+    // Batch k is drawn while batch k − 1 is handed to the writer (whose chunk compression
+    // runs on the same pool): the writer gets the profiles in order whatever the thread
+    // count, so the file's bytes do not depend on it.
+    let draw_batch = |first_profile: usize| -> Option<Batch> {
+        let last = (first_profile + batch).min(rows.end);
+        let draw_start = Instant::now();
+        let n_channels = lidar.channels.len();
+        let mut drawn: Vec<(DrawnProfile, Option<SceneDraw>)> = (first_profile..last)
+            .into_par_iter()
+            .map(|p| {
+                if cancelled(opts) {
+                    return None;
+                }
+                Some(match scene {
+                    Some(sc) => {
+                        let (d, draw) =
+                            draw_scene_counts(sc, seed, n_channels, p as u64, n_bins, &energy);
+                        (d, Some(draw))
+                    }
+                    None => (
+                        draw_profile(&channels, p as u64, shots, n_bins, components, &energy),
+                        None,
+                    ),
+                })
+            })
+            .collect::<Option<_>>()?;
+        let took = draw_start.elapsed();
+        // the truth of a changing scene's profiles (the model, not the draw)
+        if let Some(sc) = scene {
+            drawn.par_iter_mut().for_each(|(d, draw)| {
+                if let Some(draw) = draw {
+                    d.values = scene_profile_values(sc, n_bins, draw);
+                }
+            });
+        }
+        // summed here, in parallel, not on the writer's thread
+        let counted: u64 = drawn
+            .par_iter()
+            .map(|(d, _)| d.counts.iter().sum::<u64>())
+            .sum();
+        let drawn: Vec<DrawnProfile> = drawn.into_iter().map(|(d, _)| d).collect();
+        Some((first_profile, drawn, took, counted))
+    };
+    let mut write_batch = |(first_profile, drawn, took, counted): Batch| {
+        drawing += took;
+        total_counts += counted;
+        for (k, d) in drawn.iter().enumerate() {
+            let index = first_profile + k;
+            let place = orbit.as_ref().map(|o| {
+                let g = o.position((index as f64 + 0.5) * profile_time_s);
+                [[g.latitude_deg], [g.longitude_deg], [g.along_track_m]]
+            });
+            let values: Vec<&[f64]> = d
+                .values
+                .iter()
+                .map(Vec::as_slice)
+                .chain(place.iter().flat_map(|p| p.iter().map(|v| &v[..])))
+                .collect();
+            // E0_c·(Σf_s/M): exactly E0_c when every factor is 1
+            let factor = d.energy_sum / shots as f64;
+            let pulse_energy_j: Vec<f64> = nominal_energy_j.iter().map(|e0| e0 * factor).collect();
+            sink.write_profile(&ProfileRecord {
+                index: index - rows.start,
+                time_s: index as f64 * profile_time_s + 0.5 * profile_time_s,
+                n_shots: shots,
+                pulse_energy_j: &pulse_energy_j,
+                counts: &d.counts,
+                components: d
+                    .components
+                    .as_ref()
+                    .map(|[s, b, k]| [&s[..], &b[..], &k[..]]),
+                values: &values,
+                columns: d.columns.as_ref().map_or(STATIC_COLUMN.0, |c| &c.0),
+                column_weights: d.columns.as_ref().map_or(STATIC_COLUMN.1, |c| &c.1),
+            })?;
+        }
+        progress.inc(drawn.len() as u64);
+        Ok::<(), Error>(())
+    };
+    let mut pending = None;
+    for first_profile in rows.clone().step_by(batch) {
+        let (drawn, written) = rayon::join(
+            || draw_batch(first_profile),
+            || pending.take().map_or(Ok(()), &mut write_batch),
+        );
+        written?;
+        match drawn {
+            Some(drawn) if !cancelled(opts) => pending = Some(drawn),
+            _ => return Err(Error::Interrupted),
+        }
+    }
+    if let Some(last) = pending {
+        write_batch(last)?;
+    }
+    progress.finish_and_clear();
+    Ok((total_counts, drawing))
+}
+
+/// A drawn batch: its first profile, its profiles, the time their counts took to draw,
+/// and the sum of their counts.
+type Batch = (usize, Vec<DrawnProfile>, Duration, u64);
+
+pub fn progress_bar(show: bool, profiles: usize) -> indicatif::ProgressBar {
+    if !show {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(profiles as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} {pos}/{len} profiles [{bar:40}] {elapsed} (eta {eta})",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
+}
