@@ -24,7 +24,7 @@
 //!
 //! Between rows the number density is interpolated linearly in ln N; below the
 //! bottom row it is held at the bottom value. Above the top row this type gives 0;
-//! the atmosphere (`super::molecules::Molecules`) continues a profile that ends below 86 km
+//! the atmosphere (`Molecules`, in `molecules`) continues a profile that ends below 86 km
 //! with the US Standard Atmosphere 1976, scaled to match at the top row, and says so
 //! in the run's notes.
 

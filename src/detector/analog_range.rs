@@ -142,3 +142,60 @@ impl Analog {
 fn normal_cdf(x: f64) -> f64 {
     0.5 * statrs::function::erf::erfc(-x / std::f64::consts::SQRT_2)
 }
+
+/// The linear range and the clipping warning, from the laws above.
+impl Analog {
+    /// Whether each bin's record is linear in its photoelectrons (the file's
+    /// `linear_range`, this file): the mean code above the offset is at least
+    /// the rms of one shot's electronic noise and rounding (below, a shot's code is mostly
+    /// noise), a shot's code leaves the ADC's range with probability at most
+    /// `CLIP_PROBABILITY` (from the law of the code), and the low-passed photoelectrons
+    /// are the bin's own to `PROPORTIONAL_TOLERANCE` (the ratio to the photon counts is
+    /// the gluing constant there).
+    pub fn linear_bins(&self, lambda: &[f64]) -> Vec<bool> {
+        let floor = (self.noise_codes().powi(2) + 1.0 / 12.0).sqrt();
+        let clipping = self.clipping_bins(lambda);
+        let proportional = self.proportional_bins(lambda);
+        self.expected_codes(lambda)
+            .iter()
+            .zip(clipping.iter().zip(&proportional))
+            .map(|(&m, (&clips, &prop))| m - self.offset_codes() >= floor && !clips && prop)
+            .collect()
+    }
+
+    /// The warning for a chain whose law the codes leave: electronic noise below one
+    /// code (the rounding's bias is then up to `e^{−2π²σ²}/π` codes a shot), or bins whose
+    /// codes leave the ADC's range with a probability above `CLIP_PROBABILITY` a shot
+    /// (clipping, this file), naming the first such bin; `None` when neither.
+    pub fn clipping_warning(&self, lambda: &[f64], altitude_m: &[f64]) -> Option<String> {
+        let sigma = self.noise_codes();
+        if sigma < 1.0 {
+            let bias =
+                (-2.0 * std::f64::consts::PI.powi(2) * sigma * sigma).exp() / std::f64::consts::PI;
+            return Some(format!(
+                "lidarsim: warning: the analog electronic noise is {sigma:.2} ADC codes, below \
+                 one: rounding may bias a shot's code by up to {bias:.2e} codes, which \
+                 expected_counts leaves out; raise instrument.detector.electronic_noise_v to \
+                 at least {:.3e} V (one code) or narrow adc_range_v",
+                self.volts_per_code()
+            ));
+        }
+        let full = self.full_scale_code();
+        let limit = CLIP_PROBABILITY;
+        let (bin, (lo, hi)) = self
+            .clipping_probabilities(lambda)
+            .into_iter()
+            .enumerate()
+            .find(|(_, (lo, hi))| *lo > limit || *hi > limit)?;
+        let mean = self.expected_codes(&lambda[..=bin])[bin];
+        Some(format!(
+            "lidarsim: warning: analog bin {bin} ({:.2} km) has a mean of {mean:.1} codes per \
+             shot and its codes leave the ADC's range (0, {full}) with a probability up to \
+             {:.1e} a shot (above {limit:e}): they clip, and expected_counts (which has no \
+             clipping) overstates or understates them; change instrument.detector.adc_range_v, \
+             offset_v or gain",
+            altitude_m.get(bin).copied().unwrap_or(f64::NAN) / 1e3,
+            lo.max(hi)
+        ))
+    }
+}

@@ -24,7 +24,7 @@
 //! grid step ([`DeadTime::solve`]), the midpoint rule in a (step min(τ, Δt)/64). Then
 //! `Var K = E_r E[X² | r] − (E_r E[X | r])²`.
 //!
-//! Where the grid is too long ([`super::dead_time::MAX_GRID_STEPS`]) the state entering a
+//! Where the grid is too long ([`MAX_GRID_STEPS`](super::dead_time::MAX_GRID_STEPS)) the state entering a
 //! bin is taken stationary (live with probability `1/(1+nτ)`, else r uniform on (0, τ)),
 //! as the mean is.
 //!

@@ -128,7 +128,7 @@ pub struct ChannelConfig {
     #[serde(skip)]
     pub spectral_filter: Option<SpectralFilter>,
     /// What this channel of the file records: photon counts or analog codes (a `both`
-    /// detector is two channels of the file, one of each, [`super::split_detection_modes`]).
+    /// detector is two channels of the file, one of each, `split_detection_modes` (in `receiver`)).
     #[serde(skip)]
     pub record: Record,
     /// The other channel of a `both` pair (its index among the receiver's channels).
@@ -328,7 +328,7 @@ pub fn spectral_filter(
         values
             .iter()
             .enumerate()
-            .map(|(i, v)| super::number(v, &format!("{name}.{k}[{i}]"), file))
+            .map(|(i, v)| number(v, &format!("{name}.{k}[{i}]"), file))
             .collect()
     };
     let (offsets, transmissions) = (column("offset_ghz")?, column("transmission")?);
@@ -509,6 +509,20 @@ pub fn channel_label(value: &toml::Value, key: &str, file: &str) -> Result<Strin
         return Err(fail("must not contain control characters"));
     }
     Ok(name.to_string())
+}
+
+/// A finite number (an integer is taken as a float), for a channel's own keys.
+pub(super) fn number(value: &toml::Value, key: &str, file: &str) -> Result<f64> {
+    let x = match value {
+        toml::Value::Float(x) => *x,
+        toml::Value::Integer(i) => *i as f64,
+        _ => return Err(Error::config(file, key, "must be a number")),
+    };
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(Error::config(file, key, "must be a finite number"))
+    }
 }
 
 #[cfg(test)]

@@ -21,6 +21,7 @@ pub use polarization::{PolarizationOptics, analyser_transmission, delta90_calibr
 
 use crate::config::{self, ScenarioConfig};
 use crate::error::{Error, Result};
+use channel::number;
 
 /// Keys shared by every channel: the laser's timing and energy statistics, the
 /// digitizer's bins, the telescope's overlap.
@@ -300,20 +301,6 @@ fn expand_one(
     };
     channel.name = name.unwrap_or_else(|| channel.default_name());
     Ok(channel)
-}
-
-/// A finite number (an integer is taken as a float), for a channel's own keys.
-fn number(value: &toml::Value, key: &str, file: &str) -> Result<f64> {
-    let x = match value {
-        toml::Value::Float(x) => *x,
-        toml::Value::Integer(i) => *i as f64,
-        _ => return Err(Error::config(file, key, "must be a number")),
-    };
-    if x.is_finite() {
-        Ok(x)
-    } else {
-        Err(Error::config(file, key, "must be a finite number"))
-    }
 }
 
 /// `inst[key]` = `value`, merged key by key into an existing table.

@@ -3,7 +3,7 @@
 //! diffuse return ([`wide_angle::wide_angle_backscatter`]) on gates of the bins' width,
 //! each bin's apparent over its single-scattering signal.
 
-use super::BeamPath;
+use super::beam_path::BeamPath;
 use crate::atmosphere::multiple_scattering as ms;
 use crate::atmosphere::wide_angle::{self, Gate};
 

@@ -40,7 +40,7 @@
 //!
 //! **Variance** ([`DeadTime::recorded_mean_and_variance`]) of a bin's recorded count per
 //! shot: non-paralyzable, exact given the dead time the solver carries into each bin
-//! ([`super::dead_time_variance`]); paralyzable, the renewal-theory form
+//! (`detector::dead_time_variance`); paralyzable, the renewal-theory form
 //! `mΔt·(1 − 2nτ·e^{−nτ})` at the bin's rate ([`DeadTime::recorded_variance`], whose
 //! non-paralyzable `nΔt/(1+nτ)³` is the asymptote for bins much longer than the count's
 //! correlation time, ~(nτ)²·τ: 11× too low at nτ = 40 in bins of 40τ).

@@ -4,7 +4,7 @@
 
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
-use super::spec::{AttrValue, CONVENTIONS, Dims, FORMAT_VERSION, Variable};
+use super::spec::{AttrValue, CONVENTIONS, Dims, FORMAT_VERSION, Variable, var};
 use super::truth;
 use crate::error::{Error, Result};
 use crate::scenario::{ExpectedProfile, Lidar, Scenario};
@@ -99,27 +99,6 @@ pub fn creation_time() -> Result<String> {
         Err(_) => SystemTime::now(),
     };
     Ok(humantime::format_rfc3339_seconds(t).to_string())
-}
-
-pub(super) fn var(
-    name: &str,
-    dims: Dims,
-    long_name: &str,
-    units: &str,
-    attributes: &[(&str, &str)],
-    data: Vec<f64>,
-) -> Variable {
-    Variable {
-        name: name.into(),
-        dims,
-        long_name: long_name.into(),
-        units: units.into(),
-        attributes: attributes
-            .iter()
-            .map(|(k, v)| (k.to_string(), AttrValue::Str(v.to_string())))
-            .collect(),
-        data,
-    }
 }
 
 /// The values of `f` for every channel, channel-major.

@@ -261,3 +261,25 @@ pub struct ProfileRecord<'a> {
     /// slot), summing to 1.
     pub column_weights: &'a [f64],
 }
+
+/// A float variable with its CF `long_name`, `units` and further text attributes.
+pub(super) fn var(
+    name: &str,
+    dims: Dims,
+    long_name: &str,
+    units: &str,
+    attributes: &[(&str, &str)],
+    data: Vec<f64>,
+) -> Variable {
+    Variable {
+        name: name.into(),
+        dims,
+        long_name: long_name.into(),
+        units: units.into(),
+        attributes: attributes
+            .iter()
+            .map(|(k, v)| (k.to_string(), AttrValue::Str(v.to_string())))
+            .collect(),
+        data,
+    }
+}

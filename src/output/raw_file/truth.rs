@@ -3,7 +3,7 @@
 //! each bin centre, the particle properties, `t2` and the molecular state; and the
 //! channel's description (kind, polarization, filter, detector, molecular line).
 
-use super::content::var;
+use super::spec::var;
 use super::spec::{AttrValue, Dims, TextVariable, Variable};
 use crate::detector::DeadTimeModel;
 use crate::scenario::{ExpectedProfile, Lidar, Scenario};

@@ -36,7 +36,6 @@
 
 use std::path::Path;
 
-use super::exact::ExactSum;
 use super::scene;
 use super::statistics::{MIN_TOTAL_COUNTS, mean_z};
 use super::{BinModel, BinReport, Report, Stat};
@@ -45,49 +44,14 @@ use crate::error::{Error, Result};
 use crate::output::raw_file::read::{self, RawHeader};
 
 mod reader;
+mod sums;
 use reader::{Reader, read_all};
+use sums::{Channels, Sums};
 
 /// Counts read at once (with their expectations: 8 bytes each, five arrays at most).
 pub const BLOCK_VALUES: usize = 1 << 20;
 /// Memory held per bin: the sums and the report.
 const BYTES_PER_BIN: f64 = 1200.0;
-
-/// Per-bin sums over the judged profiles.
-#[derive(Debug, Clone, Default)]
-struct Sums {
-    total: u128,
-    mu: ExactSum,
-    var: ExactSum,
-    v: ExactSum,
-    var_y: ExactSum,
-    k3: ExactSum,
-    k4: ExactSum,
-}
-
-impl Sums {
-    /// A count `c` of mean `mu` and variance `var` (Poisson-shaped at that variance):
-    /// `Y = (c − μ)²` has `E Y = var` and the cumulants of [`super::scene`] at `var`.
-    fn push(&mut self, c: u64, mu: f64, var: f64) {
-        let d = c as f64 - mu;
-        self.total += u128::from(c);
-        self.mu.add(mu);
-        self.var.add(var);
-        self.v.add(d * d);
-        self.var_y.add(var + 2.0 * var * var);
-        self.k3.add(var + 22.0 * var * var + 8.0 * var.powi(3));
-        self.k4
-            .add(var + 112.0 * var * var + 384.0 * var.powi(3) + 48.0 * var.powi(4));
-    }
-}
-
-/// What the file says of its channels.
-struct Channels {
-    names: Vec<String>,
-    /// `nominal_pulse_energy` of each channel: the energy its `pulse_energy` is relative to.
-    nominal_energy: Vec<f64>,
-    /// Each channel's dead time, None for an ideal detector.
-    dead: Vec<Option<DeadTime>>,
-}
 
 /// The file's check and its report; `Err` for a file that is not a raw file or carries
 /// impossible expectations (exit 2), never an INCONSISTENT verdict for those.

@@ -1,4 +1,4 @@
-//! Reading a checked raw file for [`super::check_file`]: block by block, the counts and
+//! Reading a checked raw file for `check_file` (`validate --file`): block by block, the counts and
 //! what their law needs, refusing impossible expectations.
 
 use std::path::Path;
@@ -6,7 +6,7 @@ use std::path::Path;
 use hdf5::types::{VarLenAscii, VarLenUnicode};
 use ndarray::{Ix1, Ix2, Ix3, s};
 
-use super::{Channels, Sums};
+use super::sums::{Channels, Sums};
 use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
 use crate::output::raw_file::read::{self, RawHeader};
