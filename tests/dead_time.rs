@@ -522,7 +522,7 @@ fn scenarios() -> Vec<(&'static str, Vec<f64>, f64, u64)> {
     ]
 }
 
-/// The non-paralyzable counting paths (`src/detector/counting.rs`) against the arrival
+/// The non-paralyzable counting paths (`src/detector/counting/`) against the arrival
 /// sweep written here, on a constant 300 MHz in 2 µs bins, 1 and 50 MHz, and steps of
 /// rate in 10 ns bins (τ/Δt = 0.35: the dead time carried over bin edges matters in most
 /// bins): per bin the mean, the variance and the covariance with the next bin agree

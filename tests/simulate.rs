@@ -275,7 +275,7 @@ fn normal_approximation_ks(mu: f64) -> f64 {
     worst
 }
 
-/// The threshold μ* of a tolerance τ, from the bound `src/sampling/approx.rs` documents,
+/// The threshold μ* of a tolerance τ, from the bound `src/sampling/approx/` documents,
 /// solved here: `c/√μ·(1 + 1/(8μ) + 1e-6) = τ`, `c = 1/(6√(2π))` (bisection).
 fn threshold_for(tau: f64) -> f64 {
     let c = 1.0 / (6.0 * (2.0 * std::f64::consts::PI).sqrt());

@@ -1,5 +1,9 @@
 //! Statistical and determinism tests of the samplers.
 //!
+//! Over 700 lines on purpose: one file of tests, read test by test (each states its
+//! false-alarm rate and the wrong sampler it rejects), sharing the reference PMFs and
+//! goodness-of-fit helpers at its top; cutting it would split those helpers from their users.
+//!
 //! Every statistical check uses a fixed seed, so the suite is deterministic;
 //! the false-alarm rate stated beside each check is the probability that a
 //! *correct* sampler fails it for a random seed (normal approximation for the

@@ -16,7 +16,7 @@
 //! at `z = 0`: `KS(μ) ≈ c/√μ` with `c =` [`KS_ASYMPTOTE`] `= 1/(6√(2π)) ≈ 0.0664904`.
 //! Around it a lattice term of period 1 in μ: `(√μ·KS/c − 1)·μ` stays in
 //! `[−0.2482, 0.1243]` (checked on a dense grid, with full periods resolved at
-//! μ = 10, 10³, 10⁵, 10⁷; see `validation/speed_vs_error.rs` and its report). Hence the
+//! μ = 10, 10³, 10⁵, 10⁷; see `validation/speed_vs_error/` and its report). Hence the
 //! bound [`normal_approx_ks_bound`]
 //!
 //! ```text
