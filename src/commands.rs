@@ -59,7 +59,7 @@ pub fn load_channel(
         Some(name) => channel_index(&lidar, config, name)?,
         None => {
             if names.len() > 1 {
-                eprintln!(
+                crate::tell!(
                     "lidarsim: channel {} of {} ({}); --channel NAME for another",
                     names[0],
                     names.len(),
@@ -122,13 +122,13 @@ pub fn expect(
         None => to_stdout(|w| expect::write_table(w, &sc, &e))?,
     }
     for w in sc.loaded.config.plausibility_warnings() {
-        eprintln!("{w}");
+        crate::tell!("{w}");
     }
     if let Some(note) = sc.atmosphere.molecules.continuation_note() {
-        eprintln!("{note}");
+        crate::tell!("{note}");
     }
     if let Some(w) = sc.linear_range_warning(&e) {
-        eprintln!("{w}");
+        crate::tell!("{w}");
     }
     Ok(())
 }
@@ -249,9 +249,9 @@ pub fn simulate_as(
     format: OutputFormat,
 ) -> Result<()> {
     let summary = simulate_quietly(config, overrides, opts, threads, format)?;
-    eprintln!("{summary}");
+    crate::tell!("{summary}");
     if let Some(w) = &summary.warning {
-        eprintln!("{w}");
+        crate::tell!("{w}");
     }
     Ok(())
 }
@@ -445,7 +445,7 @@ pub fn sweep(
     }
     outputs.commit()?;
     for w in base.loaded.config.plausibility_warnings() {
-        eprintln!("{w}");
+        crate::tell!("{w}");
     }
     Ok(())
 }
@@ -468,7 +468,7 @@ pub fn export_scc(raw: &Path, out: &Path, opts: &scc::SccOptions) -> Result<()> 
     let id = outputs.add("OUT.nc", out, Stream::Binary)?;
     scc::export_scc(raw, outputs.temp_path(id)?, opts)?;
     outputs.commit()?;
-    eprintln!(
+    crate::tell!(
         "Wrote {} (SCC raw NetCDF) from {}.",
         out.display(),
         raw.display()
@@ -511,7 +511,7 @@ pub fn validate_partial(
         writeln!(w)
     })?;
     outputs.commit()?;
-    eprintln!(
+    crate::tell!(
         "Wrote {}: shard {shard} of the validation, realizations {}–{} of {}; \
          `lidarsim validate --combine` the partials of every shard for the verdict.",
         partial.display(),
@@ -589,7 +589,7 @@ fn publish(
         to_stdout(|w| table(w, report))?;
     }
     if let Some(w) = &report.warning {
-        eprintln!("{w}");
+        crate::tell!("{w}");
     }
     Ok(report.consistent)
 }
@@ -612,7 +612,7 @@ pub fn merge(out: &Path, shards: &[PathBuf]) -> Result<()> {
             m.write(outputs, id)?
         }
     };
-    eprintln!("{summary}");
+    crate::tell!("{summary}");
     Ok(())
 }
 

@@ -3,6 +3,17 @@
 //! The physics follows Fochesatto et al. (2004), Adv. Space Res. 34, 2227–2231,
 //! as restated and completed in `docs/model.md`.
 
+/// `eprintln!` that never panics: when standard error is closed (`lidarsim … 2>&1 |
+/// head`, the reader gone) the line is dropped instead of ending the thread that writes
+/// it with a panic; the signal watcher must always reach its exit.
+#[macro_export]
+macro_rules! tell {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
 pub mod atmosphere;
 pub mod cli_values;
 pub mod commands;

@@ -32,7 +32,7 @@ fn usage_error(e: clap::Error) -> ExitCode {
         .collect();
     let message = message.join(" ");
     let message = message.strip_prefix("error: ").unwrap_or(&message);
-    eprintln!("lidarsim: error: {message} (see lidarsim --help)");
+    lidarsim::tell!("lidarsim: error: {message} (see lidarsim --help)");
     ExitCode::from(2)
 }
 
@@ -293,7 +293,7 @@ fn main() -> ExitCode {
         Err(e) => return usage_error(e),
     };
     if let Err(e) = lidarsim::safe_file::install_signal_handlers() {
-        eprintln!("lidarsim: error: {e}");
+        lidarsim::tell!("lidarsim: error: {e}");
         return ExitCode::from(2);
     }
     let result = match &cli.command {
@@ -478,7 +478,7 @@ fn main() -> ExitCode {
         Ok(true) => ExitCode::SUCCESS,
         Ok(false) => ExitCode::from(1),
         Err(e) => {
-            eprintln!("lidarsim: error: {e}");
+            lidarsim::tell!("lidarsim: error: {e}");
             ExitCode::from(2)
         }
     }

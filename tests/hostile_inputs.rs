@@ -1257,3 +1257,36 @@ fn table() {
     }
     fs::write(path, rows).unwrap();
 }
+
+/// A signal ends a run whose standard error is closed (`lidarsim simulate … 2>&1 | head
+/// -1`, the reader gone): the signal watcher's line goes nowhere instead of panicking the
+/// watcher, which then never ended the process (issue 36, item 17: a run that "ignores
+/// SIGTERM"). Before the fix the run below was still drawing 10 s after its SIGTERM.
+#[test]
+fn a_signal_ends_a_run_whose_stderr_is_closed() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = Scratch::new("closed-stderr", 0);
+    let mut child = Command::new(bin())
+        .args(long_run().iter().map(|a| expand(a, &dir)))
+        .current_dir(&dir.0)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn lidarsim");
+    // the reader goes away: every later write to either stream fails with EPIPE
+    drop(child.stdout.take());
+    drop(child.stderr.take());
+    assert!(wait_for_partial(&dir.0), "the run never started writing");
+    unsafe { libc::kill(child.id() as i32, libc::SIGTERM) };
+    let (st, hung) = wait(&mut child);
+    assert!(!hung, "still running {TIMEOUT:?} after SIGTERM");
+    assert_eq!(st.and_then(|s| s.code()), Some(143), "{st:?}");
+    let left: Vec<String> = fs::read_dir(&dir.0)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n != "in")
+        .collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}

@@ -208,7 +208,7 @@ pub fn run(config: &Path, overrides: &[String], opts: &OnboardOptions) -> Result
     commit_with_raw(&native, outputs, raw.zip(opts.raw.as_deref()))?;
     // the native config differs from the user's only in accumulation and profiles
     for w in native.lidar.first().loaded.config.plausibility_warnings() {
-        eprintln!("{w}");
+        crate::tell!("{w}");
     }
     Ok(())
 }

@@ -102,7 +102,7 @@ fn out_of_memory(size: usize) -> ! {
     } else {
         ""
     };
-    eprintln!(
+    crate::tell!(
         "lidarsim: error: out of memory: {size} more bytes could not be had (the run needs \
          more than its estimate, a limit such as ulimit -v or a control group's was reached); \
          make the run smaller{what}"

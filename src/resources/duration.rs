@@ -13,7 +13,7 @@ pub fn announce_duration(what: &str, seconds: f64) {
     if let Some(notice) = duration_notice(what, seconds) {
         match KEPT_NOTICES.lock().as_deref_mut() {
             Ok(Some(kept)) => kept.push(notice),
-            _ => eprintln!("{notice}"),
+            _ => crate::tell!("{notice}"),
         }
     }
 }

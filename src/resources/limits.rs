@@ -316,7 +316,7 @@ Max file locks            unlimited            unlimited            locks
     #[test]
     fn this_process_limits_are_read_where_proc_exists() {
         if !Path::new("/proc/self/status").exists() {
-            eprintln!("no /proc here: the limits of this process are not read");
+            crate::tell!("no /proc here: the limits of this process are not read");
             return;
         }
         let l = MemoryLimits::of_this_process();

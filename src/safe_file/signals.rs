@@ -101,7 +101,7 @@ pub fn install_signal_handlers() -> Result<()> {
                     Ending::Complete => " after its outputs were written; they are complete",
                     Ending::NoOutput => "",
                 };
-                eprintln!("\nlidarsim: interrupted by {name}{what}");
+                crate::tell!("\nlidarsim: interrupted by {name}{what}");
                 for f in &files {
                     let _ = fs::remove_file(f);
                 }

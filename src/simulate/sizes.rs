@@ -55,14 +55,22 @@ pub(super) fn check_sizes(
 ) -> Result<()> {
     let (totals, method, components) = (&planned.totals, planned.method, planned.components);
     let shots = lidar.first().shots_per_profile();
-    // the dead-time detector's cost per shot (ns), from its channels' means
+    // the dead-time detector's and the analog chain's cost per shot (ns), from their
+    // channels' means and bins
     let dead_time_ns: f64 = lidar
         .channels
         .iter()
         .zip(&planned.expected)
         .filter(|_| method == ResolvedMethod::Shot)
         .filter_map(|(c, e)| Some(c.instrument.dead_time?.ns_per_shot(&e.total_per_shot())))
-        .sum();
+        .sum::<f64>()
+        // an analog chain records every bin of every shot
+        + lidar
+            .channels
+            .iter()
+            .filter(|_| method == ResolvedMethod::Shot)
+            .filter_map(|c| Some(c.instrument.analog.as_ref()?.ns_per_shot(totals.len() / lidar.channels.len())))
+            .sum::<f64>();
     let streams = if components { 4 } else { 1 };
     let bins = totals.len() as f64;
     // one bit per profile (written yet?), the batch of drawn rows, the samplers' tables,
