@@ -55,22 +55,27 @@ pub(super) fn check_sizes(
 ) -> Result<()> {
     let (totals, method, components) = (&planned.totals, planned.method, planned.components);
     let shots = lidar.first().shots_per_profile();
-    // the dead-time detector's and the analog chain's cost per shot (ns), from their
-    // channels' means and bins
-    let dead_time_ns: f64 = lidar
+    // the detectors' cost per shot (ns): the dead-time counter's from its channel's
+    // means, the analog chain's from its bins (it records every bin of every shot)
+    let detector_ns: f64 = lidar
         .channels
         .iter()
         .zip(&planned.expected)
         .filter(|_| method == ResolvedMethod::Shot)
-        .filter_map(|(c, e)| Some(c.instrument.dead_time?.ns_per_shot(&e.total_per_shot())))
-        .sum::<f64>()
-        // an analog chain records every bin of every shot
-        + lidar
-            .channels
-            .iter()
-            .filter(|_| method == ResolvedMethod::Shot)
-            .filter_map(|c| Some(c.instrument.analog.as_ref()?.ns_per_shot(totals.len() / lidar.channels.len())))
-            .sum::<f64>();
+        .map(|(c, e)| {
+            let lambda = e.total_per_shot();
+            let dead = c
+                .instrument
+                .dead_time
+                .map_or(0.0, |d| d.ns_per_shot(&lambda));
+            let analog = c
+                .instrument
+                .analog
+                .as_ref()
+                .map_or(0.0, |a| a.ns_per_shot(lambda.len()));
+            dead + analog
+        })
+        .sum();
     let streams = if components { 4 } else { 1 };
     let bins = totals.len() as f64;
     // one bit per profile (written yet?), the batch of drawn rows, the samplers' tables,
@@ -101,7 +106,7 @@ pub(super) fn check_sizes(
     let draw_ns_per_profile = match method {
         ResolvedMethod::Shot => ShotSampler::new(totals).strategy().est_ns_per_shot * shots as f64,
         _ => bins * cost::AGGREGATE_LARGE_NS,
-    } + (dead_time_ns + afterpulse_ns) * shots as f64;
+    } + (detector_ns + afterpulse_ns) * shots as f64;
     let ns = profiles as f64
         * (draw_ns_per_profile * streams.min(3) as f64 / threads as f64
             + bins * streams as f64 * FILE_NS_PER_COUNT);
