@@ -41,6 +41,15 @@ impl ShardRegion {
                 Error::output(path, format!("{region} has no `{name}`: not a product"))
             })
         };
+        // every variable holds what it declares before any is compared with another, so
+        // that a crafted length is named where it is
+        for d in g
+            .datasets()
+            .map_err(|_| bad("cannot list its variables".into()))?
+        {
+            let name = d.name();
+            check_storage(path, name.trim_start_matches('/'), &d)?;
+        }
         let counts = get("counts")?;
         let shape = counts.shape();
         let [rows, channels, bins] = shape[..] else {
@@ -70,6 +79,8 @@ impl ShardRegion {
             ("n_shots", rows, false),
             ("channel", channels, false),
             ("altitude", bins, true),
+            ("profile", rows, false),
+            ("bin", bins, false),
         ] {
             let d = get(name)?;
             if d.shape() != [len] || (float && !is_float(&d)) {
@@ -127,7 +138,24 @@ impl ShardRegion {
             let d = g.dataset(&v.name).map_err(|_| {
                 Error::output(path, format!("no `{name}`: not a product of this version"))
             })?;
-            if d.shape() != want || !is_float(&d) {
+            let shape = d.shape();
+            if v.dims == ColumnChannelBin
+                && shape.len() == 3
+                && shape[1..] == want[1..]
+                && shape[0] != self.columns
+            {
+                return Err(Error::output(
+                    path,
+                    format!(
+                        "`{name}` is {} (column, channel, bin): its {} columns disagree with \
+                         the coordinate `{region}/column`, which has {}",
+                        shape_text(&shape),
+                        shape[0],
+                        self.columns
+                    ),
+                ));
+            }
+            if shape != want || !is_float(&d) {
                 return Err(Error::output(
                     path,
                     format!(
@@ -177,10 +205,14 @@ impl ShardRegion {
                 _ => vec![self.rows, width],
             };
             if d.shape() != want || (width != 1 && d.ndim() == 1) {
+                let want = match d.ndim() {
+                    1 if width == 1 => vec![self.rows],
+                    _ => vec![self.rows, width],
+                };
                 return Err(bad(format!(
                     "`{name}` is {}, not {} (profile, …)",
                     shape_text(&d.shape()),
-                    shape_text(&[self.rows, width])
+                    shape_text(&want)
                 )));
             }
             check_storage(path, &format!("{region}/{name}"), &d)?;

@@ -177,6 +177,38 @@ fn damages() -> Vec<Damage> {
             v[0] = 0;
             write_u_like(&ds, &v);
         }),
+        // --- a coordinate of crafted length is named, not the first variable on its
+        // dimension (issue 36, item 18) ---
+        d("column declared 2^40", Raw, "`column` declares", |f| {
+            declare_huge(f, "column")
+        }),
+        d("k declared 2^40", Raw, "`k` declares", |f| {
+            declare_huge(f, "k")
+        }),
+        d("column one too long", Raw, "coordinate `column`", |f| {
+            lengthen(f, "column")
+        }),
+        d(
+            "region column declared 2^40",
+            Product,
+            "`region_0/column` declares",
+            |f| declare_huge(&region(f, 0), "column"),
+        ),
+        d(
+            "region column one too long",
+            Product,
+            "coordinate `region_0/column`",
+            |f| lengthen(&region(f, 0), "column"),
+        ),
+        d(
+            "region profile one too long",
+            Product,
+            "`profile` is",
+            |f| lengthen(&region(f, 0), "profile"),
+        ),
+        d("region bin one too long", Product, "`bin` is", |f| {
+            lengthen(&region(f, 0), "bin")
+        }),
         d("region 2^40 rows declared", Product, "crafted", |f| {
             let g = region(f, 0);
             let shape = g.dataset("counts").unwrap().shape();
@@ -403,6 +435,25 @@ pub fn prepare(name: &str, dir: &Scratch) -> Option<bool> {
     let f = hdf5::File::open_rw(&target).expect("open the file to damage");
     (damage.make)(&f);
     Some(true)
+}
+
+/// Replaces int64 coordinate `name` of `g` by one that declares 2^40 values and stores
+/// none (chunked, never written).
+fn declare_huge(g: &hdf5::Group, name: &str) {
+    g.unlink(name).unwrap();
+    g.new_dataset::<i64>()
+        .chunk(1024)
+        .shape(1usize << 40)
+        .create(name)
+        .unwrap();
+}
+
+/// Replaces int64 coordinate `name` of `g` by its values and one more (0, 1, …, n).
+fn lengthen(g: &hdf5::Group, name: &str) {
+    let n = g.dataset(name).unwrap().shape()[0];
+    g.unlink(name).unwrap();
+    let v: Vec<i64> = (0..=n as i64).collect();
+    g.new_dataset_builder().with_data(&v).create(name).unwrap();
 }
 
 /// Region group `k` of a product.

@@ -131,10 +131,15 @@ pub fn check(path: &Path, f: &hdf5::File) -> Result<RawHeader> {
     let datasets = f
         .datasets()
         .map_err(|_| bad("cannot list its variables".into()))?;
+    // every variable holds what it declares before any is compared with another, so
+    // that a crafted length is named where it is (a huge `column`, not the first
+    // variable on that dimension)
+    for d in &datasets {
+        check_storage(path, d.name().trim_start_matches('/'), d)?;
+    }
     for d in &datasets {
         let name = d.name();
         let name = name.trim_start_matches('/');
-        check_storage(path, name, d)?;
         let shape = d.shape();
         let (class, _) = Class::of(d);
         let want: Vec<&[Dim]> = match KNOWN.iter().find(|k| k.name == name) {
@@ -162,6 +167,9 @@ pub fn check(path: &Path, f: &hdf5::File) -> Result<RawHeader> {
             dims.len() == shape.len() && dims.iter().zip(&shape).all(|(&d, &n)| len(d) == n)
         };
         if !want.iter().any(fits) {
+            if let Some(why) = coordinate_disagrees(name, &shape, &want, len) {
+                return Err(bad(why));
+            }
             let expected: Vec<String> = want
                 .iter()
                 .filter(|dims| dims.iter().all(|&d| len(d) != usize::MAX))
@@ -207,6 +215,40 @@ pub fn check(path: &Path, f: &hdf5::File) -> Result<RawHeader> {
     };
     super::integrity::check_raw(path, f, &header)?;
     Ok(header)
+}
+
+/// When variable `name` of `shape` fits one of its dimension lists `want` but for the
+/// length of one `column` or `k` that the file has, the sentence that names that
+/// coordinate: the variable and the coordinate disagree, and the coordinate is what
+/// defines the dimension. (A file without the coordinate is refused as before.)
+fn coordinate_disagrees(
+    name: &str,
+    shape: &[usize],
+    want: &[&[Dim]],
+    len: impl Fn(Dim) -> usize,
+) -> Option<String> {
+    let differs = |dims: &[Dim]| -> Vec<(Dim, usize)> {
+        dims.iter()
+            .zip(shape)
+            .filter(|&(&d, &n)| len(d) != n)
+            .map(|(&d, &n)| (d, n))
+            .collect()
+    };
+    want.iter()
+        .filter(|dims| dims.len() == shape.len())
+        .find_map(|dims| match differs(dims)[..] {
+            [(d @ (Dim::Col | Dim::K), n)] if len(d) != usize::MAX => {
+                let coordinate = if d == Dim::Col { COLUMN_DIM } else { SLOT_DIM };
+                Some(format!(
+                    "`{name}` is {} {}: its {n} along `{coordinate}` disagree with the \
+                     coordinate `{coordinate}`, which has {}",
+                    shape_text(shape),
+                    dims_name(dims),
+                    len(d)
+                ))
+            }
+            _ => None,
+        })
 }
 
 /// The dimensions of known variable `k` in a file of format `version`: `pulse_energy` is
