@@ -689,3 +689,29 @@ fn the_glued_pairs_common_range_is_where_the_records_are_proportional() {
         assert!(common >= 50, "{pair}: {common} common bins");
     }
 }
+
+/// A long analog run announces its duration before it starts (issue 36, item 17): the
+/// analog chain costs `detector::analog::NS_PER_ANALOG_BIN` (10 ns) a bin a shot, which
+/// the estimate once left out, so that 1,000 profiles of the PollyXT-like glued lidar
+/// (measured 5.1 min on two cores) started silently as "under a minute". With the term
+/// the first line of stderr says "about … min"; with `NS_PER_ANALOG_BIN` 0 this test fails
+/// (no announcement: the first line is the run's own summary after minutes, or nothing
+/// before the 30 s watchdog). The run is stopped once the line is read.
+#[test]
+fn a_long_analog_run_announces_its_duration() {
+    let dir = scratch("analog-announce");
+    let cfg = config_path("ground/pollyxt_like_glued.toml");
+    let args = [
+        "simulate",
+        cfg.to_str().unwrap(),
+        "-o",
+        "long.h5",
+        "--profiles",
+        "1000",
+    ];
+    let line = common::cli::first_stderr_line(&dir, &args);
+    assert!(
+        line.contains("expected to take about") && line.contains("min"),
+        "{line}"
+    );
+}

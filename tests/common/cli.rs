@@ -70,3 +70,35 @@ pub fn refused(dir: &Path, args: &[&str], words: &[&str], out: &str) {
         "{args:?} left a temporary file"
     );
 }
+
+/// The first line `lidarsim ARGS` writes to stderr, the process killed then (and after
+/// 30 s at the latest).
+pub fn first_stderr_line(dir: &Path, args: &[&str]) -> String {
+    use std::io::BufRead;
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_lidarsim"))
+        .current_dir(dir)
+        .args(args)
+        .stderr(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let pid = child.id().to_string();
+    let child = std::sync::Arc::new(std::sync::Mutex::new(child));
+    let stderr = child.lock().unwrap().stderr.take().unwrap();
+    // the watchdog kills through the same handle (never a pid reused after the wait)
+    let watched = std::sync::Arc::clone(&child);
+    std::thread::spawn(move || {
+        std::thread::sleep(std::time::Duration::from_secs(30));
+        let mut c = watched.lock().unwrap();
+        if c.try_wait().ok().flatten().is_none() {
+            eprintln!("killing lidarsim {pid} after 30 s");
+            c.kill().ok();
+        }
+    });
+    let mut line = String::new();
+    std::io::BufReader::new(stderr).read_line(&mut line).ok();
+    let mut c = child.lock().unwrap();
+    c.kill().ok();
+    c.wait().ok();
+    line
+}
