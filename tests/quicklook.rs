@@ -96,39 +96,46 @@ fn a_pair_with_truth_draws_three_panels() {
 
 /// The estimate `(N/M − B)/(C·w·E/E₀)` recovers the truth's attenuated backscatter: over
 /// the cells where the truth is above 1e-7 m⁻¹ sr⁻¹, their sums agree within 2 %, in
-/// the raw file and in its onboard product (regions of 1 to 15 shots and 30 to 300 m
-/// stitched on one grid, the background from the product's expected counts). The
-/// sums hold 10⁵ photons and more (statistical error below 0.5 %); a 3 % error in the
-/// lidar constant, the range weight or the energy fails it.
+/// the raw file and in its onboard products (regions of 1 to 15 shots and 30 to 300 m
+/// stitched on one grid, the background from the product's expected counts), of photon
+/// counters and of the shipped preset's analog detectors (the product's
+/// `counts_per_photoelectron` and `counts_offset`; before them an analog product was
+/// drawn as if its codes were photons, ~3e4× too bright). The sums hold 10⁵ photons and
+/// more (statistical error below 0.5 %); a 3 % error in the lidar constant, the range
+/// weight or the energy fails it.
 #[test]
 fn the_estimate_recovers_the_truth_in_raw_files_and_products() {
     let dir = scratch("quicklook-truth");
     caliop_3ch(&dir);
-    // the product of photon counters: an onboard product does not carry the analog
-    // chain's constants yet (docs/figures.md), and the shipped preset is analog
     let photon_counting =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/configs/caliop_3ch_photon_counting.toml");
-    ok(lidarsim(
-        &dir,
-        &[
-            "onboard",
-            photon_counting.to_str().unwrap(),
-            "--set",
-            "acquisition.top_altitude_km=40",
-            "--set",
-            "acquisition.bottom_altitude_km=-2",
-            "--set",
-            "acquisition.profiles=20",
-            "--set",
-            "instrument.detector.dead_time_s=0",
-            "--scheme",
-            "caliop",
-            "-o",
-            "product.h5",
-        ],
-        &[],
-    ));
-    for file in ["raw.h5", "product.h5"] {
+    let analog = config_path("instruments/caliop_3ch.toml");
+    for (config, product) in [
+        (photon_counting.to_str().unwrap(), "product.h5"),
+        (analog.to_str().unwrap(), "analog_product.h5"),
+    ] {
+        ok(lidarsim(
+            &dir,
+            &[
+                "onboard",
+                config,
+                "--set",
+                "acquisition.top_altitude_km=40",
+                "--set",
+                "acquisition.bottom_altitude_km=-2",
+                "--set",
+                "acquisition.profiles=20",
+                "--set",
+                "instrument.detector.dead_time_s=0",
+                "--scheme",
+                "caliop",
+                "-o",
+                product,
+            ],
+            &[],
+        ));
+    }
+    for file in ["raw.h5", "product.h5", "analog_product.h5"] {
         let q = quicklook::read(&dir.join(file), None, true).unwrap();
         let truth = q.truth.as_ref().unwrap().means();
         let (m, n) = ratio_of_sums(&q.signal.means(), &truth, 1e-7);

@@ -31,8 +31,9 @@ fn attributes(long_name: &str, units: &str, extra: &[(&str, &str)]) -> Vec<(Stri
 /// What the suffix of an averaged point truth's long name says.
 const AVERAGED: &str = ": mean over the region bin's native bins of the value at their centres";
 
-/// The fixed variables of a region, in order: `range_weight` (bin), `lidar_constant` and
-/// `nominal_pulse_energy` (channel), the point truth of [`COLUMN_TRUTH`], then
+/// The fixed variables of a region, in order: `range_weight` (bin), `lidar_constant`,
+/// `nominal_pulse_energy`, `counts_per_photoelectron` and `counts_offset` (channel: how
+/// the channel's counts record photoelectrons, 1 and 0 for a photon counter), the point truth of [`COLUMN_TRUTH`], then
 /// `expected_signal` and `attenuated_backscatter` (column, channel, bin); `data(name)`
 /// gives each one's values, `beta_mol` the attributes of `beta_mol` beyond its long name
 /// and units (the raw file's, [`crate::output::raw_file::truth::beta_mol_attributes`]).
@@ -75,6 +76,24 @@ pub fn fixed_variables(
         attributes(
             "nominal emitted pulse energy E0 of the channel (expected_signal and lidar_constant are at this energy)",
             "J",
+            &[],
+        ),
+    )?;
+    push(
+        "counts_per_photoelectron",
+        Channel,
+        attributes(
+            "mean counts one photoelectron adds to one shot's native bin: 1 for a photon-counting channel; for an analog channel its ADC codes per photoelectron (the raw file's analog_counts_per_photoelectron, of the low-passed photoelectrons)",
+            "count",
+            &[],
+        ),
+    )?;
+    push(
+        "counts_offset",
+        Channel,
+        attributes(
+            "mean counts one shot's native bin records without light: 0 for a photon-counting channel; for an analog channel its baseline in ADC codes (analog_offset / adc_volts_per_count); a region bin of native_bins_merged native bins and a profile of n_shots shots hold n_shots x native_bins_merged x this",
+            "count",
             &[],
         ),
     )?;
@@ -260,6 +279,14 @@ pub fn region_truth(
             "nominal_pulse_energy" => {
                 channel(&|c| lidar.channels[c].loaded.config.instrument.pulse_energy_j)
             }
+            "counts_per_photoelectron" => channel(&|c| {
+                let analog = lidar.channels[c].instrument.analog.as_ref();
+                analog.map_or(1.0, crate::detector::Analog::codes_per_photoelectron)
+            }),
+            "counts_offset" => channel(&|c| {
+                let analog = lidar.channels[c].instrument.analog.as_ref();
+                analog.map_or(0.0, crate::detector::Analog::offset_codes)
+            }),
             "expected_signal" => expected_signal.clone(),
             "attenuated_backscatter" => attenuated_backscatter.clone(),
             _ => {

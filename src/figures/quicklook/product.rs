@@ -12,7 +12,7 @@ use super::figure::{
     BLOCK_PROFILES, Background, COLUMNS, Calibration, Quicklook, ROWS, TOP_KM, add_profile, x_axis,
 };
 use super::grid::Grid;
-use super::raw::{Vars, calibration, day_night, extend_spans, pair, start_unix_s};
+use super::raw::{Vars, day_night, extend_spans, pair, start_unix_s};
 use crate::error::Result;
 use crate::figures::plot::panel::{edges, widen};
 use crate::output::raw_file::read::read_text;
@@ -195,7 +195,7 @@ pub(super) fn read(
         }
         let cals: Vec<Calibration> = jobs
             .iter()
-            .map(|(k, _)| calibration(&v, *k))
+            .map(|(k, _)| product_calibration(&v, *k))
             .collect::<Result<_>>()?;
         let counts = v.ds("counts")?;
         let atb = match (truth, c) {
@@ -267,6 +267,18 @@ pub(super) fn read(
         pair: has_pair.then(|| (par, perp, "perpendicular / parallel".to_string())),
         truth: truth_grid,
         day,
+    })
+}
+
+/// Channel `c`'s calibration in a product's region: its lidar constant and how its counts
+/// record photoelectrons (`counts_per_photoelectron`, `counts_offset`: the analog chain's
+/// codes and baseline, 1 and 0 for a photon counter).
+fn product_calibration(v: &Vars, c: usize) -> Result<Calibration> {
+    let at = |name: &str| -> Result<f64> { Ok(v.f64s(name)?.get(c).copied().unwrap_or(f64::NAN)) };
+    Ok(Calibration {
+        lidar_constant: at("lidar_constant")?,
+        codes_per_photoelectron: at("counts_per_photoelectron")?,
+        offset_codes: at("counts_offset")?,
     })
 }
 

@@ -61,14 +61,17 @@ enum Sign {
 }
 
 /// The calibration a reader divides by (or, the analog offset, subtracts), and what
-/// each must be; `true`: of analog channels only (NaN in the others).
-const CALIBRATION: [(&str, Sign, bool); 6] = [
+/// each must be; `true`: of analog channels only (NaN in the others). The last two are
+/// an onboard product's (its regions' record of photoelectrons, every channel).
+const CALIBRATION: [(&str, Sign, bool); 8] = [
     ("lidar_constant", Sign::NonNegative, false),
     ("nominal_pulse_energy", Sign::Positive, false),
     ("range_weight", Sign::NonNegative, false),
     ("analog_counts_per_photoelectron", Sign::Positive, true),
     ("adc_volts_per_count", Sign::Positive, true),
     ("analog_offset", Sign::Finite, true),
+    ("counts_per_photoelectron", Sign::Positive, false),
+    ("counts_offset", Sign::Finite, false),
 ];
 
 /// Why a profile's columns and weights are impossible, if they are: every used slot a
