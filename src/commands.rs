@@ -102,7 +102,7 @@ pub fn expect(
     csv: Option<&Path>,
     channel: Option<&str>,
 ) -> Result<()> {
-    let sc = load_channel(config, overrides, channel)?;
+    let mut sc = load_channel(config, overrides, channel)?;
     let mut outputs = outputs_for(&sc);
     let csv_path = csv.filter(|p| *p != Path::new("-"));
     let csv = csv
@@ -113,6 +113,8 @@ pub fn expect(
         resources::require_disk("--csv", p, bytes)?;
     }
     let e = sc.expected()?;
+    // nothing below reads the beam path: it goes before the CSV's columns come
+    sc.path.release();
     let shots = sc.instrument.rep_rate_hz * sc.accumulation_time_s();
     match csv {
         Some(id) => {
@@ -411,11 +413,7 @@ pub fn sweep(
     let at_once = points.min(rayon::current_num_threads().max(1)) as f64;
     resources::require_memory(
         &format!("sweeping {points} points of {} bins", base.geometry.n_bins),
-        at_once
-            * crate::scenario::model_bytes(
-                base.geometry.n_bins as f64,
-                base.path.segments().len() as f64,
-            ),
+        at_once * crate::scenario::model_bytes(base.geometry.n_bins as f64, base.path.laid_bytes()),
     )?;
     let bar =
         crate::simulate::progress_bar(std::io::IsTerminal::is_terminal(&std::io::stderr()), points);

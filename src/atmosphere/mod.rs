@@ -410,8 +410,10 @@ impl Atmosphere {
     }
 
     /// [`Self::slabs`] one at a time, none held: a window of millions of bins lays its
-    /// beam path from them without a second copy of every slab's optics.
-    pub fn slabs_iter(&self, z_lo: f64, z_hi: f64) -> impl Iterator<Item = Slab> + '_ {
+    /// beam path from them without a second copy of every slab's optics. From the bottom
+    /// up, or from the top down (`rev`), so that a path looking down is laid in range
+    /// order too.
+    pub fn slabs_iter(&self, z_lo: f64, z_hi: f64) -> impl DoubleEndedIterator<Item = Slab> + '_ {
         let first = (z_lo / self.grid_m).ceil() as i64;
         let last = (z_hi / self.grid_m).floor() as i64;
         let mut edges =

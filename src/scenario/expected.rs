@@ -2,28 +2,27 @@
 //! bin and the atmosphere's truth at bin centres, and the memory it takes.
 
 use crate::atmosphere::{MolecularState, Optics};
-use crate::signal::BinMultipleScattering;
+use crate::signal::{BinMultipleScattering, PathBytes};
 use crate::snr;
 
-/// Memory the deterministic model holds per range bin beyond its slabs
-/// ([`MODEL_BYTES_PER_SLAB`]), bytes: the expected profile and truth by species (~31 f64),
-/// the detector's means and the CSV's columns. Measured (heaptrack of `expect --csv` on
-/// scenario 1 at `bin_width_s` 2e-9, 1.33e5 bins: 150.9 MB at the peak, of which the
-/// 1.15e6 slabs' 101 MB): 375 bytes a bin, rounded up.
+/// Memory the deterministic model holds per range bin beyond its beam path
+/// ([`crate::signal::laying_bytes`]), bytes: the expected profile and truth by species
+/// (33 f64: 264 bytes while the model is computed, its pieces of 64 Ki bins besides),
+/// the detector's means and, while `expect` writes it, the CSV's twelve columns (368
+/// bytes then, the path let go). Peak RSS of `/usr/bin/time -v lidarsim expect
+/// configs/paper/scenario1.toml --set instrument.bin_width_s=1e-10 --set
+/// acquisition.top_altitude_km=40 --csv big.csv` (2.67e6 bins, 1.07e7 of the path's
+/// 2.29e7 slabs kept): 1.13 GB, estimated 1.63 GB (3.17 GB before the path kept only
+/// what the bins read, 5.27 GB before the bins were taken a piece at a time); at
+/// `bin_width_s` 2e-9 (1.33e5 bins) 77 MB, estimated 81 MB. Rounded up from 368 for
+/// the small-angle models' per-bin multiple scattering.
 pub const MODEL_BYTES_PER_BIN: f64 = 450.0;
-/// Memory per slab of the beam path (`signal::Segment`, 11 f64, and its altitude edge
-/// while the path is laid), bytes: 96, rounded up. A window's slabs are at least four per
-/// bin over the whole path, the atmosphere above a space-borne window included (8.6 per
-/// bin for scenario 1's 40 km window under its 86 km atmosphere). Peak RSS of
-/// `/usr/bin/time -v lidarsim expect configs/paper/scenario1.toml --set
-/// instrument.bin_width_s=1e-10 --set acquisition.top_altitude_km=40 --csv big.csv`
-/// (2.67e6 bins, 2.29e7 slabs): 2.91 GB, 3.5 GB estimated; 5.27 GB before the model's
-/// bins were taken a piece at a time into vectors of their final size.
-pub const MODEL_BYTES_PER_SLAB: f64 = 100.0;
 
-/// The model's memory for `bins` range bins along a path of `slabs` slabs, bytes.
-pub fn model_bytes(bins: f64, slabs: f64) -> f64 {
-    bins * MODEL_BYTES_PER_BIN + slabs * MODEL_BYTES_PER_SLAB
+/// The model's memory for `bins` range bins along a beam path of `path`
+/// ([`crate::signal::laying_bytes`]), bytes, at its peak: the kept segments with the
+/// larger of what the path takes while it is laid and what the bins take after.
+pub fn model_bytes(bins: f64, path: PathBytes) -> f64 {
+    path.kept + path.laying.max(bins * MODEL_BYTES_PER_BIN)
 }
 
 /// One bin of [`Scenario::expected`]'s model, before multiple scattering and the

@@ -5,7 +5,7 @@
 mod expected;
 mod model;
 
-pub use expected::{ExpectedProfile, MODEL_BYTES_PER_BIN, MODEL_BYTES_PER_SLAB, model_bytes};
+pub use expected::{ExpectedProfile, MODEL_BYTES_PER_BIN, model_bytes};
 
 use std::path::Path;
 
@@ -15,7 +15,7 @@ use crate::error::{Error, Result};
 use crate::geometry::{Geometry, Overlap};
 use crate::instrument::Instrument;
 use crate::loaded::{self, LoadedConfig};
-use crate::signal::BeamPath;
+use crate::signal::{BeamPath, PathExtent};
 
 /// Everything the deterministic model needs, built from one validated config.
 #[derive(Debug, Clone)]
@@ -139,10 +139,17 @@ impl Scenario {
         let cfg = &loaded.config;
         let geometry = Geometry::from_config(cfg, &file)?;
         let bins = geometry.n_bins as f64;
+        let extent = PathExtent::for_model(cfg.multiple_scattering.model);
         // a first look before the atmosphere is built (at least four slabs per bin)
         crate::resources::require_memory(
             &format!("the model of {bins} range bins"),
-            model_bytes(bins, 4.0 * bins),
+            model_bytes(
+                bins,
+                crate::signal::PathBytes {
+                    kept: 4.0 * bins * PathExtent::Bins.bytes_per_segment(),
+                    ..Default::default()
+                },
+            ),
         )?;
         let mut atmosphere = Atmosphere::from_config(&loaded)?;
         let channel = &loaded.channels[0];
@@ -179,18 +186,16 @@ impl Scenario {
                 ),
             ));
         }
-        let (z_lo, z_hi) = BeamPath::altitude_span(&atmosphere, &geometry, surface.as_ref());
-        // the grid's slabs, split further at each layer edge and profile top
-        let edges = 8.0 + 2.0 * atmosphere.layers.len() as f64;
-        let slabs = ((z_hi - z_lo) / atmosphere.grid_m).max(0.0) + edges;
+        let path_bytes =
+            crate::signal::laying_bytes(&atmosphere, &geometry, surface.as_ref(), extent);
         crate::resources::require_memory(
             &format!(
                 "the model of {bins} range bins ({} slabs of the beam path)",
-                crate::error::compact(slabs.round())
+                crate::error::compact(path_bytes.slabs.round())
             ),
-            model_bytes(bins, slabs),
+            model_bytes(bins, path_bytes),
         )?;
-        let path = BeamPath::new(&atmosphere, &geometry, overlap, surface);
+        let path = BeamPath::new(&atmosphere, &geometry, overlap, surface, extent);
         let sc = Scenario {
             loaded,
             instrument,

@@ -9,43 +9,14 @@ use crate::error::{Error, Result};
 use crate::geometry::{Geometry, Overlap};
 use crate::surface::Surface;
 
+use super::laying::{self, PathBytes, PathExtent, Segment, SegmentLobes};
+
 /// Degree of the interpolant of `η/r²` on a piece, plus one.
 const NODES: usize = 6;
 /// Largest piece length relative to its start range.
 const MAX_PIECE_FRACTION: f64 = 0.1;
 /// Smallest piece next to an overlap kink, m.
 const GRADED_MIN_PIECE_M: f64 = 1e-4;
-
-/// One stretch of the beam with constant optical properties.
-#[derive(Debug, Clone, Copy)]
-pub struct Segment {
-    /// Range at the segment's start (nearer the instrument), m.
-    pub r_start: f64,
-    /// Range at its end, m.
-    pub r_end: f64,
-    /// Attenuating extinction (η_ms applied), m⁻¹ of path.
-    pub alpha: f64,
-    /// Backscatter seen by the channel, m⁻¹ sr⁻¹.
-    pub beta: f64,
-    /// One-way attenuating optical depth from the instrument to `r_start`.
-    pub tau_start: f64,
-    /// Particle (aerosol and cloud) extinction, m⁻¹.
-    pub alpha_particle: f64,
-    /// Extinction of the particles in the small-angle model, m⁻¹ (`multiple_scattering`).
-    pub alpha_lobe: f64,
-    /// `Σ α·Θ²` of their forward lobes, m⁻¹ rad².
-    pub alpha_theta2: f64,
-    /// `Σ α·g` of the same particles (their asymmetry factors), m⁻¹.
-    pub alpha_lobe_g: f64,
-    /// Absorption by gases (ozone), m⁻¹.
-    pub alpha_absorbing: f64,
-    /// Backscatter of every species in every polarization (the elastic return a
-    /// channel's share is taken from), m⁻¹ sr⁻¹.
-    pub beta_total: f64,
-    /// Backscatter of the clouds in every polarization, m⁻¹ sr⁻¹ (a water cloud's
-    /// depolarization, `multiple_scattering`).
-    pub beta_cloud: f64,
-}
 
 /// The surface's echo on the beam: where it is and its integrated backscatter.
 #[derive(Debug, Clone, Copy)]
@@ -59,7 +30,13 @@ pub struct SurfaceEcho {
 /// The beam path from the instrument out to the last bin.
 #[derive(Debug, Clone)]
 pub struct BeamPath {
+    /// In range order: from the instrument ([`PathExtent::Whole`]) or from the last
+    /// segment before the window's first bin ([`PathExtent::Bins`]).
     pub(super) segments: Vec<Segment>,
+    /// One per segment for [`PathExtent::Whole`], else empty.
+    pub(super) lobes: Vec<SegmentLobes>,
+    /// The memory the path took while it was laid and after ([`laying::laying_bytes`]).
+    laid_bytes: PathBytes,
     overlap: Overlap,
     /// The surface echo, if the scene has a surface within the window.
     surface: Option<SurfaceEcho>,
@@ -71,18 +48,20 @@ pub struct BeamPath {
 }
 
 impl BeamPath {
-    /// Lays the atmosphere's slabs along the beam of `geometry`, out to its last bin; a
-    /// space-borne beam stops at the `surface` (at sea level when there is none), whose
-    /// echo is added to the bin that holds it.
+    /// Lays the atmosphere's slabs along the beam of `geometry`, out to its last bin, as
+    /// much of it as `extent` keeps; a space-borne beam stops at the `surface` (at sea
+    /// level when there is none), whose echo is added to the bin that holds it.
     pub fn new(
         atmosphere: &Atmosphere,
         geometry: &Geometry,
         overlap: Overlap,
         surface: Option<Surface>,
+        extent: PathExtent,
     ) -> Self {
         let r_max = geometry.max_range_m();
         let z_far = geometry.altitude_at_range(r_max);
-        let (z_lo, z_hi) = Self::altitude_span(atmosphere, geometry, surface.as_ref());
+        let span = Self::altitude_span(atmosphere, geometry, surface.as_ref());
+        let laid_bytes = laying::laying_bytes(atmosphere, geometry, surface.as_ref(), extent);
         let surface = surface
             .filter(|s| geometry.kind == PlatformKind::Spaceborne && s.altitude_m >= z_far)
             .map(|s| SurfaceEcho {
@@ -90,47 +69,7 @@ impl BeamPath {
                 integrated_backscatter_sr: atmosphere.surface_echo_share()
                     * s.integrated_backscatter_sr(geometry.local_cos_at(s.altitude_m)),
             });
-        let mut segments: Vec<Segment> = if z_hi > z_lo {
-            atmosphere
-                .slabs_iter(z_lo, z_hi)
-                .map(|s| {
-                    let (ra, rb) = (
-                        geometry.range_at_altitude(s.z_lo),
-                        geometry.range_at_altitude(s.z_hi),
-                    );
-                    Segment {
-                        r_start: ra.min(rb),
-                        r_end: ra.max(rb),
-                        alpha: s.optics.alpha_effective,
-                        beta: s.optics.beta_channel,
-                        tau_start: 0.0,
-                        alpha_particle: s.optics.alpha_aer + s.optics.alpha_cld,
-                        alpha_lobe: s.optics.alpha_lobe,
-                        alpha_theta2: s.optics.alpha_theta2,
-                        alpha_lobe_g: s.optics.alpha_lobe_g,
-                        alpha_absorbing: s.optics.alpha_o3,
-                        beta_total: s.optics.beta_mol + s.optics.beta_aer + s.optics.beta_cld,
-                        beta_cloud: s.optics.beta_cld,
-                    }
-                })
-                .collect()
-        } else {
-            vec![]
-        };
-        // slabs come by altitude: by range already (looking up) or reversed (looking down),
-        // put in order without the sort's scratch copy of a window's segments
-        let by_range = |a: &Segment, b: &Segment| a.r_start.total_cmp(&b.r_start);
-        if segments.is_sorted_by(|a, b| by_range(a, b).is_gt()) {
-            segments.reverse();
-        }
-        if !segments.is_sorted_by(|a, b| by_range(a, b).is_le()) {
-            segments.sort_by(by_range);
-        }
-        let mut tau = 0.0;
-        for s in &mut segments {
-            s.tau_start = tau;
-            tau += s.alpha * (s.r_end - s.r_start);
-        }
+        let (segments, lobes) = laying::lay(atmosphere, geometry, span, extent);
         let zero_overlap_until_m = if overlap.sees_zero_range() {
             0.0
         } else {
@@ -144,6 +83,8 @@ impl BeamPath {
         kinks_m.sort_by(f64::total_cmp);
         BeamPath {
             segments,
+            lobes,
+            laid_bytes,
             overlap,
             surface,
             zero_overlap_until_m,
@@ -151,26 +92,14 @@ impl BeamPath {
         }
     }
 
-    /// The altitudes `(z_lo, z_hi)` the beam's path through the atmosphere spans (empty
-    /// when `z_hi <= z_lo`): a space-borne beam from the platform or the atmosphere's top
-    /// down to the window's end or the `surface` (sea level without one); a ground beam
-    /// from the station up to the window's end or the atmosphere's top.
+    /// The altitudes `(z_lo, z_hi)` the beam's path through the atmosphere spans
+    /// ([`laying::altitude_span`]).
     pub fn altitude_span(
         atmosphere: &Atmosphere,
         geometry: &Geometry,
         surface: Option<&Surface>,
     ) -> (f64, f64) {
-        let r_max = geometry.max_range_m();
-        let z_far = geometry.altitude_at_range(r_max);
-        let ground_m = surface.map_or(0.0, |s| s.altitude_m);
-        match geometry.kind {
-            // The beam stops at the surface.
-            PlatformKind::Spaceborne => (
-                z_far.max(ground_m),
-                geometry.platform_altitude_m.min(atmosphere.top_m()),
-            ),
-            PlatformKind::Ground => (geometry.platform_altitude_m, z_far.min(atmosphere.top_m())),
-        }
+        laying::altitude_span(atmosphere, geometry, surface)
     }
 
     /// The range where the beam's path through the atmosphere ends, m: a space-borne
@@ -188,6 +117,20 @@ impl BeamPath {
     /// The segments, ordered by range.
     pub fn segments(&self) -> &[Segment] {
         &self.segments
+    }
+
+    /// Lets the segments go once the model is computed, for a command that reads no more
+    /// of the path (`expect`, whose CSV's columns then take their place): the path is
+    /// empty after, as one through no atmosphere, and integrates no signal.
+    pub fn release(&mut self) {
+        self.segments = Vec::new();
+        self.lobes = Vec::new();
+    }
+
+    /// The memory the path took while it was laid and after (its segments, and every
+    /// slab's edge while they were iterated), bytes.
+    pub fn laid_bytes(&self) -> PathBytes {
+        self.laid_bytes
     }
 
     /// The overlap function η(r).

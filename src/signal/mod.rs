@@ -19,7 +19,9 @@
 //! shrink geometrically only towards the overlap's kinks, where η is not smooth.
 
 mod beam_path;
+mod laying;
 mod multiple_scattering;
 
-pub use beam_path::{BeamPath, Segment, SurfaceEcho, exponential_moments};
+pub use beam_path::{BeamPath, SurfaceEcho, exponential_moments};
+pub use laying::{PathBytes, PathExtent, Segment, SegmentLobes, laying_bytes};
 pub use multiple_scattering::BinMultipleScattering;

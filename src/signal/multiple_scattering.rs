@@ -165,7 +165,8 @@ impl BeamPath {
         cuts.dedup();
         let mut out = BeamSteps::default();
         let mut tau_p = 0.0;
-        for s in &self.segments {
+        debug_assert_eq!(self.lobes.len(), self.segments.len(), "PathExtent::Whole");
+        for (s, l) in self.segments.iter().zip(&self.lobes) {
             if s.tau_start > OPAQUE_OPTICAL_DEPTH {
                 break; // T² underflows to 0 here: these bins hold no signal to enhance
             }
@@ -184,11 +185,11 @@ impl BeamPath {
                     let mid = a + 0.5 * d;
                     out.steps.push(ms::Step {
                         width_m: d,
-                        alpha_particle_per_m: s.alpha_lobe,
-                        alpha_theta2_per_m: s.alpha_theta2,
-                        alpha_air_per_m: (s.alpha - s.alpha_lobe).max(0.0),
+                        alpha_particle_per_m: l.alpha_lobe,
+                        alpha_theta2_per_m: l.alpha_theta2,
+                        alpha_air_per_m: (s.alpha - l.alpha_lobe).max(0.0),
                     });
-                    tau_p += s.alpha_particle * d;
+                    tau_p += l.alpha_particle * d;
                     out.ends.push((a + d, tau_p));
                     let bin = bins.partition_point(|&(_, b)| b <= mid);
                     let bin = match bins.get(bin) {
@@ -200,8 +201,8 @@ impl BeamPath {
                     out.weights.push(StepWeight {
                         bin,
                         channel: s.beta * t2,
-                        total: s.beta_total * t2,
-                        cloud: s.beta_cloud * t2,
+                        total: l.beta_total * t2,
+                        cloud: l.beta_cloud * t2,
                         range,
                     });
                 }
@@ -274,17 +275,20 @@ impl BeamPath {
             return g;
         }
         let k = self.segments.partition_point(|s| s.r_end <= a);
-        for s in self.segments[k..].iter().take_while(|s| s.r_start < b) {
+        let along = self.segments[k..]
+            .iter()
+            .zip(&self.lobes[k.min(self.lobes.len())..]);
+        for (s, l) in along.take_while(|(s, _)| s.r_start < b) {
             let len = s.r_end.min(b) - s.r_start.max(a);
             if len <= 0.0 {
                 continue;
             }
-            let air = (s.alpha - s.alpha_lobe).max(0.0);
-            g.alpha_particle_per_m += s.alpha_lobe * len;
-            g.alpha_g_per_m += s.alpha_lobe_g * len;
-            g.alpha_theta2_per_m += s.alpha_theta2 * len;
+            let air = (s.alpha - l.alpha_lobe).max(0.0);
+            g.alpha_particle_per_m += l.alpha_lobe * len;
+            g.alpha_g_per_m += l.alpha_lobe_g * len;
+            g.alpha_theta2_per_m += l.alpha_theta2 * len;
             g.alpha_air_per_m += air * len;
-            g.scattering_air_per_m += (air - s.alpha_absorbing).max(0.0) * len;
+            g.scattering_air_per_m += (air - l.alpha_absorbing).max(0.0) * len;
         }
         let w = b - a;
         g.alpha_particle_per_m /= w;

@@ -157,12 +157,13 @@ pub fn plan(lidar: &Lidar, opts: &RunOptions, resolved: Option<ResolvedMethod>) 
         Some(m) => m,
         None => resolve_method(requested, lidar)?,
     };
-    // what the plan holds besides the model (whose estimate was checked when it was
-    // built): the file's variables per bin, before the run's own estimate (check_sizes)
+    // what the plan holds from here on: the model's bins (its beam paths are laid and
+    // counted in what the process holds) and the file's variables per bin, before the
+    // run's own estimate (check_sizes)
     let bins = (lidar.channels.len() * first.geometry.n_bins) as f64;
     crate::resources::require_memory(
         &format!("planning a run of {bins} bins"),
-        bins * PLAN_BYTES_PER_BIN,
+        bins * (crate::scenario::MODEL_BYTES_PER_BIN + PLAN_BYTES_PER_BIN),
     )?;
     let expected = lidar.expected()?;
     let shots = first.shots_per_profile();

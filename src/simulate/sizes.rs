@@ -26,6 +26,13 @@ const FILE_BYTES_PER_BIN: f64 = 200.0;
 /// f64 truth values per count), rounded up for counts alone.
 const FILE_NS_PER_COUNT: f64 = 40.0;
 
+/// Profiles drawn in one batch of `n_bins` bins and `streams` count streams: at most
+/// 4 Mi counts (32 MiB), at least one profile, at most 64 (the drawing loop's,
+/// `simulate::draw`); two batches are held at once, one drawn while one is written.
+fn batch_profiles(n_bins: usize, streams: usize) -> usize {
+    ((4 << 20) / (n_bins * streams).max(1)).clamp(1, 64)
+}
+
 /// Estimated size of the raw file, bytes: per stored count the smaller of its width and
 /// the compressed Poisson entropy of its mean.
 pub fn estimated_file_bytes(totals: &[f64], shots: u64, profiles: usize, streams: usize) -> f64 {
@@ -84,7 +91,9 @@ pub(super) fn check_sizes(
     let writer =
         crate::output::raw_file::writer::buffer_bytes(bins as usize * 8, streams + 5, threads);
     let tables = streams as f64 * sampling::table_bytes_bound(bins as usize);
-    let memory = profiles as f64 / 8.0 + 64.0 * bins * 8.0 * 2.0 * streams as f64 + tables + writer;
+    let batch = batch_profiles(bins as usize, streams).min(profiles);
+    let rows = batch as f64 * bins * streams as f64;
+    let memory = profiles as f64 / 8.0 + rows * 8.0 * 2.0 + tables + writer;
     crate::resources::require_memory(&format!("simulating {profiles} profiles"), memory)?;
     if to_disk {
         let file = estimated_file_bytes(totals, shots, profiles, streams);
