@@ -99,6 +99,11 @@ enum Command {
         /// Also store signal, background and dark counts separately.
         #[arg(long)]
         components: bool,
+        /// compact (each truth at the dimensions of what it depends on) or per-profile
+        /// (also format 3's (profile, channel, bin) arrays of a changing scene); default
+        /// simulation.truth.
+        #[arg(long, value_enum)]
+        truth: Option<lidarsim::config::TruthForm>,
         /// With --method auto: largest KS distance per bin to the exact law a faster
         /// approximation may have, in (0, 0.01] (e.g. 1e-3); default exact.
         #[arg(long, allow_negative_numbers = true, value_parser = cli_values::tolerance)]
@@ -320,6 +325,7 @@ fn main() -> ExitCode {
             profiles,
             method,
             components,
+            truth,
             tolerance,
             threads,
             format,
@@ -336,6 +342,7 @@ fn main() -> ExitCode {
                     profiles: *profiles,
                     method: *method,
                     components: components.then_some(true),
+                    truth: *truth,
                     tolerance: *tolerance,
                     progress: std::io::IsTerminal::is_terminal(&std::io::stderr()),
                     command_line: lidarsim::output::raw_file::content::history_command(

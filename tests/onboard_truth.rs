@@ -249,13 +249,21 @@ fn compare_with_native(product: &Path, raw: &Path, g: &str, shots: usize) {
             "C·atb·range_weight",
         );
     }
-    // the per-shot truth of the raw file's one-shot profiles (per profile in a changing
-    // scene, else (channel, bin)), averaged over the shots
+    // the per-shot truth of the raw file's one-shot profiles, averaged over the shots:
+    // the expected signal of each column (a static scene: its one column, (channel, bin))
+    // and the background of each (profile, channel) in a changing scene (a static
+    // scene: (channel, bin))
     let raw_signal = f64s(raw, "", "expected_signal");
     let raw_bkg = f64s(raw, "", "expected_background");
     let raw_dark = f64s(raw, "", "expected_dark");
-    let per_profile = raw_signal.len() > nch * n;
-    let row = |shot: usize, c: usize| if per_profile { shot * nch + c } else { c };
+    let bkg_per_profile = raw_bkg.len() != nch * n;
+    let bkg_of = |shot: usize, c: usize| {
+        if bkg_per_profile {
+            raw_bkg[shot * nch + c]
+        } else {
+            raw_bkg[c * n]
+        }
+    };
     let raw_columns = read::<i32>(raw, "", "profile_column").0;
     let raw_slots = raw_columns.len() / f64s(raw, "", "time").len();
     let column_of = |shot: usize| raw_columns[shot * raw_slots] as usize;
@@ -263,7 +271,8 @@ fn compare_with_native(product: &Path, raw: &Path, g: &str, shots: usize) {
         let col = column_of(shot);
         for (h, &c) in held.iter().enumerate() {
             for j in 0..bins {
-                let s = mean(&raw_signal, row(shot, c), j) * merge as f64;
+                // one shot: its profile's signal is its column's
+                let s = mean(&raw_signal, col * nch + c, j) * merge as f64;
                 let i = (col * channels + h) * bins + j;
                 close(signal[i], s, "expected_signal of the shot's column");
             }
@@ -290,7 +299,7 @@ fn compare_with_native(product: &Path, raw: &Path, g: &str, shots: usize) {
             close(e, mean_of(&|s| raw_energy[s * nch + c]), "pulse_energy");
         }
         for (h, &c) in held.iter().enumerate() {
-            let b = mean_of(&|s| raw_bkg[row(s, c) * n]);
+            let b = mean_of(&|s| bkg_of(s, c));
             close(bkg[p * channels + h], b, "expected_background");
             close(dark[p * channels + h], raw_dark[c * n], "expected_dark");
         }

@@ -125,8 +125,8 @@ fn segments_broken_cloud_and_the_terminator() {
     let (dir, f) = orbit_run("segments", &["--set", "background.transmission=0.8"]);
     let n_bins = read(&f, "altitude").len();
     let alt = read(&f, "altitude");
-    let signal = read(&f, "expected_signal");
-    let bkg = read(&f, "expected_background");
+    let signal = common::h5::per_profile(&f, "expected_signal");
+    let bkg = common::h5::per_profile(&f, "expected_background");
     let d = read(&f, "along_track_distance");
     let at = |p: usize, z: f64| {
         let i = (0..n_bins)
@@ -228,7 +228,7 @@ fn a_tabulated_curtain_is_the_scene() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let f = hdf5::File::open(&out).unwrap();
     let alt = read(&f, "altitude");
-    let signal = read(&f, "expected_signal");
+    let signal = common::h5::per_profile(&f, "expected_signal");
     let n = alt.len();
     let bin = |z: f64| {
         (0..n)
@@ -319,8 +319,8 @@ fn daylight_through_dead_time() {
         .iter()
         .map(|&c| f64::from(c))
         .collect();
-    let expected = read(&f, "expected_counts");
-    let signal = read(&f, "expected_signal");
+    let expected = common::h5::per_profile(&f, "expected_counts");
+    let signal = common::h5::per_profile(&f, "expected_signal");
     // every sunlit signal-free bin (signal below 1 % of the recorded expectation, at
     // least 0.1 counts expected)
     // of the window's top 450 bins, in every profile

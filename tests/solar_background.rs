@@ -270,7 +270,7 @@ fn an_orbit_run_sees_the_daylight_sky() {
     let (lat, lon, bkg, n_bins) = (
         read("latitude"),
         read("longitude"),
-        read("expected_background"),
+        common::h5::per_profile(&f, "expected_background"),
         read("altitude").len(),
     );
     let start = humantime::parse_rfc3339("2024-06-20T12:00:00Z").unwrap();

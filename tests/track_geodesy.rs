@@ -99,7 +99,7 @@ fn a_segment_boundary_falls_at_its_length_along_the_files_track() {
         read(&f, "longitude"),
         read(&f, "altitude"),
     );
-    let signal = read(&f, "expected_signal");
+    let signal = common::h5::per_profile(&f, "expected_signal");
     let n_bins = alt.len();
     let z10 = (0..n_bins)
         .min_by(|&a, &b| (alt[a] - 10e3).abs().total_cmp(&(alt[b] - 10e3).abs()))

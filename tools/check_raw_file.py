@@ -17,7 +17,11 @@ and with `ncdump -h` (if on PATH), and checks that:
     `time` to datetime64 and attaches `time`, `altitude` and `range` as coordinates with
     no extra arguments; `expected_signal = lidar_constant * attenuated_backscatter *
     range_weight`; `expected_counts` is the sum of the three expectations (at most
-    that sum for a channel with dead time);
+    that sum for a channel with dead time); these per profile, rebuilt here from
+    whatever form the file holds (format 4's compact truth: `expected_signal` and
+    `attenuated_backscatter` per column, `expected_background` per (profile, channel),
+    no `expected_counts` of an ideal detector, no `snr_eq4`; docs/file-format.md, "The
+    truth of each profile"), and per column where they are per column;
   * the truth (format 3): per column, channel and bin `alpha_total` is the sum of
     `alpha_mol`, `alpha_o3`, `alpha_aer`, `alpha_cld` (1e-12), `beta_mol` times
     `molecular_lidar_ratio` is `alpha_mol` (1e-12), the particle lidar ratios are
@@ -47,8 +51,7 @@ CHANNEL_TEXT = ["channel_kind", "channel_species", "polarization", "detection_mo
                 "molecular_line"]
 REQUIRED_VARIABLES = [
     "counts", "channel", "altitude", "range", "time", "n_shots", "pulse_energy",
-    "expected_signal", "expected_background", "expected_dark", "expected_counts", "snr_eq4",
-    "lidar_constant", "range_weight", "attenuated_backscatter",
+    "expected_signal", "expected_background", "expected_dark", "lidar_constant", "range_weight", "attenuated_backscatter",
     "overlap", "emission_wavelength", "detection_wavelength", "crosstalk", "relative_gain",
     "filter_width", "molecular_transmission", "particle_transmission", "molecular_lidar_ratio",
     "profile_column", "profile_column_weight", "column", "k",
@@ -143,10 +146,25 @@ def check_h5py(path, c, structure_only):
                     c.check(np.array_equal(total, counts.astype(np.uint64)),
                             "h5py: signal + background + dark counts != counts")
         if not structure_only and all(n in data for n in REQUIRED_VARIABLES):
-            model = data["lidar_constant"][:, None] * data["attenuated_backscatter"] * data["range_weight"][None, :]
-            c.check(np.allclose(model, data["expected_signal"], rtol=1e-9, atol=0),
+            dim_names = {n: tuple(d.values()[0].name.lstrip("/") if len(d) else "" for d in ds.dims)
+                         for n, ds in datasets.items()}
+            if dim_names.get("expected_signal", ())[:1] == ("column",):
+                # the compact truth: the identity per column too
+                model = (data["lidar_constant"][None, :, None] * data["attenuated_backscatter"]
+                         * data["range_weight"][None, None, :])
+                c.check(np.allclose(model, data["expected_signal"], rtol=1e-9, atol=0),
+                        "h5py: expected_signal != lidar_constant * attenuated_backscatter * range_weight per column")
+            rebuilt = {n: per_profile(data, dim_names, n)
+                       for n in ("expected_signal", "expected_background", "expected_dark", "expected_counts",
+                                 "snr_eq4", "attenuated_backscatter")}
+            for n, v in rebuilt.items():
+                c.check(v.shape == counts.shape and bool(np.all(np.isfinite(v))),
+                        f"h5py: {n} rebuilt per profile is {v.shape} or not finite")
+            model = (data["lidar_constant"][None, :, None] * rebuilt["attenuated_backscatter"]
+                     * data["range_weight"][None, None, :])
+            c.check(np.allclose(model, rebuilt["expected_signal"], rtol=1e-9, atol=0),
                     "h5py: expected_signal != lidar_constant * attenuated_backscatter * range_weight")
-            total = data["expected_signal"] + data["expected_background"] + data["expected_dark"]
+            total = rebuilt["expected_signal"] + rebuilt["expected_background"] + rebuilt["expected_dark"]
             # a channel with dead time records less than arrives; an ideal one all of it
             # (channel, bin), or (profile, channel, bin) in a scene that changes along the track
             channels = data["lidar_constant"].shape[0]
@@ -161,7 +179,7 @@ def check_h5py(path, c, structure_only):
             for extra in ("expected_induced", "expected_afterpulse"):
                 if extra in f:
                     total = total + f[extra][:]
-            counted = data["expected_counts"]
+            counted = rebuilt["expected_counts"]
             ideal = ~dead & ~analog
             ideal_ok = np.allclose(total[..., ideal, :], counted[..., ideal, :], rtol=1e-9, atol=0)
             c.check(bool(ideal_ok), "h5py: expected_counts != signal + background + dark (ideal detector)")
@@ -192,6 +210,40 @@ def check_energy(data, c):
     factor = energy / np.where(nominal > 0, nominal, 1)[None, :]
     c.check(rel_dev(factor, np.repeat(factor[:, :1], shape[1], axis=1)) <= 1e-12,
             "h5py: pulse_energy / nominal_pulse_energy differs between channels of a profile")
+
+
+def per_profile(data, dim_names, name):
+    """``name`` of every profile (profile, channel, bin), from whatever form the file holds
+    (docs/file-format.md, "The truth of each profile"): (profile, channel, bin) as is,
+    (channel, bin) in every profile, (column, channel, bin) mixed by each profile's
+    columns, (profile, channel) in every bin; an absent ``expected_counts`` (ideal
+    detectors) is signal + background + dark, an absent ``snr_eq4`` Eq. 4 of those."""
+    import numpy as np
+
+    p, ch, b = data["counts"].shape
+    if name not in data:
+        s, bg, d = (per_profile(data, dim_names, n)
+                    for n in ("expected_signal", "expected_background", "expected_dark"))
+        if name == "expected_counts":
+            return s + bg + d
+        m = data["n_shots"].astype("float64")[:, None, None]
+        total = m * (s + bg + d)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(total > 0, m * s / np.sqrt(total), 0.0)
+    v, dims = data[name], dim_names.get(name, ())
+    if dims == ("profile", "channel", "bin"):
+        return v
+    if dims == ("channel", "bin"):
+        return np.broadcast_to(v, (p, ch, b))
+    if dims == ("profile", "channel"):
+        return np.repeat(v[:, :, None], b, axis=2)
+    if dims == ("column", "channel", "bin"):
+        col, w = np.clip(data["profile_column"], 0, None), data["profile_column_weight"]
+        out = np.zeros((p, ch, b))
+        for j in range(col.shape[1]):
+            out = out + w[:, j, None, None] * v[col[:, j]]
+        return out
+    return np.full((p, ch, b), np.nan)
 
 
 def rel_dev(a, b):

@@ -30,7 +30,8 @@ import xarray as xr
 
 from . import _lidarsim
 
-__all__ = ["Config", "load_config", "expect", "simulate", "validate", "validate_file", "sweep"]
+__all__ = ["Config", "load_config", "expect", "simulate", "per_profile", "validate",
+           "validate_file", "sweep"]
 
 
 def _toml_value(key: str, value: Any) -> str:
@@ -160,27 +161,94 @@ def expect(config: ConfigLike, channel: Optional[str] = None) -> xr.Dataset:
 
 def simulate(config: ConfigLike, profiles: Optional[int] = None, seed: Optional[int] = None,
              method: Optional[str] = None, path: Union[str, os.PathLike, None] = None,
-             progress: bool = False) -> Union[xr.Dataset, Path]:
+             progress: bool = False, truth: Optional[str] = None) -> Union[xr.Dataset, Path]:
     """``lidarsim simulate CONFIG -o PATH``: with ``path``, writes the raw file exactly
     as the CLI does (same seed, same counts and truth) and returns its path; without,
     returns the raw file's Dataset built in memory (no file, no compression; the same
     variables, dimensions and attributes, the counts in the file's integer type).
     ``method``: ``"auto"``, ``"shot"`` or ``"aggregate"``; ``progress``: the CLI's
-    progress bar on a terminal. Ctrl-C stops the run before its next profile and
-    leaves no file. A scene beyond a photon counter's range gives a ``UserWarning``."""
+    progress bar on a terminal; ``truth``: ``"compact"`` (the default,
+    ``simulation.truth``) or ``"per-profile"`` (``--truth per-profile``: a changing
+    scene's expectations also as format 3's (profile, channel, bin) arrays). Ctrl-C stops
+    the run before its next profile and leaves no file. A scene beyond a photon
+    counter's range gives a ``UserWarning``."""
     cfg = _config(config)
     profiles, seed = _whole("profiles", profiles), _whole("seed", seed)
     if path is not None:
         with _terminable():
             warning = _lidarsim.simulate(cfg.loaded, os.fspath(path), profiles, seed, method,
-                                         progress)
+                                         truth, progress)
         _warn(warning)
         return Path(path)
     with _terminable():
         variables, root, warning, _times = _lidarsim.simulate_in_memory(
-            cfg.loaded, profiles, seed, method, progress)
+            cfg.loaded, profiles, seed, method, truth, progress)
     _warn(warning)
     return _dataset(variables, root)
+
+
+#: The variables ``per_profile`` rebuilds (docs/file-format.md, "The truth of each
+#: profile"), and every other (column, channel, bin) variable of the truth.
+PER_PROFILE_NAMES = ("expected_signal", "expected_background", "expected_counts", "snr_eq4",
+                     "attenuated_backscatter")
+
+
+def _mix(ds: xr.Dataset, x: xr.DataArray) -> np.ndarray:
+    """A (column, channel, bin) variable per profile: ``sum_j w_j * x[c_j]`` over the
+    profile's slots in order, from 0 (an unused slot, -1 of weight 0, read as column
+    0): the writer's order of operations, so the same bits."""
+    cols = np.clip(ds["profile_column"].values, 0, None)
+    w = ds["profile_column_weight"].values
+    x = x.values
+    out = np.zeros((cols.shape[0],) + x.shape[1:])
+    for j in range(cols.shape[1]):
+        out = out + w[:, j, None, None] * x[cols[:, j]]
+    return out
+
+
+def _as_per_profile(ds: xr.Dataset, name: str) -> np.ndarray:
+    """``name`` of every profile, (profile, channel, bin), whatever its form in ``ds``."""
+    p, c, b = ds.sizes["profile"], ds.sizes["channel"], ds.sizes["bin"]
+    if name not in ds:
+        sig = _as_per_profile(ds, "expected_signal")
+        bkg = _as_per_profile(ds, "expected_background")
+        dark = _as_per_profile(ds, "expected_dark")
+        if name == "expected_counts":   # an ideal photon counter: what arrives
+            return sig + bkg + dark
+        if name == "snr_eq4":           # Eq. 4 with the profile's shots (src/snr.rs)
+            m = ds["n_shots"].values.astype("float64")[:, None, None]
+            total = m * (sig + bkg + dark)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                return np.where(total > 0.0, m * sig / np.sqrt(total), 0.0)
+        raise KeyError(f"{name!r} is not in the Dataset and cannot be rebuilt")
+    v = ds[name]
+    dims = v.dims
+    if dims == ("profile", "channel", "bin"):
+        return v.values
+    if dims == ("channel", "bin"):
+        return np.broadcast_to(v.values, (p, c, b)).copy()
+    if dims == ("column", "channel", "bin"):
+        return _mix(ds, v)
+    if dims == ("profile", "channel"):
+        return np.repeat(v.values[:, :, None], b, axis=2)
+    raise ValueError(f"{name!r} is {dims}: not a truth this function rebuilds per profile")
+
+
+def per_profile(ds: xr.Dataset, name: str) -> xr.DataArray:
+    """The (profile, channel, bin) array ``name`` of a raw file's Dataset, rebuilt from
+    whatever form it holds (docs/file-format.md, "The truth of each profile"): exactly
+    the values ``simulate --truth per-profile`` writes for ``expected_signal``,
+    ``expected_background``, ``expected_counts``, ``snr_eq4`` and
+    ``attenuated_backscatter``, and the profile's mix of its columns for every other
+    (column, channel, bin) truth (``beta_cld``, ``t2``, ...). ``ds`` is what
+    ``xarray.open_dataset(path, engine="h5netcdf")`` or ``simulate`` returns; select
+    profiles first (``ds.isel(profile=slice(0, 1000))``) for a long run."""
+    data = _as_per_profile(ds, name)
+    attrs = dict(ds[name].attrs) if name in ds else {}
+    attrs.pop("coordinates", None)
+    return xr.DataArray(data, dims=("profile", "channel", "bin"),
+                        coords={"profile": ds["profile"], "channel": ds["channel"]},
+                        name=name, attrs=attrs)
 
 
 def _whole(name: str, value: Optional[int]) -> Optional[int]:

@@ -225,13 +225,28 @@ fn method(name: Option<&str>) -> PyResult<Option<Method>> {
     .transpose()
 }
 
+/// `simulation.truth` by name (`--truth`).
+fn truth_form(name: Option<&str>) -> PyResult<Option<lidarsim::config::TruthForm>> {
+    use lidarsim::config::TruthForm;
+    name.map(|n| match n {
+        "compact" => Ok(TruthForm::Compact),
+        "per-profile" => Ok(TruthForm::PerProfile),
+        _ => Err(PyValueError::new_err(format!(
+            "truth `{n}` is not one of compact, per-profile"
+        ))),
+    })
+    .transpose()
+}
+
 /// The options of a run, as the CLI's `simulate` sets them.
+#[allow(clippy::too_many_arguments)]
 fn run_options(
     loaded: &Loaded,
     output: PathBuf,
     profiles: Option<usize>,
     seed: Option<u64>,
     method_name: Option<&str>,
+    truth: Option<&str>,
     progress: bool,
 ) -> PyResult<RunOptions> {
     Ok(RunOptions {
@@ -239,6 +254,7 @@ fn run_options(
         seed,
         profiles,
         method: method(method_name)?,
+        truth: truth_form(truth)?,
         progress,
         command_line: format!("lidarsim.simulate({})", loaded.path.display()),
         ..RunOptions::default()
@@ -270,7 +286,8 @@ fn expect<'py>(
 /// (same seed, same counts and truth; the `history` attribute names this call);
 /// returns the run's warning, if any.
 #[pyfunction]
-#[pyo3(signature = (loaded, output, profiles=None, seed=None, method=None, progress=false))]
+#[pyo3(signature = (loaded, output, profiles=None, seed=None, method=None, truth=None, progress=false))]
+#[allow(clippy::too_many_arguments)]
 fn simulate(
     py: Python<'_>,
     loaded: &Loaded,
@@ -278,9 +295,10 @@ fn simulate(
     profiles: Option<usize>,
     seed: Option<u64>,
     method: Option<&str>,
+    truth: Option<&str>,
     progress: bool,
 ) -> PyResult<Option<String>> {
-    let opts = run_options(loaded, output, profiles, seed, method, progress)?;
+    let opts = run_options(loaded, output, profiles, seed, method, truth, progress)?;
     let summary = interruptible(py, |cancel| {
         let opts = RunOptions {
             cancel: Some(cancel),
@@ -309,16 +327,25 @@ type InMemory<'py> = (
 /// the same counts and truth as the file for the same seed, the run's warning, and its
 /// drawing and whole times (s).
 #[pyfunction]
-#[pyo3(signature = (loaded, profiles=None, seed=None, method=None, progress=false))]
+#[pyo3(signature = (loaded, profiles=None, seed=None, method=None, truth=None, progress=false))]
 fn simulate_in_memory<'py>(
     py: Python<'py>,
     loaded: &Loaded,
     profiles: Option<usize>,
     seed: Option<u64>,
     method: Option<&str>,
+    truth: Option<&str>,
     progress: bool,
 ) -> PyResult<InMemory<'py>> {
-    let opts = run_options(loaded, PathBuf::new(), profiles, seed, method, progress)?;
+    let opts = run_options(
+        loaded,
+        PathBuf::new(),
+        profiles,
+        seed,
+        method,
+        truth,
+        progress,
+    )?;
     let (memory, summary) = interruptible(py, |cancel| {
         let opts = RunOptions {
             cancel: Some(cancel),

@@ -136,6 +136,36 @@ def test_a_changing_scene_in_memory_is_the_file(tmp_path):
         lidarsim.simulate(orbit, profiles=3, method="fast")
 
 
+
+def test_per_profile_is_what_truth_per_profile_writes(tmp_path):
+    """The orbit's compact truth (format 4: per column, the sky per (profile, channel),
+    no expected_counts or snr_eq4 of its ideal detector) rebuilt by per_profile: every
+    value, to the bit, what `simulate --truth per-profile` writes; the in-memory run
+    takes the same argument."""
+    import xarray as xr
+
+    orbit = ROOT / "configs" / "instruments" / "caliop_orbit.toml"
+    args = ["--profiles", "30", "--seed", "2", "--method", "aggregate"]
+    for truth in ("compact", "per-profile"):
+        r = cli("simulate", orbit, "-o", tmp_path / f"{truth}.nc", *args, "--truth", truth)
+        assert r.returncode == 0, r.stderr
+    compact = xr.load_dataset(tmp_path / "compact.nc", engine="h5netcdf")
+    full = xr.load_dataset(tmp_path / "per-profile.nc", engine="h5netcdf")
+    assert compact.expected_signal.dims == ("column", "channel", "bin")
+    assert compact.expected_background.dims == ("profile", "channel")
+    assert "expected_counts" not in compact and "snr_eq4" not in compact
+    for name in lidarsim.PER_PROFILE_NAMES:
+        rebuilt = lidarsim.per_profile(compact, name)
+        assert rebuilt.dims == full[name].dims == ("profile", "channel", "bin"), name
+        np.testing.assert_array_equal(rebuilt.values.view(np.uint64),
+                                      full[name].values.view(np.uint64), err_msg=name)
+    in_memory = lidarsim.simulate(orbit, profiles=30, seed=2, method="aggregate",
+                                  truth="per-profile")
+    np.testing.assert_array_equal(in_memory.snr_eq4.values, full.snr_eq4.values)
+    with pytest.raises(ValueError, match="truth `full` is not one of compact, per-profile"):
+        lidarsim.simulate(orbit, profiles=3, truth="full")
+
+
 INTERRUPTED_RUN = """
 import sys, time, lidarsim
 what, path = sys.argv[2], (sys.argv[3] if len(sys.argv) > 3 else None)

@@ -57,7 +57,7 @@ pub use scene::{
     OrbitConfig, PlatformConfig, PlatformKind, SceneConfig, SegmentAerosol, SegmentConfig,
     SurfaceConfig, SurfaceKind,
 };
-pub use simulation::{Method, SimulationConfig, seed_value};
+pub use simulation::{Method, SimulationConfig, TruthForm, seed_value};
 pub use warnings::{
     PLAUSIBLE_PULSE_ENERGY_J, PLAUSIBLE_WINDOW_BEYOND_GROUND_KM, unambiguous_range_m,
 };

@@ -15,6 +15,20 @@ pub enum Method {
     Aggregate,
 }
 
+/// How a changing scene's truth is stored in the raw file (docs/file-format.md, "The
+/// truth of each profile"): at the dimensions of what it depends on, or also per profile.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum TruthForm {
+    /// Per column what depends on the atmosphere, per (profile, channel) what depends
+    /// on the profile alone, per (profile, channel, bin) only what varies in all three.
+    #[default]
+    Compact,
+    /// Also the format-3 arrays (profile, channel, bin) of `expected_signal`,
+    /// `expected_background`, `expected_counts`, `snr_eq4` and `attenuated_backscatter`.
+    PerProfile,
+}
+
 /// Monte Carlo settings.
 #[derive(Debug, Clone, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -33,6 +47,9 @@ pub struct SimulationConfig {
     /// exact law that a faster approximate method may have (see `docs/simulation.md`).
     #[serde(default)]
     pub tolerance: Option<f64>,
+    /// How a changing scene's truth is stored (`--truth`).
+    #[serde(default)]
+    pub truth: TruthForm,
 }
 
 /// The TOML value of `simulation.seed`: an integer, or the string of its digits above

@@ -59,8 +59,11 @@ pub fn model_variables(
     command_line: &str,
 ) -> crate::error::Result<(Vec<crate::output::raw_file::memory::MemoryVariable>, f64)> {
     use crate::output::raw_file::{Dims, PROFILE_DIM, content, memory};
+    // a changing scene's expectations per profile (format 3's layout), replaced below
+    // by the first column's
     let opts = crate::simulate::RunOptions {
         command_line: command_line.into(),
+        truth: Some(crate::config::TruthForm::PerProfile),
         ..Default::default()
     };
     let plan = crate::simulate::plan(lidar, &opts, None)?;
@@ -69,7 +72,13 @@ pub fn model_variables(
     if plan.scene.is_some() {
         let columns = [plan.expected.as_slice()];
         let shots = first.shots_per_profile();
-        let first_column = content::variables(lidar, &plan.expected, &columns, shots, false);
+        let first_column = content::variables(
+            lidar,
+            &plan.expected,
+            &columns,
+            shots,
+            content::TruthLayout::Static,
+        );
         for v in spec.variables.iter_mut() {
             let same = first_column.iter().find(|f| f.name == v.name);
             if let (Dims::ProfileChannelBin, Some(f)) = (v.dims, same) {

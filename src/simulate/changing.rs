@@ -7,6 +7,8 @@ use super::method::ResolvedMethod;
 use super::sampler::channel_seed;
 use super::scene;
 use crate::error::{Error, Result};
+use crate::output::raw_file::content::TruthLayout;
+use crate::output::raw_file::per_profile;
 use crate::scenario::Lidar;
 
 /// Whether the scene of `lidar` changes along the track (or with the sun): a run of it
@@ -176,4 +178,86 @@ pub fn scene_profile_values(
         snr,
         truth.attenuated_backscatter,
     ]
+}
+
+/// The rows profile `p` of a changing scene writes into its file, in the order of its
+/// per-profile variables ([`TruthLayout`]): with the compact truth the sky background
+/// per channel, and the recorded counts of a dead-time detector under the sun; with
+/// `--truth per-profile` format 3's five rows, each exactly what
+/// [`crate::output::raw_file::per_profile`] rebuilds from the compact form. `columns`
+/// are the profile's slots and weights, `dark` every channel's dark counts per shot
+/// (the file's `expected_dark`), `shots` the profile's.
+pub fn file_rows(
+    sc: &scene::SceneModel,
+    layout: TruthLayout,
+    draw: &SceneDraw,
+    columns: &(Vec<i32>, Vec<f64>),
+    dark: &[f64],
+    shots: u64,
+) -> Vec<Vec<f64>> {
+    let n_bins = sc.expected[0][0].n_bins();
+    let channels = dark.len();
+    let background = &draw.mean_backgrounds;
+    let mix = |f: fn(&crate::scenario::ExpectedProfile) -> &[f64]| {
+        let mut out = vec![0.0; channels * n_bins];
+        for (k, row) in out.chunks_mut(n_bins).enumerate() {
+            let slots = columns.0.iter().zip(&columns.1).map(|(&c, &w)| {
+                let e = &sc.expected[per_profile::slot_column(c)][k];
+                (w, f(e))
+            });
+            per_profile::mix_into(row, slots);
+        }
+        out
+    };
+    let signal = mix(|e| &e.signal);
+    let dead = sc.dead.iter().any(Option::is_some);
+    // (signal + background) + dark in every bin, or a dead-time channel's stationary
+    // recorded rate of it (the transient at a sharp edge, O(τ/Δt), is not in this truth)
+    let recorded_of_arriving = || -> Vec<f64> {
+        let mut out = signal.clone();
+        for (k, row) in out.chunks_mut(n_bins).enumerate() {
+            for r in row.iter_mut() {
+                let arriving = per_profile::ideal_counts(*r, background[k], dark[k]);
+                *r = match &sc.dead[k] {
+                    Some(d) => d.stationary_rate(arriving / d.bin_width_s) * d.bin_width_s,
+                    None => arriving,
+                };
+            }
+        }
+        out
+    };
+    match layout {
+        TruthLayout::Static => vec![],
+        TruthLayout::Compact { dead_time, solar } => {
+            let mut rows = vec![background.clone()];
+            if dead_time && solar {
+                rows.push(recorded_of_arriving());
+            }
+            rows
+        }
+        TruthLayout::PerProfile => {
+            let recorded = if dead && !sc.is_solar() {
+                mix(|e| &e.recorded)
+            } else {
+                recorded_of_arriving()
+            };
+            let bkg: Vec<f64> = background
+                .iter()
+                .flat_map(|&b| std::iter::repeat_n(b, n_bins))
+                .collect();
+            let snr = (0..signal.len())
+                .map(|j| {
+                    let k = j / n_bins;
+                    crate::snr::eq4(signal[j], background[k], dark[k], shots as f64)
+                })
+                .collect();
+            vec![
+                signal,
+                bkg,
+                recorded,
+                snr,
+                mix(|e| &e.attenuated_backscatter),
+            ]
+        }
+    }
 }

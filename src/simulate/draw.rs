@@ -5,7 +5,7 @@ use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
-use super::changing::{SceneDraw, draw_scene_counts, scene_profile_values};
+use super::changing::{SceneDraw, draw_scene_counts, file_rows};
 use super::drawn::{DrawnProfile, STATIC_COLUMN, draw_profile};
 use super::orbit::orbit_of;
 use super::plan::{RunOptions, RunPlan};
@@ -40,8 +40,11 @@ pub(super) fn draw_into<S: ProfileSink>(
         ref expected,
         energy,
         ref scene,
+        truth,
         ..
     } = *planned;
+    let layout = crate::output::raw_file::content::TruthLayout::of(lidar, scene.is_some(), truth);
+    let dark: Vec<f64> = expected.iter().map(|e| e.dark).collect();
     let shots = first.shots_per_profile();
     let profile_time_s = shots as f64 / first.instrument.rep_rate_hz;
     let n_bins = first.geometry.n_bins;
@@ -99,8 +102,8 @@ pub(super) fn draw_into<S: ProfileSink>(
         // the truth of a changing scene's profiles (the model, not the draw)
         if let Some(sc) = scene {
             drawn.par_iter_mut().for_each(|(d, draw)| {
-                if let Some(draw) = draw {
-                    d.values = scene_profile_values(sc, n_bins, draw);
+                if let (Some(draw), Some(columns)) = (draw, &d.columns) {
+                    d.values = file_rows(sc, layout, draw, columns, &dark, shots);
                 }
             });
         }

@@ -318,6 +318,9 @@ fn copy_rows(f: &ShardFile, spec: &RawFileSpec, writer: &mut RawFileWriter) -> R
             .iter()
             .map(|(d, dims)| match dims {
                 Dims::Profile => rows1(d).map(|x| (x.into_raw_vec(), 1)),
+                Dims::ProfileChannel => d
+                    .read_slice::<f64, _, Ix2>(s![a..b, ..])
+                    .map(|x| (x.into_raw_vec(), ch)),
                 _ => rows3f(d).map(|x| (x.into_raw_vec(), n)),
             })
             .collect::<hdf5::Result<_>>()

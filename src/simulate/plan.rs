@@ -30,6 +30,8 @@ pub struct RunOptions {
     pub tolerance: Option<f64>,
     /// Component-resolved counts (`simulation.components`).
     pub components: Option<bool>,
+    /// How a changing scene's truth is stored (`simulation.truth`, `--truth`).
+    pub truth: Option<crate::config::TruthForm>,
     /// Show a progress bar (on a terminal only).
     pub progress: bool,
     /// The command line, recorded in the file's `history`
@@ -53,6 +55,8 @@ pub struct RunPlan {
     pub profiles: usize,
     /// Component-resolved counts.
     pub components: bool,
+    /// How a changing scene's truth is stored.
+    pub truth: crate::config::TruthForm,
     /// The method used.
     pub method: ResolvedMethod,
     /// Every channel's per-shot expectations (the scene's first column).
@@ -81,6 +85,8 @@ pub struct RunValues {
     pub components: bool,
     /// `simulation.tolerance` (`--tolerance`).
     pub tolerance: Option<f64>,
+    /// `simulation.truth` (`--truth`).
+    pub truth: crate::config::TruthForm,
 }
 
 impl RunValues {
@@ -92,6 +98,7 @@ impl RunValues {
             method: opts.method.unwrap_or(cfg.simulation.method),
             components: opts.components.unwrap_or(cfg.simulation.components),
             tolerance: opts.tolerance.or(cfg.simulation.tolerance),
+            truth: opts.truth.unwrap_or(cfg.simulation.truth),
         }
     }
 
@@ -132,6 +139,8 @@ impl RunValues {
         if let Some(t) = self.tolerance {
             set("simulation", "tolerance", toml::Value::Float(t))?;
         }
+        let truth = toml::Value::try_from(self.truth).map_err(|e| unwritable(e.to_string()))?;
+        set("simulation", "truth", truth)?;
         toml::to_string(&table).map_err(|e| unwritable(e.to_string()))
     }
 }
@@ -148,6 +157,7 @@ pub fn plan(lidar: &Lidar, opts: &RunOptions, resolved: Option<ResolvedMethod>) 
         method: requested,
         components,
         tolerance,
+        truth,
     } = values;
     if profiles == 0 {
         return Err(Error::Unsupported("--profiles must be at least 1".into()));
@@ -194,6 +204,7 @@ pub fn plan(lidar: &Lidar, opts: &RunOptions, resolved: Option<ResolvedMethod>) 
         seed,
         profiles,
         components,
+        truth,
         method,
         expected,
         energy,
@@ -220,7 +231,7 @@ fn raw_file_spec(
         tolerance,
         ..
     } = *values;
-    let changing = scene.is_some();
+    let layout = content::TruthLayout::of(lidar, scene.is_some(), values.truth);
     let first = lidar.first();
     let shots = first.shots_per_profile();
     let mut method_attributes = vec![];
@@ -280,7 +291,7 @@ fn raw_file_spec(
         count_width: CountWidth::for_max_count(max_mean)?,
         components,
         time_units: content::time_units(&first.loaded.config.acquisition.start_time)?,
-        variables: content::variables(lidar, expected, &column_models, shots, changing)
+        variables: content::variables(lidar, expected, &column_models, shots, layout)
             .into_iter()
             .chain(
                 orbit_of(lidar)?
@@ -324,6 +335,7 @@ mod tests {
             method: Method::Auto,
             components: true,
             tolerance: Some(1e-3),
+            truth: crate::config::TruthForm::PerProfile,
         };
         let stored = values.stored_config(&loaded.resolved_toml).unwrap();
         assert!(

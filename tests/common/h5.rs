@@ -86,3 +86,15 @@ pub fn validate_consistent_both_ways(dir: &Path, config: &Path) {
         assert!(out.contains("CONSISTENT"), "{out}");
     }
 }
+
+/// Variable `name` of every profile, (profile, channel, bin) C order, rebuilt from
+/// whatever form the file holds (format 3's rows, one column's (channel, bin), format
+/// 4's compact form): the readers' rule, `raw_file::per_profile`, which
+/// tests/compact_truth.rs checks bit for bit against `simulate --truth per-profile`.
+pub fn per_profile(f: &hdf5::File, name: &str) -> Vec<f64> {
+    use lidarsim::output::raw_file::{per_profile::PerProfileReader, read};
+    let path = std::path::PathBuf::from(f.filename());
+    let h = read::check(&path, f).unwrap();
+    let reader = PerProfileReader::new(&path, f, &h).unwrap();
+    reader.rows(name, 0..h.n_profiles).unwrap()
+}

@@ -12,6 +12,7 @@ use super::grid::Grid;
 use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
 use crate::figures::plot::panel::{edges, widen};
+use crate::output::raw_file::per_profile::PerProfileReader;
 use crate::output::raw_file::read::{check, energy_factors, read_text};
 use crate::output::scc::signal_free;
 
@@ -52,18 +53,6 @@ impl Vars<'_> {
             .read_slice::<f64, _, Ix1>(s![a..b])
             .map_err(|e| self.unreadable(name, e))?
             .to_vec())
-    }
-
-    /// Row `c` of a (channel, bin) variable, or of profile `p` of a (profile, channel,
-    /// bin) one.
-    pub fn channel_row(&self, name: &str, c: usize, p: usize) -> Result<Vec<f64>> {
-        let d = self.ds(name)?;
-        let v = match d.ndim() {
-            2 => d.read_slice::<f64, _, Ix1>(s![c, ..]),
-            3 => d.read_slice::<f64, _, Ix1>(s![p, c, ..]),
-            n => return Err(self.fail(format!("`{name}` has {n} dimensions, not 2 or 3"))),
-        };
-        Ok(v.map_err(|e| self.unreadable(name, e))?.to_vec())
     }
 }
 
@@ -124,7 +113,13 @@ pub(super) fn channel_index(v: &Vars, names: &[String], channel: Option<&str>) -
 /// The bins of channel `c` that hold no signal: the pre-trigger bins, else those whose
 /// expected signal (in the first and the last profile) is below 1 % of their expected
 /// background and dark.
-fn background_bins(v: &Vars, c: usize, n_profiles: usize, n_bins: usize) -> Result<Vec<usize>> {
+fn background_bins(
+    v: &Vars,
+    t: &PerProfileReader,
+    c: usize,
+    n_profiles: usize,
+    n_bins: usize,
+) -> Result<Vec<usize>> {
     if let Ok(a) = v.f.attr("pretrigger_bins") {
         let n: i64 = a.read_scalar().unwrap_or(0);
         if n > 0 {
@@ -132,14 +127,14 @@ fn background_bins(v: &Vars, c: usize, n_profiles: usize, n_bins: usize) -> Resu
         }
     }
     let last = n_profiles.saturating_sub(1);
-    let (s0, s1) = (
-        v.channel_row("expected_signal", c, 0)?,
-        v.channel_row("expected_signal", c, last)?,
-    );
-    let noise: Vec<f64> = v
-        .channel_row("expected_background", c, 0)?
+    let row = |name: &str, p: usize| -> Result<Vec<f64>> {
+        let r = t.rows(name, p..p + 1)?;
+        Ok(r[c * n_bins..(c + 1) * n_bins].to_vec())
+    };
+    let (s0, s1) = (row("expected_signal", 0)?, row("expected_signal", last)?);
+    let noise: Vec<f64> = row("expected_background", 0)?
         .iter()
-        .zip(v.channel_row("expected_dark", c, 0)?)
+        .zip(row("expected_dark", 0)?)
         .map(|(b, d)| b + d)
         .collect();
     Ok((0..n_bins.min(noise.len()).min(s0.len()).min(s1.len()))
@@ -208,6 +203,7 @@ pub(super) fn read(
 ) -> Result<Quicklook> {
     let header = check(path, f)?;
     let v = Vars { path, f };
+    let per_profile = PerProfileReader::new(path, f, &header)?;
     let names = header.channels.clone();
     let c = channel_index(&v, &names, channel)?;
     let (n_profiles, n_bins) = (header.n_profiles, header.n_bins);
@@ -269,15 +265,11 @@ pub(super) fn read(
         .collect::<Result<_>>()?;
     let bkg: Vec<Vec<usize>> = channels
         .iter()
-        .map(|&k| background_bins(&v, k, n_profiles, n_bins))
+        .map(|&k| background_bins(&v, &per_profile, k, n_profiles, n_bins))
         .collect::<Result<_>>()?;
     let mut grids = vec![empty.clone(); channels.len()];
     let mut truth_grid = truth.then(|| empty.clone());
-    let atb = if truth {
-        Some(v.ds("attenuated_backscatter")?)
-    } else {
-        None
-    };
+    let atb = truth.then_some(&per_profile);
     let counts = v.ds("counts")?;
     let nominal = v.f64s("nominal_pulse_energy")?;
     let geolocated = f.dataset("latitude").is_ok() && f.dataset("longitude").is_ok();
@@ -315,7 +307,7 @@ pub(super) fn read(
             }
         }
         if let (Some(t), Some(d)) = (truth_grid.as_mut(), atb.as_ref()) {
-            add_truth(&v, t, d, c, p0, p1, &columns, &bin_rows)?;
+            add_truth(t, d, c, n_bins, p0, p1, &columns, &bin_rows)?;
         }
         if let (true, Some(t0)) = (geolocated, t0) {
             let scaled: Vec<f64> = x.iter().map(|x| x * x_scale).collect();
@@ -366,37 +358,24 @@ fn counts_shots(v: &Vars, p0: usize, p1: usize) -> Result<Vec<u64>> {
         .to_vec())
 }
 
-/// Adds the truth's attenuated backscatter of profiles `p0..p1` (a (channel, bin)
-/// variable in a static scene, (profile, channel, bin) in a changing one).
+/// Adds the truth's attenuated backscatter of profiles `p0..p1` (whatever its form in
+/// the file: [`PerProfileReader`]).
 #[allow(clippy::too_many_arguments)]
 fn add_truth(
-    v: &Vars,
     grid: &mut Grid,
-    d: &Dataset,
+    t: &PerProfileReader,
     c: usize,
+    n_bins: usize,
     p0: usize,
     p1: usize,
     columns: &[Vec<(usize, f64)>],
     bin_rows: &[Vec<(usize, f64)>],
 ) -> Result<()> {
-    let name = "attenuated_backscatter";
-    match d.ndim() {
-        2 => {
-            let r = v.channel_row(name, c, 0)?;
-            for cols in &columns[..p1 - p0] {
-                grid.add_profile(cols, bin_rows, r.iter().copied());
-            }
-        }
-        3 => {
-            let block = d
-                .read_slice::<f64, _, Ix3>(s![p0..p1, c..c + 1, ..])
-                .map_err(|e| v.unreadable(name, e))?;
-            let block = block.index_axis(Axis(1), 0);
-            for (row, cols) in block.outer_iter().zip(columns) {
-                grid.add_profile(cols, bin_rows, row.iter().copied());
-            }
-        }
-        n => return Err(v.fail(format!("`{name}` has {n} dimensions, not 2 or 3"))),
+    let rows = t.rows("attenuated_backscatter", p0..p1)?;
+    let per = rows.len() / (p1 - p0).max(1);
+    for (row, cols) in rows.chunks(per.max(1)).zip(columns) {
+        let r = &row[c * n_bins..(c + 1) * n_bins];
+        grid.add_profile(cols, bin_rows, r.iter().copied());
     }
     Ok(())
 }

@@ -48,6 +48,7 @@ impl RecordShape {
                 .filter(|v| v.dims.per_profile())
                 .map(|v| match v.dims {
                     Dims::Profile => (v.dims, 1),
+                    Dims::ProfileChannel => (v.dims, spec.channels.len()),
                     _ => (v.dims, spec.counts_per_profile()),
                 })
                 .collect(),
@@ -58,8 +59,8 @@ impl RecordShape {
 
     /// A checked record's rows of the (profile, channel, bin) variables in the file's
     /// order (`counts`, the components, the spec's variables), and its values of the
-    /// (profile) variables in the spec's order.
-    pub fn split<'a>(&self, rec: &ProfileRecord<'a>) -> (Vec<Row<'a>>, Vec<f64>) {
+    /// (profile) and (profile, channel) variables in the spec's order.
+    pub fn split<'a>(&self, rec: &ProfileRecord<'a>) -> (Vec<Row<'a>>, Vec<&'a [f64]>) {
         let mut rows = vec![Row::Counts(rec.counts)];
         if let Some(parts) = rec.components {
             rows.extend(parts.map(Row::Counts));
@@ -67,7 +68,7 @@ impl RecordShape {
         let mut columns = Vec::new();
         for (v, (dims, _)) in rec.values.iter().zip(&self.per_profile) {
             match dims {
-                Dims::Profile => columns.push(v[0]),
+                Dims::Profile | Dims::ProfileChannel => columns.push(*v),
                 _ => rows.push(Row::Floats(v)),
             }
         }

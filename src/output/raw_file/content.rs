@@ -106,22 +106,67 @@ fn per_channel(expected: &[ExpectedProfile], f: impl Fn(&ExpectedProfile) -> Vec
     expected.iter().flat_map(f).collect()
 }
 
+/// Where a run's expectations go in its file (docs/file-format.md, "The truth of each
+/// profile"): one column's (channel, bin), or a changing scene's compact or per-profile
+/// form.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TruthLayout {
+    /// One column: every expectation (channel, bin).
+    Static,
+    /// A changing scene, each truth at the dimensions of what it depends on:
+    /// `expected_signal` and `attenuated_backscatter` (column, channel, bin), and
+    /// `expected_counts` too with a dead-time detector and no sun; `expected_background`
+    /// (profile, channel); `expected_counts` (profile, channel, bin) with a dead-time
+    /// detector under the sun (its rate follows the profile's sky); no `expected_counts`
+    /// for ideal detectors (signal + background + dark) and no `snr_eq4` (Eq. 4 of
+    /// those).
+    Compact {
+        /// Some channel has a dead time.
+        dead_time: bool,
+        /// The background is the sun's.
+        solar: bool,
+    },
+    /// A changing scene with format 3's (profile, channel, bin) `expected_signal`,
+    /// `expected_background`, `expected_counts`, `snr_eq4` and `attenuated_backscatter`
+    /// (`--truth per-profile`), each exactly what [`super::per_profile`] rebuilds from the
+    /// compact form.
+    PerProfile,
+}
+
+impl TruthLayout {
+    /// The layout of a run of `lidar`: `changing` whether its scene changes along the
+    /// track (or with the sun), `form` what `simulation.truth` asks.
+    pub fn of(lidar: &Lidar, changing: bool, form: crate::config::TruthForm) -> TruthLayout {
+        match (changing, form) {
+            (false, _) => TruthLayout::Static,
+            (true, crate::config::TruthForm::PerProfile) => TruthLayout::PerProfile,
+            (true, crate::config::TruthForm::Compact) => TruthLayout::Compact {
+                dead_time: lidar
+                    .channels
+                    .iter()
+                    .any(|c| c.instrument.dead_time.is_some()),
+                solar: lidar.first().loaded.config.background.model
+                    == crate::config::BackgroundModel::Solar,
+            },
+        }
+    }
+}
+
 /// The variables of docs/file-format.md for every channel of `lidar`: coordinates, the
 /// expectations, the instrument constants, and the truth of each of the scene's
 /// `columns` ([`truth::column_variables`]).
-/// With `changing` (a scene that changes along the track, or a solar background)
-/// `expected_signal`, `expected_background`, `expected_counts`, `snr_eq4` and
-/// `attenuated_backscatter` are (profile, channel, bin),
-/// their rows written with each profile in that order; the other variables are those of
-/// the first profile's first column.
+/// In a changing scene ([`TruthLayout`]) the expectations are per column or per profile,
+/// the rows of the per-profile ones written with each profile in the order they come
+/// here (last); the other (channel, bin) variables are those of the first profile's
+/// first column.
 pub fn variables(
     lidar: &Lidar,
     expected: &[ExpectedProfile],
     columns: &[&[ExpectedProfile]],
     shots: u64,
-    changing: bool,
+    layout: TruthLayout,
 ) -> Vec<Variable> {
-    use Dims::{Bin, Channel, ChannelBin, ProfileChannelBin};
+    use Dims::{Bin, Channel, ChannelBin, ProfileChannel, ProfileChannelBin};
     let e0 = &expected[0];
     let channels = &lidar.channels;
     let instrument = |f: fn(&Scenario) -> f64| channels.iter().map(f).collect::<Vec<f64>>();
@@ -251,25 +296,78 @@ pub fn variables(
             }),
     );
     vars.extend(truth::column_variables(lidar, columns));
-    if changing {
-        // per profile, in the order the simulation gives their rows
-        for name in [
-            "expected_signal",
-            "expected_background",
-            "expected_counts",
-            "snr_eq4",
-            "attenuated_backscatter",
-        ] {
-            if let Some(i) = vars.iter().position(|v| v.name == name) {
-                let mut v = vars.remove(i);
+    match layout {
+        TruthLayout::Static => {}
+        TruthLayout::PerProfile => {
+            // per profile, in the order the simulation gives their rows
+            for name in super::per_profile::PER_PROFILE_NAMES {
+                if let Some(i) = vars.iter().position(|v| v.name == name) {
+                    let mut v = vars.remove(i);
+                    v.dims = ProfileChannelBin;
+                    v.data.clear();
+                    v.long_name.push_str(" (average over the profile's shots)");
+                    vars.push(v);
+                }
+            }
+        }
+        TruthLayout::Compact { dead_time, solar } => {
+            let of_columns = |f: fn(&ExpectedProfile) -> &[f64]| -> Vec<f64> {
+                columns
+                    .iter()
+                    .flat_map(|c| c.iter().flat_map(f))
+                    .copied()
+                    .collect()
+            };
+            let mut take = |name: &str| {
+                let i = vars.iter().position(|v| v.name == name);
+                i.map(|i| vars.remove(i))
+            };
+            let mut moved = vec![];
+            for (name, data) in [
+                ("expected_signal", of_columns(|e| &e.signal)),
+                (
+                    "attenuated_backscatter",
+                    of_columns(|e| &e.attenuated_backscatter),
+                ),
+            ] {
+                moved.extend(take(name).map(|v| per_column(v, data)));
+            }
+            let mut counts = take("expected_counts");
+            if dead_time && !solar {
+                let v = counts.take();
+                moved.extend(v.map(|v| per_column(v, of_columns(|e| &e.recorded))));
+            }
+            take("snr_eq4");
+            let mut pushed = vec![];
+            if let Some(mut v) = take("expected_background") {
+                v.dims = ProfileChannel;
+                v.data.clear();
+                v.long_name = "expected sky-background counts per shot and bin (Eq. 3), the \
+                    same in every bin, averaged over the profile's shots"
+                    .into();
+                pushed.push(v);
+            }
+            if let (true, true, Some(mut v)) = (dead_time, solar, counts) {
                 v.dims = ProfileChannelBin;
                 v.data.clear();
                 v.long_name.push_str(" (average over the profile's shots)");
-                vars.push(v);
+                pushed.push(v);
             }
+            // the column ones among the column truth, the per-profile ones last
+            vars.extend(moved);
+            vars.extend(pushed);
         }
     }
     vars
+}
+
+/// `v` as a (column, channel, bin) variable of `data`: the column's value at the nominal
+/// pulse energy.
+fn per_column(mut v: Variable, data: Vec<f64>) -> Variable {
+    v.dims = Dims::ColumnChannelBin;
+    v.data = data;
+    v.long_name.push_str(" of the column");
+    v
 }
 
 /// The geolocation variables of a run with an orbit, in the order of their values.

@@ -130,7 +130,7 @@ pub fn validate_spec(spec: &RawFileSpec) -> Result<(), String> {
             Dims::ChannelBin => spec.counts_per_profile(),
             Dims::ColumnBin => spec.n_columns * spec.n_bins,
             Dims::ColumnChannelBin => spec.n_columns * spec.counts_per_profile(),
-            Dims::Profile | Dims::ProfileChannelBin => 0,
+            Dims::Profile | Dims::ProfileChannel | Dims::ProfileChannelBin => 0,
         };
         if matches!(var.dims, Dims::ColumnBin | Dims::ColumnChannelBin) && spec.n_columns == 0 {
             return Err(format!("variable `{}` needs a column dimension", var.name));

@@ -257,7 +257,9 @@ impl MemoryWriter {
                 (PerProfile::Time, Array::F64(a)) => a.push(rec.time_s),
                 (PerProfile::NShots, Array::U64(a)) => a.push(rec.n_shots),
                 (PerProfile::PulseEnergy, Array::F64(a)) => a.extend_from_slice(rec.pulse_energy_j),
-                (PerProfile::Value, Array::F64(a)) => a.extend(values.next()),
+                (PerProfile::Value, Array::F64(a)) => {
+                    a.extend_from_slice(values.next().unwrap_or_default());
+                }
                 (PerProfile::Columns, Array::I32(a)) => a.extend_from_slice(rec.columns),
                 (PerProfile::ColumnWeights, Array::F64(a)) => {
                     a.extend_from_slice(rec.column_weights);

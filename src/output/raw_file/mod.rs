@@ -22,7 +22,8 @@
 //! filters would ([`planes`] the counts' chunks, byte plane by byte plane, their noise
 //! planes stored), [`content`] decides what a simulation puts in the
 //! file ([`truth`] the truth beside the counts), `hdf5_ds` makes the HDF5 calls the `hdf5` crate does not;
-//! [`memory`] holds the same variables in memory instead of a file.
+//! [`memory`] holds the same variables in memory instead of a file; [`per_profile`]
+//! rebuilds a changing scene's truth of each profile from its compact form.
 //!
 //! The writer creates the file at exactly the path it is given: where the file goes, its
 //! temporary name, the final rename, locks and signals are decided by
@@ -36,6 +37,7 @@ pub(crate) mod hdf5_ds;
 pub mod integrity;
 pub mod layout;
 pub mod memory;
+pub mod per_profile;
 pub mod planes;
 pub mod read;
 pub mod schema;

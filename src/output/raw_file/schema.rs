@@ -41,7 +41,8 @@ pub enum PerProfile {
     NShots,
     /// `pulse_energy`.
     PulseEnergy,
-    /// The spec's (profile) variable: one value of [`super::spec::ProfileRecord::values`].
+    /// The spec's (profile) or (profile, channel) variable: one row of
+    /// [`super::spec::ProfileRecord::values`].
     Value,
     /// `profile_column`.
     Columns,
@@ -297,6 +298,11 @@ pub fn schema(spec: &RawFileSpec) -> Vec<VarSchema<'_>> {
             Dims::Channel => (vec![CHANNEL_DIM], vec![c], None),
             Dims::ChannelBin => (vec![CHANNEL_DIM, BIN_DIM], vec![c, b], Some(COORDS_BIN)),
             Dims::Profile => (vec![PROFILE_DIM], vec![p], Some(coords_profile)),
+            Dims::ProfileChannel => (
+                vec![PROFILE_DIM, CHANNEL_DIM],
+                vec![p, c],
+                Some(coords_profile),
+            ),
             Dims::ProfileChannelBin => (
                 vec![PROFILE_DIM, CHANNEL_DIM, BIN_DIM],
                 vec![p, c, b],
@@ -314,7 +320,9 @@ pub fn schema(spec: &RawFileSpec) -> Vec<VarSchema<'_>> {
                 Values::PerProfile(PerProfile::Row),
                 Storage::Rows { by_planes: false },
             ),
-            Dims::Profile => (Values::PerProfile(PerProfile::Value), Storage::Contiguous),
+            Dims::Profile | Dims::ProfileChannel => {
+                (Values::PerProfile(PerProfile::Value), Storage::Contiguous)
+            }
             Dims::ColumnBin | Dims::ColumnChannelBin => (Values::F64(&var.data), Storage::Deflated),
             _ => (Values::F64(&var.data), Storage::Contiguous),
         };

@@ -124,6 +124,9 @@ pub enum Dims {
     /// (profile, channel, bin): written with each profile, e.g. the expectations of a
     /// scene that changes along the track.
     ProfileChannelBin,
+    /// (profile, channel): written with each profile, one value per channel, e.g. a
+    /// changing scene's sky background per bin.
+    ProfileChannel,
     /// (column, bin), column-major: e.g. the molecular state of each column.
     ColumnBin,
     /// (column, channel, bin), column-major then channel-major: the truth of each
@@ -134,7 +137,10 @@ pub enum Dims {
 impl Dims {
     /// Whether the variable has a profile dimension (its values come with each profile).
     pub fn per_profile(self) -> bool {
-        matches!(self, Dims::Profile | Dims::ProfileChannelBin)
+        matches!(
+            self,
+            Dims::Profile | Dims::ProfileChannel | Dims::ProfileChannelBin
+        )
     }
 }
 
@@ -252,7 +258,8 @@ pub struct ProfileRecord<'a> {
     /// spec asked for components, and then summing to `counts`.
     pub components: Option<[&'a [u64]; 3]>,
     /// This profile's row of every per-profile variable of the spec, in the spec's order
-    /// (one value for (profile), channels × bins channel-major for (profile, channel, bin)).
+    /// (one value for (profile), one per channel for (profile, channel), channels × bins
+    /// channel-major for (profile, channel, bin)).
     pub values: &'a [&'a [f64]],
     /// The columns this profile's shots saw (indices of the `column` dimension, each
     /// once, −1 for an unused slot), [`RawFileSpec::column_slots`] of them.

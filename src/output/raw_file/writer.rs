@@ -339,7 +339,7 @@ impl RawFileWriter {
     /// flush of the queue if it is full.
     fn accept(&mut self, recs: &[ProfileRecord]) -> std::result::Result<(), String> {
         let shape = &self.shape;
-        let split: Vec<(Vec<Row>, Vec<f64>)> = recs.iter().map(|r| shape.split(r)).collect();
+        let split: Vec<(Vec<Row>, Vec<&[f64]>)> = recs.iter().map(|r| shape.split(r)).collect();
         // buffers for the chunks each variable opens in this batch
         let mut pools: Vec<Vec<Vec<u8>>> = Vec::with_capacity(self.vars.len());
         for var in &self.vars {
@@ -401,7 +401,7 @@ impl RawFileWriter {
     fn put_columns(
         &mut self,
         rec: &ProfileRecord,
-        values: &[f64],
+        values: &[&[f64]],
     ) -> std::result::Result<(), String> {
         let (b, r) = (rec.index / COLUMN_BLOCK, rec.index % COLUMN_BLOCK);
         let start = b * COLUMN_BLOCK;
@@ -411,7 +411,7 @@ impl RawFileWriter {
             time: vec![0.0; len],
             n_shots: vec![0; len],
             pulse_energy: vec![0.0; len * self.shape.n_channels],
-            values: vec![vec![0.0; len]; values.len()],
+            values: values.iter().map(|v| vec![0.0; len * v.len()]).collect(),
             columns: vec![0; len * slots],
             weights: vec![0.0; len * slots],
             present: 0,
@@ -422,8 +422,8 @@ impl RawFileWriter {
         block.n_shots[r] = rec.n_shots;
         let ch = self.shape.n_channels;
         block.pulse_energy[r * ch..(r + 1) * ch].copy_from_slice(rec.pulse_energy_j);
-        for (column, &v) in block.values.iter_mut().zip(values) {
-            column[r] = v;
+        for (column, v) in block.values.iter_mut().zip(values) {
+            column[r * v.len()..(r + 1) * v.len()].copy_from_slice(v);
         }
         block.present += 1;
         if block.present < len {
@@ -443,7 +443,15 @@ impl RawFileWriter {
                 .map_err(as_2d)?;
             open.pulse_energy.write_slice(energy, (range.clone(), ..))?;
             for (ds, column) in open.columns.iter().zip(&block.values) {
-                ds.write_slice(&column[..], range.clone())?;
+                match ds.ndim() {
+                    1 => ds.write_slice(&column[..], range.clone())?,
+                    _ => {
+                        let width = column.len() / len;
+                        let rows = ndarray::ArrayView2::from_shape((len, width), &column[..])
+                            .map_err(as_2d)?;
+                        ds.write_slice(rows, (range.clone(), ..))?
+                    }
+                }
             }
             if let Some((columns, weights)) = &open.profile_columns {
                 let shape = (len, slots);

@@ -77,6 +77,14 @@ pub fn read_raw(path: &Path) -> Result<RawRun> {
         8.0 * values + 32.0 * (n_channels * n_bins) as f64 + 24.0 * (n_profiles + n_bins) as f64,
     )?;
     let time_ds = dataset(path, &f, "time")?;
+    // the expectations of every profile, whatever their form in the file
+    let truth = raw_file::per_profile::PerProfileReader::new(path, &f, &header)?;
+    let every = |name: &str| -> Result<Vec<f64>> {
+        match truth.is_fixed(name) {
+            true => truth.rows(name, 0..1),
+            false => truth.rows(name, 0..n_profiles),
+        }
+    };
     let run = RawRun {
         channels: header.channels.clone(),
         n_profiles,
@@ -89,7 +97,7 @@ pub fn read_raw(path: &Path) -> Result<RawRun> {
         expected_signal: over_profiles(
             path,
             "expected_signal",
-            read_values::<f64>(path, &f, "expected_signal")?,
+            every("expected_signal")?,
             (n_profiles, n_channels * n_bins),
             f64::max,
         )?,
@@ -97,7 +105,7 @@ pub fn read_raw(path: &Path) -> Result<RawRun> {
             &over_profiles(
                 path,
                 "expected_background",
-                read_values::<f64>(path, &f, "expected_background")?,
+                every("expected_background")?,
                 (n_profiles, n_channels * n_bins),
                 f64::min,
             )?,

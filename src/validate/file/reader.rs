@@ -9,6 +9,7 @@ use ndarray::{Ix1, Ix2, Ix3, s};
 use super::sums::{Channels, Sums};
 use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
+use crate::output::raw_file::per_profile::PerProfileReader;
 use crate::output::raw_file::read::{self, RawHeader};
 
 /// A (channel) or (bin) variable of floats, whole (bounded by the header's lengths).
@@ -48,6 +49,8 @@ pub(super) struct Reader<'a> {
     f: &'a hdf5::File,
     /// The (channel, bin) expectations of a static scene (None: per profile).
     fixed: Vec<Option<Vec<f64>>>,
+    /// The expectations of each profile, whatever their form in the file.
+    truth: PerProfileReader<'a>,
     has_weights: bool,
     pub(super) first_shots: u64,
     header: RawHeader,
@@ -68,26 +71,15 @@ pub(super) struct Block {
 
 impl<'a> Reader<'a> {
     pub(super) fn new(path: &'a Path, f: &'a hdf5::File, h: &RawHeader) -> Result<Self> {
+        let truth = PerProfileReader::new(path, f, h)?;
         let mut fixed = Vec::new();
         for name in EXPECTED {
-            let d = f.dataset(name).map_err(|_| {
-                Error::output(
-                    path,
-                    format!("has no `{name}`, which `validate --file` needs"),
-                )
-            })?;
-            let shape = d.shape();
-            if shape.len() == 3 && shape[0] == h.n_profiles {
-                fixed.push(None);
-            } else if shape == [h.channels.len(), h.n_bins] {
-                let v = d.read_raw::<f64>().map_err(|e| unreadable(path, name, e))?;
+            if truth.is_fixed(name) {
+                let v = truth.rows(name, 0..1)?;
                 check_expected(path, name, &v, 0, h)?;
                 fixed.push(Some(v));
             } else {
-                return Err(Error::output(
-                    path,
-                    format!("`{name}` is neither (channel, bin) nor (profile, channel, bin)"),
-                ));
+                fixed.push(None);
             }
         }
         let first_shots = f
@@ -98,6 +90,7 @@ impl<'a> Reader<'a> {
             path,
             f,
             fixed,
+            truth,
             has_weights: f.dataset("profile_column_weight").is_ok(),
             first_shots,
             header: h.clone(),
@@ -130,7 +123,7 @@ impl<'a> Reader<'a> {
         for (name, fixed) in EXPECTED.iter().zip(&self.fixed) {
             expected.push(match fixed {
                 Some(v) => (v.clone(), false),
-                None => (self.rows::<f64>(name, rows.clone())?, true),
+                None => (self.truth.rows(name, rows.clone())?, true),
             });
         }
         let per_profile = expected.iter().any(|e| e.1);

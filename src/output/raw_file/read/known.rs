@@ -190,8 +190,9 @@ pub(super) const KNOWN: [Known; 27] = [
 ];
 
 /// The shapes any other dataset of a raw file may have.
-pub(super) const OTHER_SHAPES: [&[Dim]; 7] = [
+pub(super) const OTHER_SHAPES: [&[Dim]; 8] = [
     &[Dim::P],
+    &[Dim::P, Dim::C],
     &[Dim::C],
     &[Dim::B],
     &[Dim::C, Dim::B],
