@@ -120,7 +120,8 @@ def retrieve(raw: xr.Dataset, channel: str = CHANNEL, lidar_ratio_scale: float =
         range_corrected, lidar_ratio, beta_mol, index_reference, half_width,
         beta_aer_reference, bin_length,
         # the channel's own: the library's default (8.74 sr) is the Cabannes line's,
-        # this channel's 1 nm filter passes the whole line (8.50 sr)
+        # this channel's 1 nm filter passes the Cabannes line and the nearest rotational
+        # Raman lines (8.70 sr at 532 nm, docs/model.md §4a)
         lidar_ratio_molecular=float(ch.molecular_lidar_ratio))
 
     return xr.Dataset(

@@ -13,11 +13,12 @@ mod particles;
 pub mod profile_file;
 pub mod raman;
 pub mod rayleigh;
+pub mod rotational_raman;
 pub mod us76;
 pub mod water_vapour;
 pub mod wide_angle;
 
-pub use molecules::{MolecularSource, MolecularState, Molecules};
+pub use molecules::{LinePart, MolecularSource, MolecularState, Molecules};
 pub use optics::{Optics, Slab};
 pub use particles::{BackgroundAerosol, Layer};
 
@@ -164,23 +165,23 @@ impl Atmosphere {
             .unwrap_or_else(|| rayleigh::depolarization_rho_n(wl));
         let channel = loaded.channels.first();
         let hsrl = channel.is_some_and(|c| c.kind == ChannelKind::HsrlMolecular);
-        let cabannes = match m.line {
+        let width_nm = cfg.instrument.filter_width_nm;
+        let cabannes = || rotational_raman::seen_line(rho_n, 0.0);
+        let seen = match m.line {
             // an HSRL filter is far narrower than the rotational Raman wings
-            _ if hsrl => true,
-            MolecularLine::Cabannes => true,
-            MolecularLine::Rayleigh => false,
-            MolecularLine::Auto => {
-                cfg.instrument.filter_width_nm < rayleigh::CABANNES_FILTER_MAX_NM
-            }
+            _ if hsrl => cabannes(),
+            MolecularLine::Cabannes => cabannes(),
+            MolecularLine::Rayleigh => rotational_raman::seen_line(rho_n, 1.0),
+            MolecularLine::Auto if width_nm < rayleigh::CABANNES_FILTER_MAX_NM => cabannes(),
+            MolecularLine::Auto => rotational_raman::seen_line(rho_n, 1.0),
+            MolecularLine::Filter => rotational_raman::through_top_hat(rho_n, wl, width_nm),
         };
-        // the filter keeps all of the extinction and a share of the backscatter
-        let (share, depolarization) = if cabannes {
-            (
-                rayleigh::cabannes_fraction(rho_n),
-                rayleigh::cabannes_depolarization(rho_n),
-            )
+        let part = if seen.rr_passed == 0.0 {
+            LinePart::Cabannes
+        } else if seen.rr_passed == 1.0 {
+            LinePart::Whole
         } else {
-            (1.0, rayleigh::gamma(rho_n))
+            LinePart::CabannesAndSomeRotationalRaman
         };
         let us76_above_scale = match &source {
             MolecularSource::Profile(p) if p.top_altitude_m() < us76::TOP_ALTITUDE_M => {
@@ -191,12 +192,13 @@ impl Atmosphere {
         };
         let molecular_filter = molecular_filter(loaded, &source)?;
         let molecules = Molecules {
-            cabannes,
+            part,
             us76_above_scale,
             source,
             cross_section_m2: rayleigh::cross_section_m2(wl),
-            lidar_ratio_sr: rayleigh::lidar_ratio_sr(rho_n) / share,
-            depolarization,
+            // the filter keeps all of the extinction and a share of the backscatter
+            lidar_ratio_sr: rayleigh::lidar_ratio_sr(rho_n) / seen.share,
+            depolarization: seen.depolarization,
         };
         Ok(Atmosphere {
             molecules,
@@ -241,13 +243,12 @@ impl Atmosphere {
         }
     }
 
-    /// The name of what the channel's `beta_mol` is: `cabannes` or `whole` (the part of
-    /// the elastic molecular line its filter passes), `raman_N2`.
+    /// The name of what the channel's `beta_mol` is: `cabannes`, `cabannes+partial_rr` or
+    /// `whole` (the part of the elastic molecular line its filter passes), `raman_N2`.
     pub fn molecular_line_name(&self) -> String {
         match &self.raman {
             Some(r) => format!("raman_{}", r.species.name()),
-            None if self.molecules.cabannes => "cabannes".into(),
-            None => "whole".into(),
+            None => self.molecules.part.name().into(),
         }
     }
 

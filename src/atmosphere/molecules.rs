@@ -24,15 +24,15 @@ pub struct Molecules {
     /// Rayleigh cross-section per molecule σ(λ), m².
     pub cross_section_m2: f64,
     /// Molecular lidar ratio of the part of the line the filter passes, sr:
-    /// `S_mol = (8π/3)(1+2γ)/(1+γ)` for the whole line, divided by the Cabannes fraction
-    /// for the Cabannes line.
+    /// `S_mol = (8π/3)(1+2γ)/(1+γ)` for the whole line, divided by the share the filter
+    /// passes (the Cabannes fraction for the Cabannes line; docs/model.md §4a).
     pub lidar_ratio_sr: f64,
     /// Linear depolarization ratio of that part's backscatter: `γ = ρn/(2−ρn)` for the
-    /// whole line, `3ε/(180+4ε)` for the Cabannes line.
+    /// whole line, `3ε/(180+4ε)` for the Cabannes line, between them for the Cabannes
+    /// line with some rotational Raman lines (`rotational_raman::seen_line`).
     pub depolarization: f64,
-    /// Whether the channel's filter passes the Cabannes line only (else the whole
-    /// Rayleigh line, rotational Raman wings included).
-    pub cabannes: bool,
+    /// Which part of the elastic molecular line the channel's filter passes.
+    pub part: LinePart,
     /// For a profile file that ends below the US76 top (86 km): the factor by which US76
     /// continues it above its top row, `N_file(top)/N_US76(top)`, so that the density is
     /// continuous there.
@@ -110,6 +110,28 @@ impl Molecules {
     /// `α_mol = N·σ`, m⁻¹.
     pub fn extinction_per_m(&self, z_m: f64) -> f64 {
         self.number_density_m3(z_m) * self.cross_section_m2
+    }
+}
+
+/// The part of the elastic molecular line a channel's filter passes (docs/model.md §4a).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LinePart {
+    /// The Cabannes line alone.
+    Cabannes,
+    /// The Cabannes line and some of the rotational Raman lines.
+    CabannesAndSomeRotationalRaman,
+    /// The whole Rayleigh line, rotational Raman wings included.
+    Whole,
+}
+
+impl LinePart {
+    /// The name the raw file gives it (`beta_mol`'s `line`, `molecular_line`).
+    pub fn name(self) -> &'static str {
+        match self {
+            LinePart::Cabannes => "cabannes",
+            LinePart::CabannesAndSomeRotationalRaman => "cabannes+partial_rr",
+            LinePart::Whole => "whole",
+        }
     }
 }
 

@@ -134,9 +134,10 @@ pub fn cabannes_fraction(rho_n: f64) -> f64 {
     (45.0 + 1.75 * e) / (45.0 + 7.0 * e)
 }
 
-/// Widest filter (full width, nm) that passes the Cabannes line alone: the nearest
-/// rotational Raman lines of O2 and N2 lie 0.24 and 0.34 nm from a 532 nm line, so a
-/// filter narrower than 0.4 nm keeps them out.
+/// Widest filter (full width, nm) that `line = "auto"` takes for the Cabannes line alone.
+/// The nearest rotational Raman lines of N2 and O2 lie 0.338 and 0.407 nm from a 532 nm
+/// line (`rotational_raman`), so a filter narrower than 0.4 nm keeps them out (as does
+/// one up to 0.676 nm: `line = "filter"` places the lines; docs/model.md §4a).
 pub const CABANNES_FILTER_MAX_NM: f64 = 0.4;
 
 /// Molecular extinction coefficient α_mol = N·σ, m⁻¹.

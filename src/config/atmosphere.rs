@@ -69,6 +69,10 @@ pub enum MolecularLine {
     Cabannes,
     /// The whole Rayleigh line, Cabannes and rotational Raman wings (wide filters).
     Rayleigh,
+    /// The Cabannes line and the rotational Raman lines of N₂ and O₂ that fall inside the
+    /// top-hat `instrument.filter_width_nm` centred on the laser line
+    /// (`atmosphere::rotational_raman`).
+    Filter,
 }
 
 /// Source of the molecular number density.

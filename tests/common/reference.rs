@@ -132,6 +132,73 @@ pub fn molecular_lidar_ratio_and_depolarization(rho_n: f64, cabannes: bool) -> (
     (s_whole / share, 3.0 * eps / (180.0 + 4.0 * eps))
 }
 
+/// The share `F` of the rotational Raman lines of N₂ and O₂ inside a top-hat filter of
+/// full width `width_nm` centred on the laser line, at `temperature_k`: a direct sum of
+/// Behrendt & Nakamura (2002, Opt. Express 10, 805) as the paper writes it, constants
+/// typed in from its Table 1 (B₀, D₀ cm⁻¹; I; g even/odd; γ² 1e-48 cm⁶; abundance):
+/// σ(J) ∝ x·g_J·B₀·(ν₀+Δν)⁴·γ²/(2I+1)²·X(J)·exp(−E(J)/kT) (their high-temperature
+/// normalization; the code sums the partition function instead), Stokes
+/// Δν = −B₀(4J+6) + D₀[3(2J+3) + (2J+3)³], X = (J+1)(J+2)/(2J+3); anti-Stokes (J ≥ 2)
+/// Δν = B₀(4J−2) − D₀[3(2J−1) + (2J−1)³], X = J(J−1)/(2J−1);
+/// E(J) = hc[B₀J(J+1) − D₀J²(J+1)²].
+pub fn rotational_raman_share_through(
+    wavelength_nm: f64,
+    width_nm: f64,
+    temperature_k: f64,
+) -> f64 {
+    // (B0, D0, I, g_even, g_odd, gamma2, abundance)
+    let species = [
+        (1.98957, 5.76e-6, 1.0, 6.0, 3.0, 0.51, 0.7808), // N2
+        (1.43768, 4.85e-6, 0.0, 0.0, 1.0, 1.27, 0.2095), // O2
+    ];
+    let hc_over_k_cm_k = 1.438_776_877; // second radiation constant, cm K
+    let nu0 = 1e7 / wavelength_nm;
+    let (mut all, mut passed) = (0.0, 0.0);
+    for (b, d, i, g_even, g_odd, gamma2, x) in species {
+        for j in 0..120 {
+            let jf = j as f64;
+            let g = if j % 2 == 0 { g_even } else { g_odd };
+            let e = b * jf * (jf + 1.0) - d * jf * jf * (jf + 1.0) * (jf + 1.0);
+            let common = x * g * b * gamma2 / ((2.0 * i + 1.0) * (2.0 * i + 1.0))
+                * (-hc_over_k_cm_k * e / temperature_k).exp();
+            let mut line = |shift: f64, xj: f64| {
+                let s = common * xj * (nu0 + shift).powi(4);
+                all += s;
+                if (1e7 / (nu0 + shift) - wavelength_nm).abs() <= 0.5 * width_nm {
+                    passed += s;
+                }
+            };
+            let m = 2.0 * jf + 3.0;
+            line(
+                -b * (4.0 * jf + 6.0) + d * (3.0 * m + m * m * m),
+                (jf + 1.0) * (jf + 2.0) / m,
+            );
+            if j >= 2 {
+                let m = 2.0 * jf - 1.0;
+                line(
+                    b * (4.0 * jf - 2.0) - d * (3.0 * m + m * m * m),
+                    jf * (jf - 1.0) / m,
+                );
+            }
+        }
+    }
+    passed / all
+}
+
+/// (lidar ratio sr, linear depolarization) of the molecular backscatter a filter passes
+/// when it passes the Cabannes line and the share `rr` of the rotational Raman lines:
+/// in units of a²/45, the Cabannes line has 45 + ε parallel and 3ε/4 perpendicular (the
+/// isotropic part and the J → J branch), the rotational Raman lines 3ε and 9ε/4 (their
+/// depolarization 3/4), the whole line 45 + 7ε (She 2001; Behrendt & Nakamura 2002).
+pub fn molecular_lidar_ratio_and_depolarization_with_rr(rho_n: f64, rr: f64) -> (f64, f64) {
+    let (s_whole, _) = molecular_lidar_ratio_and_depolarization(rho_n, false);
+    let eps = 45.0 * rho_n / (6.0 - 7.0 * rho_n);
+    let parallel = 45.0 + eps + 3.0 * eps * rr;
+    let perpendicular = 0.75 * eps + 2.25 * eps * rr;
+    let share = (parallel + perpendicular) / (45.0 + 7.0 * eps);
+    (s_whole / share, perpendicular / parallel)
+}
+
 /// Share of a species' backscatter (linear depolarization δ) a channel sees: total 1;
 /// parallel `(1−x)·1/(1+δ) + x·δ/(1+δ)`, perpendicular the converse (cross-talk x).
 pub fn channel_share(polarization: &str, delta: f64, crosstalk: f64) -> f64 {
@@ -511,12 +578,17 @@ impl RefAtmosphere {
             MolecularModel::File { .. } => panic!("the reference knows US76 only"),
         };
         let rho = m.depolarization.unwrap_or_else(|| rayleigh_rho_n(wl));
-        let cabannes = match m.line {
-            MolecularLine::Cabannes => true,
-            MolecularLine::Rayleigh => false,
-            MolecularLine::Auto => cfg.instrument.filter_width_nm < 0.4,
+        let width = cfg.instrument.filter_width_nm;
+        // the share of the rotational Raman lines the filter passes (the code's reference
+        // temperature: docs/model.md §4a)
+        let rr = match m.line {
+            MolecularLine::Cabannes => 0.0,
+            MolecularLine::Rayleigh => 1.0,
+            MolecularLine::Auto if width < 0.4 => 0.0,
+            MolecularLine::Auto => 1.0,
+            MolecularLine::Filter => rotational_raman_share_through(wl, width, 288.15),
         };
-        let (s_mol, delta_mol) = molecular_lidar_ratio_and_depolarization(rho, cabannes);
+        let (s_mol, delta_mol) = molecular_lidar_ratio_and_depolarization_with_rr(rho, rr);
         assert!(cfg.surface.is_none(), "the reference has no surface echo");
         RefAtmosphere {
             sigma_mol: if has_molecules {
