@@ -1,4 +1,4 @@
-//! Cost of the dead-time detector against the ideal one, rate by rate (issue 21, item 6):
+//! Cost of the dead-time detector against the ideal one, rate by rate (issues 21 and 41):
 //! one profile of a constant true rate n over [`BINS`] bins of 2 µs, τ = 3.5 ns, drawn
 //! by the ideal detector (`sampling::shot_profile`, what `simulate --method shot` runs
 //! without dead time) and through the dead time (`dead_time::DeadTimedShots::profile`,
@@ -44,7 +44,12 @@ fn best(mut f: impl FnMut(u64)) -> f64 {
 fn main() {
     // RATES="1e6 3e8" and MODELS="non" or "par" measure a subset
     let rates: Vec<f64> = std::env::var("RATES").map_or_else(
-        |_| vec![1e3, 1e4, 1e5, 1e6, 3e6, 1e7, 3e7, 1e8, 2e8, 3e8],
+        // 0.01 photons a bin (5 kHz in bins of 2 µs) to 300 MHz
+        |_| {
+            vec![
+                5e3, 2.5e4, 5e4, 1e5, 2.5e5, 5e5, 1e6, 3e6, 1e7, 3e7, 5e7, 1e8, 2e8, 3e8,
+            ]
+        },
         |s| {
             s.split_whitespace()
                 .map(|x| x.parse().expect("a rate"))

@@ -1,12 +1,16 @@
 #!/usr/bin/env bash
-# Cost of the detector's dead time: the same `simulate --method shot` run with and
-# without `instrument.detector.dead_time_s = 3.5e-9`, one thread, paper scenario 1 at
-# night at several pulse energies (sparse to dense counts). Prints the drawing time of
-# each and their ratio.
-#   bash benches/dead_time_side_by_side.sh [PROFILES]   (default 20000)
+# Cost of the detector's dead time on whole runs (issues 21 and 41): the same
+# `simulate --method shot` run with and without `instrument.detector.dead_time_s =
+# 3.5e-9`, one thread, paper scenario 1 (100 shots a profile), both models. Part 1: 1 J
+# at night and by day (`background.radiance = 1.1e15`), PROFILES_1J profiles (default 20).
+# Part 2: night at lower energies, PROFILES profiles (sparse counts). Prints the drawing
+# time of each and their ratio (the run's own "of which drawing" figure: wall time of one
+# thread, so the shared machine's load shows; repeat and take the least).
+#   bash benches/dead_time_side_by_side.sh [PROFILES] [PROFILES_1J]   (defaults 2000, 20)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-profiles=${1:-20000}
+profiles=${1:-2000}
+profiles_1j=${2:-20}
 cargo build --release --quiet
 bin=target/release/lidarsim
 out=$(mktemp -d)
@@ -16,10 +20,25 @@ drawing() {
   "$bin" simulate configs/paper/scenario1.toml -o "$out/x.h5" --method shot --threads 1 \
     --profiles "$n" "$@" 2>&1 | sed -n 's/.*of which drawing \([0-9.]*\) s.*/\1/p'
 }
-printf '%-12s %9s %14s %14s %8s\n' "E0 (J)" "profiles" "no dead time" "dead time" "ratio"
-for e in 0.0001 0.001 0.01 1; do
-  n=$profiles; [ "$e" = 1 ] && n=$((profiles / 100))
-  a=$(drawing "$n" --set instrument.pulse_energy_j=$e)
-  b=$(drawing "$n" --set instrument.pulse_energy_j=$e --set instrument.detector.dead_time_s=3.5e-9)
-  printf '%-12s %9s %12s s %12s s %8.1f\n' "$e" "$n" "$a" "$b" "$(echo "$b / $a" | bc -l)"
+printf '%-10s %-6s %-16s %9s %14s %14s %8s\n' "E0 (J)" "sky" "model" "profiles" "no dead time" "dead time" "ratio"
+row() {
+  local e=$1 sky=$2 model=$3 n=$4
+  local bg=()
+  [ "$sky" = day ] && bg=(--set background.radiance=1.1e15)
+  a=$(drawing "$n" --set instrument.pulse_energy_j="$e" "${bg[@]}")
+  b=$(drawing "$n" --set instrument.pulse_energy_j="$e" "${bg[@]}" \
+    --set instrument.detector.dead_time_s=3.5e-9 \
+    --set instrument.detector.dead_time_model="\"$model\"")
+  printf '%-10s %-6s %-16s %9s %12s s %12s s %8.1f\n' "$e" "$sky" "$model" "$n" "$a" "$b" \
+    "$(echo "$b / $a" | bc -l)"
+}
+for sky in night day; do
+  for model in nonparalyzable paralyzable; do
+    row 1 "$sky" "$model" "$profiles_1j"
+  done
+done
+for e in 0.0001 0.001 0.01; do
+  for model in nonparalyzable paralyzable; do
+    row "$e" night "$model" "$profiles"
+  done
 done

@@ -1,9 +1,12 @@
 //! Dead time: the recorded counts against the stationary renewal values of docs/model.md
 //! §4b, mean `m = n/(1+nτ)` and `m = n·e^(−nτ)` and the exact variance of an equilibrium
 //! renewal count, for τ = 3.5 ns over true rates from 1 kHz to 300 MHz, both models, each
-//! path: non-paralyzable by the counting law (simulate's fixed means, `DeadTimedShots`)
-//! and given the photons (`DeadTime::record_shot`, every caller), paralyzable by the
-//! arrival-time sweep. Writes `dead_time.md` and `dead_time.png` into the output folder.
+//! path: non-paralyzable by simulate's fixed means (`DeadTimedShots`: the counting law
+//! from 0.5 photons a bin, below it the photons with the clusters corrected), by the
+//! photons with the clusters corrected at every rate (`DeadTimedShots::drawing_every_photon`)
+//! and given the photons (`DeadTime::record_shot`, every other caller); paralyzable by
+//! simulate's fixed means (the photons with the clusters corrected) and by the arrival-time
+//! sweep (`DeadTime::record_shot`). Writes `dead_time.md` and `dead_time.png` into the output folder.
 //!
 //! ```text
 //! cargo run --release --example dead_time -- [--out validation/reports]
@@ -78,6 +81,7 @@ fn renewal_variance(model: DeadTimeModel, n: f64, t: f64) -> f64 {
 const LAW: &str = "counting law";
 const GIVEN: &str = "given photons";
 const SWEEP: &str = "arrival sweep";
+const CLUSTERS: &str = "clusters corrected";
 
 fn measure(model: DeadTimeModel, n: f64, path: &'static str, seed: u64) -> Row {
     let dead = DeadTime {
@@ -101,6 +105,10 @@ fn measure(model: DeadTimeModel, n: f64, path: &'static str, seed: u64) -> Row {
     };
     if path == LAW {
         DeadTimedShots::new(photons, dead).for_each_shot(seed, 0, shots, add);
+    } else if path == CLUSTERS {
+        DeadTimedShots::new(photons, dead)
+            .drawing_every_photon()
+            .for_each_shot(seed, 0, shots, add);
     } else {
         let (mut rng, mut arrivals) = (stream_rng(seed, 0, 0), stream_rng(seed, 1, 0));
         let (mut scratch, mut acc) = (
@@ -152,7 +160,9 @@ fn main() {
     let mut rows = Vec::new();
     for (model, path) in [
         (DeadTimeModel::Nonparalyzable, LAW),
+        (DeadTimeModel::Nonparalyzable, CLUSTERS),
         (DeadTimeModel::Nonparalyzable, GIVEN),
+        (DeadTimeModel::Paralyzable, CLUSTERS),
         (DeadTimeModel::Paralyzable, SWEEP),
     ] {
         for n in rates() {

@@ -4,18 +4,26 @@
 //!
 //! **Sampler** ([`DeadTime::record_shot`], [`DeadTimedShots`]). The rate is taken
 //! constant within a bin (as in the model below), dead time crosses bin edges, and the
-//! detector is live at the start of the window. Three exact paths:
+//! detector is live at the start of the window. Four exact paths:
 //!
+//! * [`DeadTimedShots`] on bins at least 2τ wide, for a paralyzable detector at every
+//!   rate and for a non-paralyzable one whose bins all hold fewer than
+//!   [`LAW_FROM_PHOTONS`] photons per shot (or that draws every photon): the shot path's
+//!   photons straight into the record, the *clusters* (adjacent bins hit in one shot, or
+//!   a bin hit twice) recorded again exactly in time order and the record corrected
+//!   (`clusters.rs`, issue 41): a photon's time is drawn only where an outcome depends on
+//!   it;
 //! * a non-paralyzable detector on bins at least 2τ wide ([`DeadTime::by_counts`]) draws
 //!   each hit bin's recorded count from its counting distribution given the bin's photons
 //!   (drawn by the shot path, exactly as without dead time), carrying the dead time
 //!   left by a bin into the next ([`counting::Family`]): O(1) per hit bin, a lone photon
 //!   without a draw;
-//! * [`DeadTimedShots`] (fixed means, what `simulate`'s shot path runs) draws the bins
+//! * otherwise [`DeadTimedShots`] (fixed means, what `simulate`'s shot path runs) draws the bins
 //!   of at least [`LAW_FROM_PHOTONS`] photons per shot from the counting law at their
 //!   rate, without their photons ([`RateLaw`], tables built once per run), and the
 //!   others as above;
-//! * otherwise (paralyzable, narrow bins) each photon gets an arrival time uniform
+//! * otherwise ([`DeadTime::record_shot`] for a paralyzable detector, narrow bins) each
+//!   photon gets an arrival time uniform
 //!   within its bin, the shot's arrivals are swept in time order, and a photon is
 //!   recorded when the detector is live: O(photons · log photons) per shot.
 //!
@@ -48,6 +56,7 @@
 //! [`counting::Family`]: super::counting::Family
 //! [`RateLaw`]: super::counting::RateLaw
 
+mod clusters;
 mod model;
 mod record;
 mod shots;

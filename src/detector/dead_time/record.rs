@@ -243,7 +243,7 @@ const SPACINGS_FROM: u32 = 24;
 /// sorted for few photons, else as normalized cumulative sums of n + 1 standard
 /// exponentials (the uniform order statistics; Devroye 1986, *Non-Uniform Random
 /// Variate Generation*, §V.2), which costs O(n) instead of O(n log n).
-fn sorted_uniform_times<R: Rng + ?Sized>(
+pub(super) fn sorted_uniform_times<R: Rng + ?Sized>(
     rng: &mut R,
     n: u32,
     start: f64,

@@ -1,7 +1,8 @@
 //! Shots of fixed means through the dead time ([`DeadTimedShots`]): the bins of many
 //! photons drawn from their counting law, the others given their photons; what they cost.
 
-use super::model::DeadTime;
+use super::clusters::ClusterShots;
+use super::model::{DeadTime, DeadTimeModel};
 use super::record::{ARRIVAL_STREAM, LawBins, Scratch};
 use crate::detector::counting::{self, RateLaw};
 use crate::detector::recorder::recorded_profile;
@@ -113,6 +114,20 @@ impl DeadTimedShots {
         &self.dead
     }
 
+    /// The photon path with the clusters corrected ([`ClusterShots`]) where it serves:
+    /// bins at least 2τ wide, and a paralyzable detector, or a non-paralyzable one with
+    /// every bin's photons drawn (no bin of [`LAW_FROM_PHOTONS`] photons, or
+    /// [`drawing_every_photon`](Self::drawing_every_photon)).
+    fn by_clusters(&self) -> Option<ClusterShots<'_>> {
+        let every = self.every_photon
+            || self.dead.model == DeadTimeModel::Paralyzable
+            || self.split().laws.laws.is_empty();
+        (ClusterShots::serves(&self.dead) && every).then_some(ClusterShots {
+            photons: &self.photons,
+            dead: &self.dead,
+        })
+    }
+
     fn split(&self) -> &Split {
         self.split.get_or_init(|| {
             let (tau, dt) = (self.dead.tau_s, self.dead.bin_width_s);
@@ -164,6 +179,9 @@ impl DeadTimedShots {
     /// Draws `shots` shots from `stream_rng(seed, profile, 0)` and its arrival stream and
     /// hands each one's recorded counts to `f` (per-shot consumers: tests, onboard sums).
     pub fn for_each_shot(&self, seed: u64, profile: u64, shots: u64, mut f: impl FnMut(&[u64])) {
+        if let Some(c) = self.by_clusters() {
+            return c.for_each_shot(seed, profile, shots, f);
+        }
         let bins = self.photons.bins();
         let mut acc = vec![0u64; bins];
         let mut scratch = Scratch::default();
@@ -190,6 +208,9 @@ impl DeadTimedShots {
     /// shots from `stream_rng(seed, profile, block)` (photons) and its arrival stream
     /// (the detector's draws), summed in integers: independent of the thread count.
     pub fn profile(&self, seed: u64, profile: u64, shots: u64, acc: &mut [u64]) {
+        if let Some(c) = self.by_clusters() {
+            return c.profile(seed, profile, shots, acc);
+        }
         if !self.dead.by_counts() || self.every_photon {
             return recorded_profile(&self.photons, &self.dead, seed, profile, shots, acc);
         }
