@@ -331,7 +331,7 @@ pub fn channel_text(lidar: &Lidar) -> Vec<TextVariable> {
         ),
         text(
             "molecular_line",
-            "what the channel's beta_mol is: the part of the elastic molecular line it sees (cabannes or whole), or a Raman band (raman_N2)",
+            "what the channel's beta_mol is: the part of the elastic molecular line it sees (cabannes; cabannes+partial_rr, the Cabannes line and the rotational Raman lines the filter passes; or whole), or a Raman band (raman_N2)",
             &|c| c.atmosphere.molecular_line_name(),
         ),
     ]
