@@ -243,6 +243,47 @@ fn lidarsim_limited(args: &[&str], bytes: u64) -> std::process::Output {
     cmd.output().expect("runs")
 }
 
+/// Scenario 1's 40 km window at `bin_width_s` 2e-9 (133,426 bins along 1.15e6 slabs of
+/// the path): its `expect --csv` and `simulate --profiles 2` in `dir`.
+struct LargeWindow {
+    cfg: String,
+    csv: std::path::PathBuf,
+    h5: std::path::PathBuf,
+}
+
+impl LargeWindow {
+    const SETS: [&'static str; 4] = [
+        "--set",
+        "instrument.bin_width_s=2e-9",
+        "--set",
+        "acquisition.top_altitude_km=40",
+    ];
+
+    fn in_dir(dir: &std::path::Path) -> Self {
+        LargeWindow {
+            cfg: config_path("paper/scenario1.toml")
+                .to_str()
+                .unwrap()
+                .to_string(),
+            csv: dir.join("e.csv"),
+            h5: dir.join("s.h5"),
+        }
+    }
+
+    fn expect(&self) -> Vec<&str> {
+        let head = ["expect", &self.cfg, "--csv", self.csv.to_str().unwrap()];
+        head.into_iter().chain(Self::SETS).collect()
+    }
+
+    fn simulate(&self) -> Vec<&str> {
+        let head = ["simulate", &self.cfg, "-o", self.h5.to_str().unwrap()];
+        head.into_iter()
+            .chain(["--profiles", "2"])
+            .chain(Self::SETS)
+            .collect()
+    }
+}
+
 /// The model's memory estimate is honest (issue 36, item 15): `expect` and `simulate`
 /// of a large-bin window (scenario 1's 40 km at `bin_width_s` 2e-9: 133,425 bins along
 /// 1.15e6 slabs of the path, ~150 MB) under address-space limits from 150 to 450 MB
@@ -253,28 +294,12 @@ fn lidarsim_limited(args: &[&str], bytes: u64) -> std::process::Output {
 #[test]
 fn a_large_model_under_an_address_space_limit_fits_or_is_refused_up_front() {
     let dir = scratch_dir("rlimit-as");
-    let cfg = config_path("paper/scenario1.toml");
-    let cfg = cfg.to_str().unwrap();
-    let sets = [
-        "--set",
-        "instrument.bin_width_s=2e-9",
-        "--set",
-        "acquisition.top_altitude_km=40",
-    ];
-    let csv = dir.join("e.csv");
-    let h5 = dir.join("s.h5");
-    let expect: Vec<&str> = ["expect", cfg, "--csv", csv.to_str().unwrap()]
-        .into_iter()
-        .chain(sets)
-        .collect();
-    let simulate: Vec<&str> = ["simulate", cfg, "-o", h5.to_str().unwrap()]
-        .into_iter()
-        .chain(["--profiles", "2"])
-        .chain(sets)
-        .collect();
+    let run = LargeWindow::in_dir(&dir);
+    let (csv, h5) = (&run.csv, &run.h5);
+    let (expect, simulate) = (run.expect(), run.simulate());
     let (mut ran, mut refused) = (0, 0);
     for mb in [150u64, 200, 250, 300, 350, 450] {
-        for (args, out) in [(&expect, &csv), (&simulate, &h5)] {
+        for (args, out) in [(&expect, csv), (&simulate, h5)] {
             let o = lidarsim_limited(args, mb * 1_000_000);
             let stderr = String::from_utf8_lossy(&o.stderr);
             let what = format!("{} under {mb} MB: {stderr}", args[0]);
@@ -313,26 +338,10 @@ fn a_large_model_under_an_address_space_limit_fits_or_is_refused_up_front() {
 #[test]
 fn a_large_model_runs_under_an_address_space_limit_that_main_refused() {
     let dir = scratch_dir("rlimit-as-fits");
-    let cfg = config_path("paper/scenario1.toml");
-    let cfg = cfg.to_str().unwrap();
-    let sets = [
-        "--set",
-        "instrument.bin_width_s=2e-9",
-        "--set",
-        "acquisition.top_altitude_km=40",
-    ];
-    let csv = dir.join("e.csv");
-    let h5 = dir.join("s.h5");
-    let expect: Vec<&str> = ["expect", cfg, "--csv", csv.to_str().unwrap()]
-        .into_iter()
-        .chain(sets)
-        .collect();
-    let simulate: Vec<&str> = ["simulate", cfg, "-o", h5.to_str().unwrap()]
-        .into_iter()
-        .chain(["--profiles", "2"])
-        .chain(sets)
-        .collect();
-    for (args, out, mb) in [(&expect, &csv, 200u64), (&simulate, &h5, 450)] {
+    let run = LargeWindow::in_dir(&dir);
+    let (csv, h5) = (&run.csv, &run.h5);
+    let (expect, simulate) = (run.expect(), run.simulate());
+    for (args, out, mb) in [(&expect, csv, 200u64), (&simulate, h5, 450)] {
         let o = lidarsim_limited(args, mb * 1_000_000);
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert_eq!(

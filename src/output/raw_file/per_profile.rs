@@ -21,7 +21,8 @@ use hdf5::Dataset;
 use ndarray::{Ix1, Ix2, Ix3, s};
 
 use super::read::RawHeader;
-use crate::error::{Error, Result, describe_hdf5_error};
+use super::read::unreadable;
+use crate::error::{Error, Result};
 
 /// The variables a reader may ask per profile, in the order `--truth per-profile` writes
 /// them.
@@ -76,16 +77,6 @@ pub struct PerProfileReader<'a> {
     n_bins: usize,
     n_columns: usize,
     forms: Vec<Form>,
-}
-
-fn unreadable(path: &Path, name: &str, e: hdf5::Error) -> Error {
-    Error::output(
-        path,
-        format!(
-            "cannot read `{name}`: {}",
-            describe_hdf5_error(&e.to_string())
-        ),
-    )
 }
 
 impl<'a> PerProfileReader<'a> {

@@ -7,9 +7,9 @@ use hdf5::types::{VarLenAscii, VarLenUnicode};
 use ndarray::{Ix1, Ix2, Ix3, s};
 
 use super::sums::{Channels, Sums};
-use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
 use crate::output::raw_file::per_profile::PerProfileReader;
+use crate::output::raw_file::read::unreadable;
 use crate::output::raw_file::read::{self, RawHeader};
 
 /// A (channel) or (bin) variable of floats, whole (bounded by the header's lengths).
@@ -23,16 +23,6 @@ pub(super) fn read_all(path: &Path, f: &hdf5::File, name: &str) -> Result<Vec<f6
         )
     })?;
     d.read_raw::<f64>().map_err(|e| unreadable(path, name, e))
-}
-
-fn unreadable(path: &Path, name: &str, e: hdf5::Error) -> Error {
-    Error::output(
-        path,
-        format!(
-            "cannot read `{name}`: {}",
-            describe_hdf5_error(&e.to_string())
-        ),
-    )
 }
 
 /// The expectation variables, by their index in a [`Block`].

@@ -405,6 +405,17 @@ pub fn check_storage(path: &Path, name: &str, d: &Dataset) -> Result<()> {
     }
 }
 
+/// The one-line error of variable `name` of the file at `path` that HDF5 could not read.
+pub fn unreadable(path: &Path, name: &str, e: hdf5::Error) -> Error {
+    Error::output(
+        path,
+        format!(
+            "cannot read `{name}`: {}",
+            crate::error::describe_hdf5_error(&e.to_string())
+        ),
+    )
+}
+
 /// The `channel` coordinate's names.
 fn read_channels(path: &Path, f: &hdf5::File) -> Result<Vec<String>> {
     read_text(path, f, CHANNEL_DIM)
