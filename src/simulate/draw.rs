@@ -69,7 +69,7 @@ pub(super) fn draw_into<S: ProfileSink>(
     let progress = progress_bar(opts.progress, rows.len());
     let streams = channels.len() * channels[0].len();
     // batch size: bounded memory (at most 32 MiB of counts) and a lively progress bar
-    let batch = ((4 << 20) / (n_bins * streams).max(1)).clamp(1, 64);
+    let batch = super::sizes::batch_profiles(n_bins, streams);
     let mut total_counts = 0u64;
     let mut drawing = Duration::ZERO;
     // Batch k is drawn while batch k − 1 is handed to the writer (whose chunk compression

@@ -27,9 +27,9 @@ const FILE_BYTES_PER_BIN: f64 = 200.0;
 const FILE_NS_PER_COUNT: f64 = 40.0;
 
 /// Profiles drawn in one batch of `n_bins` bins and `streams` count streams: at most
-/// 4 Mi counts (32 MiB), at least one profile, at most 64 (the drawing loop's,
-/// `simulate::draw`); two batches are held at once, one drawn while one is written.
-fn batch_profiles(n_bins: usize, streams: usize) -> usize {
+/// 4 Mi counts (32 MiB), at least one profile, at most 64 (what the drawing loop,
+/// `simulate::draw`, draws and the estimate counts); two batches are held at once.
+pub(super) fn batch_profiles(n_bins: usize, streams: usize) -> usize {
     ((4 << 20) / (n_bins * streams).max(1)).clamp(1, 64)
 }
 
