@@ -221,12 +221,32 @@ fn compare_with_native(product: &Path, raw: &Path, g: &str, shots: usize) {
         "depol_cld",
         "depol_mol",
         "depol_volume",
+        "alpha_aer_bin_mean",
+        "alpha_cld_bin_mean",
+        "beta_aer_bin_mean",
+        "beta_cld_bin_mean",
     ] {
         let (native, region) = (f64s(raw, "", name), f64s(product, g, name));
         assert_eq!(native.len(), columns * nch * n, "{name}");
         assert_eq!(region.len(), columns * channels * bins, "{name}");
         for &(i, row, j) in &cells {
             close(region[i], mean(&native, row, j), name);
+        }
+    }
+    // a region bin's multiple-scattering factor weights its native bins' by extinction
+    for species in ["aer", "cld"] {
+        let name = format!("ms_factor_{species}_bin_mean");
+        let (factor, region) = (f64s(raw, "", &name), f64s(product, g, &name));
+        let alpha = f64s(raw, "", &format!("alpha_{species}_bin_mean"));
+        let weighted: Vec<f64> = factor.iter().zip(&alpha).map(|(m, a)| m * a).collect();
+        for &(i, row, j) in &cells {
+            let a = mean(&alpha, row, j);
+            let want = if a > 0.0 {
+                mean(&weighted, row, j) / a
+            } else {
+                1.0
+            };
+            close(region[i], want, &name);
         }
     }
     let rw = f64s(raw, "", "range_weight");

@@ -4,6 +4,7 @@
 //! [`Atmosphere`] of a scenario built from its config, and a Raman channel's return.
 
 pub mod aerosol_profile;
+pub mod bin_mean;
 pub mod cabannes_line;
 mod molecules;
 pub mod multiple_scattering;
@@ -18,6 +19,7 @@ pub mod us76;
 pub mod water_vapour;
 pub mod wide_angle;
 
+pub use bin_mean::BinMean;
 pub use molecules::{LinePart, MolecularSource, MolecularState, Molecules};
 pub use optics::{Optics, Slab};
 pub use particles::{BackgroundAerosol, Layer};

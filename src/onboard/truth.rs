@@ -14,10 +14,13 @@ use super::RegionLayout;
 use crate::error::Result;
 use crate::output::product::{RegionDims, RegionTruth, RegionVar};
 use crate::output::raw_file::AttrValue;
+use crate::output::raw_file::bin_mean::{self, BIN_MEAN_TRUTH, CELL_METHODS};
 use crate::output::raw_file::content::{GEOLOCATION, geolocation_variables};
 use crate::output::raw_file::truth::COLUMN_TRUTH;
+use crate::output::raw_file::truth::Truth;
 use crate::scenario::{ExpectedProfile, Lidar};
 use crate::scene::orbit::Orbit;
+use std::ops::Range;
 
 /// `long_name`, `units`, then `extra`, as a region variable's attributes.
 fn attributes(long_name: &str, units: &str, extra: &[(&str, &str)]) -> Vec<(String, AttrValue)> {
@@ -33,7 +36,8 @@ const AVERAGED: &str = ": mean over the region bin's native bins of the value at
 
 /// The fixed variables of a region, in order: `range_weight` (bin), `lidar_constant`,
 /// `nominal_pulse_energy`, `counts_per_photoelectron` and `counts_offset` (channel: how
-/// the channel's counts record photoelectrons, 1 and 0 for a photon counter), the point truth of [`COLUMN_TRUTH`], then
+/// the channel's counts record photoelectrons, 1 and 0 for a photon counter), the point truth of [`COLUMN_TRUTH`], the bin means of
+/// [`BIN_MEAN_TRUTH`] (the mean of the native bins' means is the region bin's), then
 /// `expected_signal` and `attenuated_backscatter` (column, channel, bin); `data(name)`
 /// gives each one's values, `beta_mol` the attributes of `beta_mol` beyond its long name
 /// and units (the raw file's, [`crate::output::raw_file::truth::beta_mol_attributes`]).
@@ -103,6 +107,14 @@ pub fn fixed_variables(
             a.extend(beta_mol.iter().cloned());
         }
         push(name, ColumnChannelBin, a)?;
+    }
+    for (name, long_name, units, _) in BIN_MEAN_TRUTH {
+        let long_name = format!("{long_name}: the region bin's, the mean over its native bins");
+        push(
+            name,
+            ColumnChannelBin,
+            attributes(&long_name, units, &[CELL_METHODS]),
+        )?;
     }
     push(
         "expected_signal",
@@ -273,6 +285,15 @@ pub fn region_truth(
     let attenuated_backscatter = attenuated_backscatter(&expected_signal, &constant, &range_weight);
     let beta_mol = crate::output::raw_file::truth::beta_mol_attributes(lidar);
     let fixed = fixed_variables(&beta_mol, |name| {
+        if let Some((ms_alpha, alpha)) = bin_mean::ms_weighted(name) {
+            let sum = |f: Truth, e: &ExpectedProfile, bins: Range<usize>| -> f64 {
+                bins.map(|i| f(e, i)).sum()
+            };
+            return Ok(cells.values(&|e, bins| {
+                let (a, b) = (sum(ms_alpha, e, bins.clone()), sum(alpha, e, bins));
+                crate::atmosphere::bin_mean::ms_factor(a, b)
+            }));
+        }
         Ok(match name {
             "range_weight" => range_weight.clone(),
             "lidar_constant" => constant.clone(),
@@ -290,7 +311,8 @@ pub fn region_truth(
             "expected_signal" => expected_signal.clone(),
             "attenuated_backscatter" => attenuated_backscatter.clone(),
             _ => {
-                let f = COLUMN_TRUTH.iter().find(|t| t.0 == name).map(|t| t.3);
+                let mut truth = COLUMN_TRUTH.iter().chain(&BIN_MEAN_TRUTH);
+                let f = truth.find(|t| t.0 == name).map(|t| t.3);
                 f.map(|f| cells.mean(f)).unwrap_or_default()
             }
         })

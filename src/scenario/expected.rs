@@ -1,20 +1,20 @@
 //! The deterministic model's product ([`ExpectedProfile`]): expected counts per shot per
 //! bin and the atmosphere's truth at bin centres, and the memory it takes.
 
-use crate::atmosphere::{MolecularState, Optics};
+use crate::atmosphere::{BinMean, MolecularState, Optics};
 use crate::signal::{BinMultipleScattering, PathBytes};
 use crate::snr;
 
 /// Memory the deterministic model holds per range bin beyond its beam path
 /// ([`crate::signal::laying_bytes`]), bytes: the expected profile and truth by species
-/// (33 f64: 264 bytes while the model is computed, its pieces of 64 Ki bins besides),
-/// the detector's means and, while `expect` writes it, the CSV's twelve columns (368
+/// (37 f64: 296 bytes while the model is computed, its pieces of 64 Ki bins besides),
+/// the detector's means and, while `expect` writes it, the CSV's twelve columns (400
 /// bytes then, the path let go). Peak RSS of `/usr/bin/time -v lidarsim expect
 /// configs/paper/scenario1.toml --set instrument.bin_width_s=1e-10 --set
 /// acquisition.top_altitude_km=40 --csv big.csv` (2.67e6 bins, 1.07e7 of the path's
 /// 2.29e7 slabs kept): 1.13 GB, estimated 1.63 GB (3.17 GB before the path kept only
 /// what the bins read, 5.27 GB before the bins were taken a piece at a time); at
-/// `bin_width_s` 2e-9 (1.33e5 bins) 77 MB, estimated 81 MB. Rounded up from 368 for
+/// `bin_width_s` 2e-9 (1.33e5 bins) 77 MB, estimated 81 MB. Rounded up from 400 for
 /// the small-angle models' per-bin multiple scattering.
 pub const MODEL_BYTES_PER_BIN: f64 = 450.0;
 
@@ -31,6 +31,7 @@ pub(super) struct ModelBin {
     pub(super) altitude_m: f64,
     pub(super) range_m: f64,
     pub(super) point: Optics,
+    pub(super) bin_mean: BinMean,
     pub(super) state: MolecularState,
     pub(super) overlap: f64,
     pub(super) t2: f64,
@@ -48,6 +49,9 @@ pub struct ExpectedProfile {
     pub range_m: Vec<f64>,
     /// The atmosphere's optics at the bin centre, by species (the point truth).
     pub point: Vec<Optics>,
+    /// The particles' optics averaged over the bin's range, by species (what the counts
+    /// integrate; [`BinMean`]).
+    pub bin_mean: Vec<BinMean>,
     /// The molecular state at the bin centre.
     pub state: Vec<MolecularState>,
     /// Overlap η(r) at the bin centre.
@@ -93,6 +97,7 @@ impl ExpectedProfile {
         self.altitude_m.reserve_exact(n);
         self.range_m.reserve_exact(n);
         self.point.reserve_exact(n);
+        self.bin_mean.reserve_exact(n);
         self.state.reserve_exact(n);
         self.overlap.reserve_exact(n);
         self.t2.reserve_exact(n);
@@ -106,6 +111,7 @@ impl ExpectedProfile {
         self.altitude_m.push(b.altitude_m);
         self.range_m.push(b.range_m);
         self.point.push(b.point);
+        self.bin_mean.push(b.bin_mean);
         self.state.push(b.state);
         self.overlap.push(b.overlap);
         self.t2.push(b.t2);

@@ -25,6 +25,12 @@ impl Scenario {
             ..Default::default()
         };
         e.reserve_exact(n);
+        let surface = self.loaded.config.surface.as_ref();
+        let span = crate::signal::BeamPath::altitude_span(
+            &self.atmosphere,
+            g,
+            surface.map(crate::surface::Surface::from_config).as_ref(),
+        );
         for i in 0..g.pretrigger_bins {
             self.push_pretrigger_bin(&mut e, g.bin_centre_range_m(i));
         }
@@ -35,7 +41,7 @@ impl Scenario {
             let bins: Vec<Result<ModelBin>> = (start..(start + MODEL_PIECE_BINS).min(n))
                 .into_par_iter()
                 .with_min_len(256)
-                .map(|i| self.model_bin(i))
+                .map(|i| self.model_bin(i, span))
                 .collect();
             for bin in bins {
                 e.push_bin(bin?);
@@ -88,9 +94,10 @@ impl Scenario {
         Ok(e)
     }
 
-    /// The model of bin `i` (past the pre-trigger bins): Eq. 2's bin integral and the
-    /// truth at the bin centre.
-    fn model_bin(&self, i: usize) -> Result<ModelBin> {
+    /// The model of bin `i` (past the pre-trigger bins): Eq. 2's bin integral, the truth
+    /// at the bin centre and the optics averaged over the bin (along the beam path's
+    /// altitude `span`).
+    fn model_bin(&self, i: usize, span: (f64, f64)) -> Result<ModelBin> {
         let g = &self.geometry;
         let (ra, rb) = g.bin_range_bounds(i);
         let r = g.bin_centre_range_m(i);
@@ -102,6 +109,10 @@ impl Scenario {
         } else {
             self.atmosphere.no_optics()
         };
+        let z_ends = (g.altitude_at_range(ra), g.altitude_at_range(rb));
+        let bin_mean = self
+            .atmosphere
+            .bin_mean(span, (ra, rb), z_ends, |z| g.range_at_altitude(z));
         let integral = self.path.bin_integral(ra, rb)?;
         let signal = self.instrument.signal_constant * integral;
         let weight = self.path.range_weight(ra, rb);
@@ -114,6 +125,7 @@ impl Scenario {
             altitude_m: z,
             range_m: r,
             point,
+            bin_mean,
             state: self.atmosphere.state_at(z),
             overlap: self.path.overlap().eta(r),
             t2: self.path.two_way_transmission(r),
@@ -237,6 +249,7 @@ impl Scenario {
         e.altitude_m.push(self.geometry.altitude_at_range(r_m));
         e.range_m.push(r_m);
         e.point.push(self.atmosphere.no_optics());
+        e.bin_mean.push(Default::default());
         e.state.push(self.atmosphere.state_at(station_m));
         e.overlap.push(0.0);
         e.t2.push(1.0);

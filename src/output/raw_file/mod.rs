@@ -29,6 +29,7 @@
 //! temporary name, the final rename, locks and signals are decided by
 //! [`crate::safe_file`].
 
+pub mod bin_mean;
 pub mod check;
 pub mod chunk;
 pub mod content;

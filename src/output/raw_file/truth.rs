@@ -1,8 +1,10 @@
 //! The truth a raw file carries beside the counts (format 3, docs/file-format.md "The
 //! truth of each profile"): per distinct column of the scene, the optics by species at
-//! each bin centre, the particle properties, `t2` and the molecular state; and the
+//! each bin centre, the particle properties, `t2`, the particles' optics averaged over
+//! each bin (`super::bin_mean`) and the molecular state; and the
 //! channel's description (kind, polarization, filter, detector, molecular line).
 
+use super::bin_mean::{BIN_MEAN_TRUTH, CELL_METHODS};
 use super::spec::var;
 use super::spec::{AttrValue, Dims, TextVariable, Variable};
 use crate::detector::DeadTimeModel;
@@ -182,13 +184,16 @@ const COLUMN_STATE: [(&str, &str, &str, &str, Truth); 4] = [
 /// are NaN (their `_FillValue`) where the molecular source gives none.
 pub fn column_variables(lidar: &Lidar, columns: &[&[ExpectedProfile]]) -> Vec<Variable> {
     let mut vars = Vec::new();
-    for (name, long_name, units, f) in COLUMN_TRUTH {
+    let bin_means = BIN_MEAN_TRUTH.iter().map(|t| (t, &[CELL_METHODS][..]));
+    for ((name, long_name, units, f), attrs) in
+        COLUMN_TRUTH.iter().map(|t| (t, &[][..])).chain(bin_means)
+    {
         let mut data = Vec::new();
         for e in columns.iter().flat_map(|col| col.iter()) {
             data.extend((0..e.n_bins()).map(|i| f(e, i)));
         }
-        let mut v = var(name, Dims::ColumnChannelBin, long_name, units, &[], data);
-        if name == "beta_mol" {
+        let mut v = var(name, Dims::ColumnChannelBin, long_name, units, attrs, data);
+        if *name == "beta_mol" {
             v.attributes = beta_mol_attributes(lidar);
         }
         vars.push(v);
