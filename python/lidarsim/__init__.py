@@ -363,7 +363,7 @@ def validate_file(path: Union[str, os.PathLike]) -> dict:
 
 #: The units of a config key, from the unit its name ends in (the house rule: units in
 #: names, docs/config.md); a key without a unit suffix is dimensionless ("1").
-_KEY_UNITS = (("_per_kg", None), ("_g_per_kg", "g kg-1"), ("_j", "J"), ("_w", "W"),
+_KEY_UNITS = (("_g_per_kg", "g kg-1"), ("_j", "J"), ("_w", "W"),
               ("_hz", "Hz"), ("_mhz", "MHz"), ("_nm", "nm"), ("_um", "um"), ("_mm", "mm"),
               ("_km", "km"), ("_m", "m"), ("_m2", "m2"), ("_ns", "ns"), ("_us", "us"),
               ("_s", "s"), ("_rad", "rad"), ("_mrad", "mrad"), ("_urad", "urad"),
@@ -376,7 +376,7 @@ def _key_units(key: str) -> str:
     """The units of a dotted config key, from its name's suffix (longest match)."""
     leaf = key.rsplit(".", 1)[-1].lower()
     found = [(len(suffix), units) for suffix, units in _KEY_UNITS
-             if units and leaf.endswith(suffix)]
+             if leaf.endswith(suffix)]
     return max(found)[1] if found else "1"
 
 
