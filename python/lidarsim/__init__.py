@@ -17,6 +17,7 @@ import contextlib
 import json
 import math
 import os
+import re
 import signal
 import tempfile
 import threading
@@ -30,12 +31,34 @@ import xarray as xr
 
 from . import _lidarsim
 
-__all__ = ["Config", "load_config", "expect", "simulate", "per_profile", "validate",
+__version__: str = _lidarsim.__version__  # the lidarsim crate's (its Cargo.toml)
+
+__all__ = ["__version__", "Config", "load_config", "expect", "simulate", "per_profile", "validate",
            "validate_file", "sweep"]
 
 
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+
+
+def _toml_key(key: str) -> str:
+    """A key of an inline table: bare when TOML allows it, else a quoted string."""
+    return key if _BARE_KEY.fullmatch(key) else json.dumps(key)
+
+
+def _plain(value: Any) -> Any:
+    """numpy scalars as the Python number they hold, numpy arrays as (nested) lists."""
+    if isinstance(value, np.generic):  # np.float64 is a float, but reprs as np.float64(..)
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    return value
+
+
 def _toml_value(key: str, value: Any) -> str:
-    """A Python value as the TOML of a ``--set KEY=VALUE`` override."""
+    """A Python value as the TOML of a ``--set KEY=VALUE`` override: booleans, numbers,
+    strings, lists and tuples (arrays), dicts (inline tables), numpy scalars and arrays;
+    anything else is refused in one line naming the key."""
+    value = _plain(value)
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, int):
@@ -43,12 +66,36 @@ def _toml_value(key: str, value: Any) -> str:
     if isinstance(value, float):
         if not math.isfinite(value):
             raise ValueError(f"--set {key}: {value} is not a finite number")
-        return repr(value)
+        return repr(float(value))
     if isinstance(value, str):
         return json.dumps(value)  # a TOML basic string
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(_toml_value(key, v) for v in value) + "]"
-    raise ValueError(f"--set {key}: a {type(value).__name__} is not a TOML value")
+    if isinstance(value, Mapping):
+        for k in value:
+            if not isinstance(k, str) or not k:
+                raise ValueError(f"--set {key}: the table key {k!r} is not a non-empty string")
+        return "{" + ", ".join(f"{_toml_key(k)} = {_toml_value(f'{key}.{k}', v)}"
+                               for k, v in value.items()) + "}"
+    raise ValueError(f"--set {key}: a Python {type(value).__name__} is not a number, "
+                     "boolean, string, list, dict or numpy value")
+
+
+def _flat(key: str, value: Any) -> list:
+    """An override as ``(dotted key, value)`` pairs: a non-empty dict is set key by key
+    (merged into the config's table, as ``--set a.b.c=...`` for each of its leaves);
+    anything else, a list of dicts too, replaces the value at ``key``."""
+    if not isinstance(key, str) or not key or any(not p for p in key.split(".")):
+        raise ValueError(f"--set {key!r}: a key is a non-empty dotted string "
+                         '("instrument.pulse_energy_j")')
+    if isinstance(value, Mapping) and value:
+        out = []
+        for k, v in value.items():
+            if not isinstance(k, str) or not k:
+                raise ValueError(f"--set {key}: the table key {k!r} is not a non-empty string")
+            out += _flat(f"{key}.{k}", v)
+        return out
+    return [(key, value)]
 
 
 @dataclass(frozen=True)
@@ -62,7 +109,8 @@ class Config:
 
     def sets(self) -> list:
         """The overrides as the CLI's ``--set KEY=VALUE`` arguments."""
-        return [f"{k}={_toml_value(k, v)}" for k, v in self.overrides.items()]
+        return [f"{k}={_toml_value(k, v)}"
+                for key, value in self.overrides.items() for k, v in _flat(key, value)]
 
     @property
     def loaded(self) -> "_lidarsim.Loaded":
@@ -313,36 +361,79 @@ def validate_file(path: Union[str, os.PathLike]) -> dict:
     return json.loads(_lidarsim.validate_file(os.fspath(path)))
 
 
-def sweep(config: ConfigLike, vary: Mapping[str, str],
-          metrics: Union[str, Sequence[str]]) -> xr.Dataset:
+#: The units of a config key, from the unit its name ends in (the house rule: units in
+#: names, docs/config.md); a key without a unit suffix is dimensionless ("1").
+_KEY_UNITS = (("_g_per_kg", "g kg-1"), ("_j", "J"), ("_w", "W"),
+              ("_hz", "Hz"), ("_mhz", "MHz"), ("_nm", "nm"), ("_um", "um"), ("_mm", "mm"),
+              ("_km", "km"), ("_m", "m"), ("_m2", "m2"), ("_ns", "ns"), ("_us", "us"),
+              ("_s", "s"), ("_rad", "rad"), ("_mrad", "mrad"), ("_urad", "urad"),
+              ("_deg", "degree"), ("_k", "K"), ("_hpa", "hPa"), ("_pa", "Pa"),
+              ("_percent", "%"), ("_mps", "m s-1"), ("_m_per_s", "m s-1"),
+              ("_per_m", "m-1"), ("_per_km", "km-1"), ("_per_sr", "sr-1"), ("_sr", "sr"))
+
+
+def _key_units(key: str) -> str:
+    """The units of a dotted config key, from its name's suffix (longest match)."""
+    leaf = key.rsplit(".", 1)[-1].lower()
+    found = [(len(suffix), units) for suffix, units in _KEY_UNITS
+             if leaf.endswith(suffix)]
+    return max(found)[1] if found else "1"
+
+
+def _metric_units(metric: str) -> str:
+    """The units of a sweep metric (src/design/sweep.rs): S/N and pulse counts are
+    numbers, ``max_altitude`` km, ``time_to_snr`` s, ``mean_laser_power_w`` W."""
+    name = metric.split(":", 1)[0]
+    return {"snr_at": "1", "max_altitude": "km", "time_to_snr": "s",
+            "mean_laser_power_w": "W", "pulses_in_flight": "1"}.get(name, "1")
+
+
+def _vary_values(key: Any, v: Any) -> Union[str, list]:
+    """One ``vary`` entry as the module passes it: a range string as it is, a list,
+    tuple or numpy array of numbers as a list of floats; anything else refused."""
+    if not isinstance(key, str):
+        raise ValueError(f"vary: the key {key!r} is not a dotted string "
+                         '("instrument.pulse_energy_j")')
+    if isinstance(v, str):
+        return v
+    v = _plain(v)
+    if isinstance(v, (list, tuple)) and all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) for x in map(_plain, v)):
+        return [float(_plain(x)) for x in v]
+    raise ValueError(f"vary {key}: {str(v)[:60]!r} is neither a range (\"0.01..1:log:5\") "
+                     "nor a list of numbers")
+
+
+def sweep(config: ConfigLike, vary: Mapping[str, Any],
+          metrics: Union[str, Sequence[str]], channel: Optional[str] = None) -> xr.Dataset:
     """``lidarsim sweep CONFIG --vary KEY=RANGE ... --metric M ...``: the metrics over
     the grid of the varied keys, one dimension per key (``vary`` maps a dotted key to
-    its range, ``"0.01..1:log:5"``; the CLI's numbers, read from its CSV). ``metrics``:
-    one metric (a string, ``"snr_at:10km"``) or a list of them."""
+    its range, ``"0.01..1:log:5"``, or to a list or numpy array of values; the CLI's
+    numbers). ``metrics``: one metric (a string, ``"snr_at:10km"``) or a list of them.
+    ``channel``: the channel the metrics are of, required for a multi-channel config.
+    Every variable carries ``units``."""
     cfg = _config(config)
     if not isinstance(vary, Mapping) or not vary:
         raise ValueError(
-            f"vary = {vary!r}: must be a dict of dotted keys to ranges, e.g. "
-            '{"instrument.pulse_energy_j": "0.01..1:log:5"}')
-    for k, v in vary.items():
-        if not isinstance(k, str) or not isinstance(v, str):
-            raise ValueError(f"vary: {k!r}: {v!r}: each key and range must be a string "
-                             '("instrument.pulse_energy_j": "0.01..1:log:5")')
+            f"vary = {str(vary)[:60]!r}: must be a dict of dotted keys to ranges or lists, "
+            'e.g. {"instrument.pulse_energy_j": "0.01..1:log:5"}')
+    axes = [(k, _vary_values(k, v)) for k, v in vary.items()]
     if isinstance(metrics, str):
         metrics = [metrics]
     elif not isinstance(metrics, Sequence) or not all(isinstance(m, str) for m in metrics):
-        raise ValueError(f"metrics = {metrics!r}: must be a metric (a string, "
+        raise ValueError(f"metrics = {str(metrics)[:60]!r}: must be a metric (a string, "
                          '"snr_at:10km") or a list of them')
-    with _terminable(), tempfile.TemporaryDirectory(prefix="lidarsim-") as d:
-        out = os.path.join(d, "sweep.csv")
-        _lidarsim.sweep(cfg.loaded, [f"{k}={v}" for k, v in vary.items()], list(metrics), out)
-        with open(out) as f:
-            header = f.readline().strip().split(",")
-        table = np.atleast_2d(np.genfromtxt(out, delimiter=",", skip_header=1))
-    keys = list(vary)
-    axes = [list(dict.fromkeys(table[:, k])) for k in range(len(keys))]
-    shape = tuple(len(a) for a in axes)
-    data = {name: (keys, table[:, len(keys) + m].reshape(shape))
-            for m, name in enumerate(header[len(keys):])}
-    return xr.Dataset(data, coords={k: a for k, a in zip(keys, axes)},
-                      attrs={"config_file": os.fspath(cfg.path)})
+    if channel is not None and not isinstance(channel, str):
+        raise ValueError(f"channel = {channel!r}: must be a channel's name (a string)")
+    with _terminable():
+        grid, rows = _lidarsim.sweep(cfg.loaded, axes, list(metrics), channel)
+    keys = [k for k, _ in grid]
+    shape = tuple(len(values) for _, values in grid)
+    table = np.array([m for _, m in rows], dtype="float64").reshape(shape + (len(metrics),))
+    data = {m: (keys, table[..., i], {"units": _metric_units(m)})
+            for i, m in enumerate(metrics)}
+    coords = {k: (k, np.array(values), {"units": _key_units(k)}) for k, values in grid}
+    attrs = {"config_file": os.fspath(cfg.path)}
+    if channel is not None:
+        attrs["channel"] = channel
+    return xr.Dataset(data, coords=coords, attrs=attrs)

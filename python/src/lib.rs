@@ -14,17 +14,18 @@
 // PyO3 0.22's #[pyfunction] expansion converts each PyResult's error into itself
 #![allow(clippy::useless_conversion)]
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use lidarsim::config::Method;
+use lidarsim::design::sweep::{Axis, Metric};
 use lidarsim::error::Error;
 use lidarsim::output::raw_file::memory::{Array, MemoryFile, MemoryVariable};
 use lidarsim::output::raw_file::AttrValue;
-use lidarsim::scenario::Lidar;
+use lidarsim::scenario::{Lidar, Scenario};
 use lidarsim::simulate::RunOptions;
 use numpy::{IntoPyArray, PyArrayMethods};
 use pyo3::exceptions::{PyOSError, PyRuntimeError, PyUserWarning, PyValueError};
@@ -395,28 +396,99 @@ fn validate_file(py: Python<'_>, path: PathBuf) -> PyResult<String> {
     })
 }
 
-/// `lidarsim sweep CONFIG --vary ... --metric ... --csv CSV`: writes the CSV.
+/// A varied key's values: the CLI's range (`"0.01..1:log:5"`) or a list of numbers.
+#[derive(FromPyObject)]
+enum Values {
+    Range(String),
+    List(Vec<f64>),
+}
+
+/// The sweep's axes: a range as `--vary KEY=RANGE` parses it; a list as given (finite,
+/// at least one value), refused in one line naming the key.
+fn axes(vary: Vec<(String, Values)>) -> lidarsim::error::Result<Vec<Axis>> {
+    vary.into_iter()
+        .map(|(key, values)| match values {
+            Values::Range(range) => Axis::parse(&format!("{key}={range}")),
+            Values::List(values) if values.is_empty() => Err(Error::Unsupported(format!(
+                "vary {key}: an empty list of values"
+            ))),
+            Values::List(values) => match values.iter().find(|v| !v.is_finite()) {
+                Some(v) => Err(Error::Unsupported(format!(
+                    "vary {key}: {v} is not a finite number"
+                ))),
+                None => Ok(Axis { key, values }),
+            },
+        })
+        .collect()
+}
+
+/// The scenario of one channel of the config with `overrides`: with `channel`, that
+/// channel of the whole lidar; without, the config's only channel (a multi-channel
+/// config asks for `channel`, naming its channels).
+fn sweep_scenario(
+    config: &Path,
+    overrides: &[String],
+    channel: Option<&str>,
+) -> lidarsim::error::Result<Scenario> {
+    let mut lidar = Lidar::load(config, overrides)?;
+    let k = match channel {
+        Some(name) => lidarsim::commands::channel_index(&lidar, config, name)?,
+        None if lidar.channels.len() == 1 => 0,
+        None => {
+            return Err(Error::config(
+                config.display().to_string(),
+                "instrument.channels",
+                format!(
+                    "lists {} channels: pass channel= one of {}",
+                    lidar.channels.len(),
+                    lidar.channel_names().join(", ")
+                ),
+            ))
+        }
+    };
+    Ok(lidar.channels.swap_remove(k))
+}
+
+/// `lidarsim sweep CONFIG --vary ... --metric ...`: the metrics of one channel at every
+/// grid point, as `(axes' keys and values, rows of (point, metrics))`: the numbers of
+/// the CLI's CSV (`sweep::run` on the same scenarios), `vary` a list of `(key, range
+/// or list of values)`.
 #[pyfunction]
+#[pyo3(signature = (loaded, vary, metrics, channel=None))]
 fn sweep(
     py: Python<'_>,
     loaded: &Loaded,
-    vary: Vec<String>,
+    vary: Vec<(String, Values)>,
     metrics: Vec<String>,
-    csv: PathBuf,
-) -> PyResult<()> {
+    channel: Option<String>,
+) -> PyResult<SweepTable> {
     interruptible(py, |cancel| {
-        let (config, overrides) = (&loaded.path, &loaded.overrides);
-        lidarsim::commands::sweep(
-            config,
-            overrides,
-            &vary,
-            &metrics,
-            &csv,
-            None,
-            Some(&cancel),
-        )
+        let (config, overrides) = (loaded.path.as_path(), &loaded.overrides);
+        let axes = axes(vary)?;
+        let parsed = Metric::parse_all(&metrics)?;
+        let base = sweep_scenario(config, overrides, channel.as_deref())?;
+        let points = lidarsim::design::sweep::grid(&axes)?.len();
+        let at_once = points.min(rayon::current_num_threads().max(1)) as f64;
+        lidarsim::resources::require_memory(
+            &format!("sweeping {points} points of {} bins", base.geometry.n_bins),
+            at_once
+                * lidarsim::scenario::model_bytes(
+                    base.geometry.n_bins as f64,
+                    base.path.laid_bytes(),
+                ),
+        )?;
+        let scenario = |extra: &[String]| {
+            let all: Vec<String> = overrides.iter().chain(extra).cloned().collect();
+            sweep_scenario(config, &all, channel.as_deref())
+        };
+        let rows = lidarsim::design::sweep::run(&axes, &parsed, &scenario, &|| {}, &cancel)?;
+        let axes = axes.into_iter().map(|a| (a.key, a.values)).collect();
+        Ok((axes, rows))
     })
 }
+
+/// A sweep's axes `(key, values)` and rows `(point, metrics)`.
+type SweepTable = (Vec<(String, Vec<f64>)>, Vec<(Vec<f64>, Vec<f64>)>);
 
 /// A whole-number argument parsed as the CLI parses its option of that name
 /// (`profiles`, `realizations`, `seed`: [`lidarsim::cli_values`]), refused with the
@@ -437,6 +509,8 @@ fn whole_option(name: &str, value: &str) -> PyResult<u64> {
 fn _lidarsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // a library prints nothing: its duration notices become warnings (warn_notices)
     lidarsim::resources::keep_duration_notices();
+    // the lidarsim crate's version (build.rs reads it from its Cargo.toml)
+    m.add("__version__", env!("LIDARSIM_VERSION"))?;
     m.add_class::<Loaded>()?;
     m.add_function(wrap_pyfunction!(expect, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;

@@ -390,8 +390,102 @@ def test_sweep_takes_one_metric_as_a_string_and_refuses_a_bad_vary():
     listed = lidarsim.sweep(SCENARIO1, vary, ["snr_at:11km"])
     np.testing.assert_array_equal(one["snr_at:11km"], listed["snr_at:11km"])
     for bad in ("instrument.pulse_energy_j=0.01..1:3", ["instrument.pulse_energy_j"], {},
-                {"instrument.pulse_energy_j": 3}):
+                {"instrument.pulse_energy_j": 3}, {"instrument.pulse_energy_j": ["a"]},
+                {"instrument.pulse_energy_j": []}):
         with pytest.raises(ValueError, match="vary"):
             lidarsim.sweep(SCENARIO1, bad, "snr_at:11km")
     with pytest.raises(ValueError, match="metrics"):
         lidarsim.sweep(SCENARIO1, vary, [3])
+
+
+# the CALIOP-like config's 532 nm perpendicular channel alone, as the CLI's --set writes it
+PERPENDICULAR = {"name": "532_perpendicular", "polarization": "perpendicular",
+                 "crosstalk": 0.005}
+PERPENDICULAR_SET = ('instrument.channels=[{name = "532_perpendicular", '
+                     'polarization = "perpendicular", crosstalk = 0.005}]')
+
+
+def test_numpy_scalars_and_arrays_are_overrides():
+    cfg = lidarsim.Config(SCENARIO1, {"instrument.pulse_energy_j": np.float64(0.1),
+                                      "instrument.rep_rate_hz": np.int64(20),
+                                      "atmosphere.layers.0.top_km": np.float32(12.5)})
+    assert cfg.sets() == ["instrument.pulse_energy_j=0.1", "instrument.rep_rate_hz=20",
+                          "atmosphere.layers.0.top_km=12.5"]
+    plain = lidarsim.expect(lidarsim.load_config(SCENARIO1, {"instrument.pulse_energy_j": 0.1}))
+    np.testing.assert_array_equal(lidarsim.expect(lidarsim.load_config(
+        SCENARIO1, {"instrument.pulse_energy_j": np.float64(0.1)}))["expected_signal"],
+        plain["expected_signal"])
+    arr = lidarsim.Config(SCENARIO1, {"a.b": np.array([1.0, 2.5]), "a.c": np.bool_(True)})
+    assert arr.sets() == ["a.b=[1.0, 2.5]", "a.c=true"]
+
+
+def test_dicts_are_tables_and_nested_dicts_are_merged_key_by_key(tmp_path):
+    cfg = lidarsim.Config(SCENARIO1, {"atmosphere": {"water_vapour": {
+        "altitude_km": np.array([0.0, 10.0]), "mixing_ratio_g_per_kg": [8, 0.01]}},
+        "instrument.channels": [PERPENDICULAR]})
+    assert cfg.sets() == [
+        "atmosphere.water_vapour.altitude_km=[0.0, 10.0]",
+        "atmosphere.water_vapour.mixing_ratio_g_per_kg=[8, 0.01]",
+        'instrument.channels=[{name = "532_perpendicular", polarization = "perpendicular", '
+        'crosstalk = 0.005}]']
+    # a layer list replaces the config's: the CLI's --set of the same TOML, to the bit
+    layer = {"kind": "cloud", "base_km": 2.0, "top_km": np.float64(3.5),
+             "extinction_per_km": 0.5, "lidar_ratio_sr": 20, "multiple_scattering": 1.0}
+    layers = lidarsim.Config(SCENARIO1, {"atmosphere.layers": [layer]})
+    (item,) = layers.sets()
+    ds = lidarsim.expect(layers)
+    out = tmp_path / "layers.csv"
+    r = cli("expect", SCENARIO1, "--set", item, "--csv", out)
+    assert r.returncode == 0, r.stderr
+    table = np.genfromtxt(out, delimiter=",", names=True)
+    np.testing.assert_array_equal(ds["expected_signal"].values.ravel(), table["signal"])
+
+
+def test_an_override_that_is_no_toml_value_is_one_line_naming_the_key():
+    for bad in (object(), {1: 2}, float("nan"), np.float64("inf"), {"x": {3: 1}}):
+        with pytest.raises(ValueError, match=r"--set instrument\.pulse_energy_j") as e:
+            lidarsim.Config(SCENARIO1, {"instrument.pulse_energy_j": bad}).sets()
+        assert "\n" not in str(e.value) and "object at 0x" not in str(e.value)
+
+
+def test_version_is_the_crates():
+    import re
+    text = (ROOT / "Cargo.toml").read_text()
+    version = re.search(r'^version = "([^"]+)"', text, re.M).group(1)
+    assert lidarsim.__version__ == version
+    assert cli("--version").stdout.split()[-1] == version
+
+
+def test_sweep_of_a_channel_equals_the_cli_expect_of_that_channel(tmp_path):
+    """Each value of the list against ``lidarsim expect --channel C --csv`` with that
+    value: ``snr_at:Zkm`` is the CSV's ``snr`` (Eq. 4, M = rate x accumulation time) at
+    the bin nearest Z, ``max_altitude:snr=X`` the highest altitude with ``snr`` >= X."""
+    energies = [0.02, 0.11, 0.3]
+    metrics = ["snr_at:10km", "max_altitude:snr=1"]
+    ds = lidarsim.sweep(CALIOP, {"instrument.pulse_energy_j": np.array(energies)}, metrics,
+                        channel="532_perpendicular")
+    out = tmp_path / "e.csv"
+    for i, e in enumerate(energies):
+        r = cli("expect", CALIOP, "--set", f"instrument.pulse_energy_j={e}",
+                "--channel", "532_perpendicular", "--csv", out)
+        assert r.returncode == 0, r.stderr
+        t = np.genfromtxt(out, delimiter=",", names=True)
+        assert ds[metrics[0]].values[i] == t["snr"][np.argmin(abs(t["altitude_m"] - 10e3))]
+        assert ds[metrics[1]].values[i] == pytest.approx(
+            t["altitude_m"][t["snr"] >= 1].max() / 1e3, rel=1e-12)
+    assert ds[metrics[0]].attrs["units"] == "1" and ds[metrics[1]].attrs["units"] == "km"
+    assert ds["instrument.pulse_energy_j"].attrs["units"] == "J"
+    np.testing.assert_array_equal(ds["instrument.pulse_energy_j"], energies)
+    assert ds.attrs["channel"] == "532_perpendicular"
+
+
+def test_a_multi_channel_sweep_asks_for_a_channel_in_one_line():
+    vary = {"instrument.pulse_energy_j": np.array([0.05, 0.1])}
+    with pytest.raises(ValueError, match="pass channel= one of 532_parallel") as e:
+        lidarsim.sweep(CALIOP, vary, "snr_at:10km")
+    assert "Scenario" not in str(e.value) and "\n" not in str(e.value)
+    with pytest.raises(ValueError, match="has no channel `355`"):
+        lidarsim.sweep(CALIOP, vary, "snr_at:10km", channel="355")
+    both = [lidarsim.sweep(CALIOP, vary, "snr_at:10km", channel=c)["snr_at:10km"].values
+            for c in ("532_parallel", "1064_total")]
+    assert not np.array_equal(*both)
