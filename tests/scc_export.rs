@@ -51,10 +51,27 @@ fn ground_run(dir: &Path) -> PathBuf {
             "acquisition.accumulation_time_s=5",
             "acquisition.top_altitude_km=6",
             "instrument.detector={dead_time_s=4e-9, dead_time_model=\"paralyzable\"}",
+            "platform.latitude_deg=44.348",
+            "platform.longitude_deg=-26.029",
         ],
         3,
     );
     raw
+}
+
+/// A key of a shipped config, read from its TOML text (not through lidarsim).
+fn shipped_key(cfg: &str, table: &str, key: &str) -> toml::Value {
+    let text = std::fs::read_to_string(config_path(cfg)).unwrap();
+    let t: toml::Table = text.parse().unwrap();
+    t[table][key].clone()
+}
+
+/// The raw file's bins at negative range (recorded before the pulse), counted from its
+/// `range` variable.
+fn bins_before_the_pulse(raw: &Path) -> usize {
+    let f = hdf5::File::open(raw).unwrap();
+    let range = f.dataset("range").unwrap().read_raw::<f64>().unwrap();
+    range.iter().filter(|&&r| r < 0.0).count()
 }
 
 fn counts_of(raw: &Path) -> (Vec<usize>, Vec<u64>) {
@@ -121,8 +138,28 @@ fn a_ground_run_exports_with_the_scc_layout_and_its_counts() {
     assert!((res - 7.494811).abs() < 1e-6, "{res}");
     // the config's 256 pre-trigger bins of 50 ns: recording starts 12.8 us before the
     // pulse leaves, and the background window is those bins
+    // atmospheric_lidar's convention: First_Signal_Rangebin = the pre-trigger bins, and
+    // Trigger_Delay 0 (bin 256 starts at the station as the pulse leaves)
+    let pretrigger = shipped_key(
+        "ground/ground_532_overlap.toml",
+        "acquisition",
+        "pretrigger_bins",
+    )
+    .as_integer()
+    .unwrap() as i32;
+    assert_eq!(pretrigger, 256);
+    assert_eq!(bins_before_the_pulse(&raw), 256);
+    assert_eq!(
+        r.read_var_i32("First_Signal_Rangebin").unwrap(),
+        vec![pretrigger]
+    );
     let delay = r.read_var_f64("Trigger_Delay").unwrap()[0];
-    assert!((delay + 12_800.0).abs() < 1e-6, "{delay}");
+    assert!(delay.abs() < 1e-6, "{delay}");
+    let ds = r.data_set();
+    let attr = |n: &str| ds.get_global_attr(n).unwrap().get_f64().unwrap().to_vec();
+    assert_eq!(attr("Latitude_degrees_north"), vec![44.348]);
+    assert_eq!(attr("Longitude_degrees_east"), vec![-26.029]);
+    assert_eq!(attr("Altitude_meter_asl"), vec![0.0]);
     let (lo, hi) = (
         r.read_var_f64("Background_Low").unwrap()[0],
         r.read_var_f64("Background_High").unwrap()[0],

@@ -83,6 +83,19 @@ def main(path):
         pc = data[:, counting, :]
         assert (data >= 0).all() and np.all(pc == np.round(pc)), "counts"
         checks += 3
+        # the pre-trigger bins: First_Signal_Rangebin below the bins, Background_Low/High
+        # (m, range) before its start when the window is in the pre-trigger bins
+        first = ds.variables["First_Signal_Rangebin"][:]
+        assert ((first >= 0) & (first < len(dims["points"]))).all(), "First_Signal_Rangebin"
+        checks += 1
+        # station coordinates: both or neither, numbers in range
+        has = [n in ds.ncattrs() for n in ("Latitude_degrees_north", "Longitude_degrees_east")]
+        assert has[0] == has[1], "Latitude_degrees_north/Longitude_degrees_east: one alone"
+        if has[0]:
+            assert -90 <= float(ds.getncattr("Latitude_degrees_north")) <= 90, "latitude"
+            assert -180 <= float(ds.getncattr("Longitude_degrees_east")) <= 180, "longitude"
+        assert "Altitude_meter_asl" in ds.ncattrs(), "Altitude_meter_asl missing"
+        checks += 2
     print(f"{checks} passed, 0 failed")
 
 

@@ -33,6 +33,12 @@ pub struct PlatformConfig {
     /// A spherical Earth (default) or the paper's flat Earth for slanted beams.
     #[serde(default = "yes")]
     pub earth_curvature: bool,
+    /// A ground station's latitude, degrees north (the SCC's `Latitude_degrees_north`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub latitude_deg: Option<f64>,
+    /// A ground station's longitude, degrees east (the SCC's `Longitude_degrees_east`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub longitude_deg: Option<f64>,
 }
 
 /// A circular orbit (`src/scene/orbit.rs`, which checks it) at `platform.altitude_km`.

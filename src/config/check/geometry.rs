@@ -13,6 +13,12 @@ impl ScenarioConfig {
         let p = &self.platform;
         let a = &self.acquisition;
         c.range("platform.off_nadir_deg", p.off_nadir_deg, 0.0, 85.0)?;
+        if let Some(lat) = p.latitude_deg {
+            c.range("platform.latitude_deg", lat, -90.0, 90.0)?;
+        }
+        if let Some(lon) = p.longitude_deg {
+            c.range("platform.longitude_deg", lon, -180.0, 180.0)?;
+        }
         c.range(
             "acquisition.accumulation_time_s",
             a.accumulation_time_s,

@@ -51,8 +51,11 @@ pub struct SccChannel {
     pub dead_time_ns: f64,
     /// `Dead_Time_Corr_Type`: 0 non-paralyzable, 1 paralyzable.
     pub dead_time_type: i32,
-    /// `Trigger_Delay`, ns.
+    /// `Trigger_Delay`, ns: 2·r/c at the start of bin `First_Signal_Rangebin`.
     pub trigger_delay_ns: f64,
+    /// `First_Signal_Rangebin`: the file's pre-trigger bins (root `pretrigger_bins`),
+    /// so that bin is the first after the pulse leaves (0 without pre-trigger bins).
+    pub first_signal_rangebin: i32,
     /// `Acquisition_Mode`: [`ACQUISITION_ANALOG`] or [`ACQUISITION_PHOTON_COUNTING`].
     pub acquisition_mode: i32,
     /// `DAQ_Range`: an analog channel's ADC input range, mV (0 for photon counting).
@@ -90,6 +93,9 @@ pub struct SccContent {
     pub text_attributes: Vec<(&'static str, String)>,
     /// `Altitude_meter_asl`.
     pub altitude_m_asl: f64,
+    /// `Latitude_degrees_north` and `Longitude_degrees_east` (`platform.latitude_deg`,
+    /// `platform.longitude_deg`), when the config gives both.
+    pub station_lat_lon_deg: Option<(f64, f64)>,
 }
 
 /// Derives the SCC content of `raw` (read from `path`).
@@ -132,7 +138,28 @@ pub fn scc_content(path: &Path, raw: RawRun, opts: &SccOptions) -> Result<SccCon
         temperature_c: state.temperature_k - 273.15,
         text_attributes,
         altitude_m_asl: altitude_m,
+        station_lat_lon_deg: station_lat_lon(path, platform)?,
     })
+}
+
+/// The station's latitude and longitude from `platform.latitude_deg/longitude_deg`: both
+/// or neither (one alone is refused, naming the key that is missing).
+fn station_lat_lon(path: &Path, platform: Option<&toml::Table>) -> Result<Option<(f64, f64)>> {
+    match (
+        num(platform, "latitude_deg"),
+        num(platform, "longitude_deg"),
+    ) {
+        (Some(lat), Some(lon)) => Ok(Some((lat, lon))),
+        (None, None) => Ok(None),
+        (Some(_), None) => Err(bad(
+            path,
+            "`platform.latitude_deg` without `platform.longitude_deg`: the SCC needs both",
+        )),
+        (None, Some(_)) => Err(bad(
+            path,
+            "`platform.longitude_deg` without `platform.latitude_deg`: the SCC needs both",
+        )),
+    }
 }
 
 fn table<'a>(t: &'a toml::Table, key: &str) -> Option<&'a toml::Table> {
@@ -269,7 +296,10 @@ fn channel(
         None => dead_time(instrument.detector.as_ref()),
     };
     let res = SPEED_OF_LIGHT_M_PER_S * raw.bin_width_s / 2.0;
-    let first_bin_start_m = raw.range_m[0] - res / 2.0;
+    // the first bin after the trigger: bin `pretrigger_bins` (the pre-trigger bins
+    // before it, at negative range), whose start is the range Trigger_Delay encodes
+    let first_signal_bin = raw.pretrigger_bins.min(raw.n_bins - 1);
+    let first_bin_start_m = raw.range_m[first_signal_bin] - res / 2.0;
     let bins = c * raw.n_bins..(c + 1) * raw.n_bins;
     let noise = &raw.expected_noise[bins.clone()];
     let not_background = not_background(raw, bins, cfg, analog.is_some());
@@ -289,6 +319,7 @@ fn channel(
         dead_time_ns,
         dead_time_type,
         trigger_delay_ns: 2.0 * first_bin_start_m / SPEED_OF_LIGHT_M_PER_S * 1e9,
+        first_signal_rangebin: first_signal_bin as i32,
         acquisition_mode: match analog {
             Some(_) => ACQUISITION_ANALOG,
             None => ACQUISITION_PHOTON_COUNTING,

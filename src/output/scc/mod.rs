@@ -40,9 +40,12 @@
 //!   expected background + dark (the farthest of equal runs; in a changing scene the largest
 //!   signal and smallest background over the profiles), within the pre-trigger bins when
 //!   the file has `pretrigger_bins`; no such bin is refused with what to do.
-//! * `Trigger_Delay` (ns) = 2·r₀/c with r₀ the range at the start of bin 0, so that bin
-//!   `i` spans `c·Trigger_Delay/2 + [i, i+1)·Raw_Data_Range_Resolution`, with
-//!   `First_Signal_Rangebin` = 0 (0 for a ground run whose window starts at the station).
+//! * `First_Signal_Rangebin` = N, the file's pre-trigger bins (0 without), and
+//!   `Trigger_Delay` (ns) = 2·r₀/c with r₀ the range at the start of bin N, so that bin
+//!   `N + i` spans `c·Trigger_Delay/2 + [i, i+1)·Raw_Data_Range_Resolution` (0 for a
+//!   ground run whose window starts at the station, which pre-trigger bins require).
+//! * `Latitude_degrees_north`, `Longitude_degrees_east` from `platform.latitude_deg`,
+//!   `platform.longitude_deg` when the config gives both (one alone is refused).
 //! * `Dead_Time` in ns (SCC documentation, not re-read here: to confirm);
 //!   `Dead_Time_Corr_Type` 0 non-paralyzable, 1 paralyzable; no detector = 0 ns, type 0.
 //! * `Scattering_Mechanism` and `Signal_Type` are **not written**: their codes are SCC

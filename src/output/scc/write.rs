@@ -121,6 +121,10 @@ fn define(c: &SccContent) -> std::result::Result<DataSet, netcdf3::InvalidDataSe
         ds.add_global_attr_string(name, value)?;
     }
     ds.add_global_attr_f64("Altitude_meter_asl", vec![c.altitude_m_asl])?;
+    if let Some((lat, lon)) = c.station_lat_lon_deg {
+        ds.add_global_attr_f64("Latitude_degrees_north", vec![lat])?;
+        ds.add_global_attr_f64("Longitude_degrees_east", vec![lon])?;
+    }
     Ok(ds)
 }
 
@@ -212,6 +216,9 @@ fn write_channel_vars(w: &mut W, c: &SccContent) -> WResult {
     w.write_var_f64("Trigger_Delay", &per_channel(c, |ch| ch.trigger_delay_ns))?;
     w.write_var_i32("LR_Input", &vec![LR_INPUT; n])?;
     w.write_var_f64("DAQ_Range", &per_channel(c, |ch| ch.daq_range_mv))?;
-    w.write_var_i32("First_Signal_Rangebin", &vec![0; n])?;
+    w.write_var_i32(
+        "First_Signal_Rangebin",
+        &per_channel(c, |ch| ch.first_signal_rangebin),
+    )?;
     w.write_var_i32("id_timescale", &vec![0; n])
 }
