@@ -74,6 +74,32 @@ pub fn shard(s: &str) -> Result<crate::shard::ShardArg, String> {
     s.parse()
 }
 
+/// Largest altitude `quicklook --altitude-range` accepts, km (beyond any orbit a lidar
+/// flies).
+pub const MAX_ALTITUDE_KM: f64 = 1.0e5;
+
+/// `quicklook --altitude-range LO,HI`: two altitudes in km, `LO < HI`, each within
+/// ±[`MAX_ALTITUDE_KM`].
+pub fn altitude_range_km(s: &str) -> Result<(f64, f64), String> {
+    let reason = || {
+        format!(
+            "must be LO,HI in km with LO < HI (e.g. 0,15), each within ±{}",
+            compact(MAX_ALTITUDE_KM)
+        )
+    };
+    let (lo, hi) = s.split_once(',').ok_or_else(reason)?;
+    let km = |t: &str| {
+        t.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|z| z.is_finite() && z.abs() <= MAX_ALTITUDE_KM)
+    };
+    match (km(lo), km(hi)) {
+        (Some(lo), Some(hi)) if lo < hi => Ok((lo, hi)),
+        _ => Err(reason()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -225,6 +225,10 @@ enum Command {
         /// Also draw the truth's attenuated backscatter on the same colour scale.
         #[arg(long)]
         truth: bool,
+        /// The altitudes drawn, km above sea level, e.g. `0,15` (default: from the
+        /// lowest recorded bin after the pre-trigger bins to the window's top or 40 km).
+        #[arg(long, value_name = "LO,HI", allow_negative_numbers = true, value_parser = cli_values::altitude_range_km)]
+        altitude_range: Option<(f64, f64)>,
     },
     /// Converts a raw file (ground run) to the EARLINET SCC raw NetCDF format.
     ExportScc {
@@ -426,8 +430,13 @@ fn main() -> ExitCode {
             png,
             channel,
             truth,
+            altitude_range,
         } => {
-            lidarsim::figures::quicklook::run(file, png, channel.as_deref(), *truth).map(|()| true)
+            let view = lidarsim::figures::quicklook::View {
+                altitude_range_km: *altitude_range,
+            };
+            lidarsim::figures::quicklook::run(file, png, channel.as_deref(), *truth, view)
+                .map(|()| true)
         }
         Command::ExportScc {
             raw,

@@ -434,3 +434,82 @@ fn each_channel_is_drawn_at_its_own_pulse_energy() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A ground run whose recorder starts 256 bins (12.8 µs, 1.92 km) before the pulse,
+/// from a station at 1.2 km: 3 profiles.
+fn ground_with_pretrigger(dir: &Path) -> std::path::PathBuf {
+    ok(lidarsim(
+        dir,
+        &[
+            "simulate",
+            config_path("ground/ground_532_overlap.toml")
+                .to_str()
+                .unwrap(),
+            "-o",
+            "raw.h5",
+            "--profiles",
+            "3",
+            "--set",
+            "platform.altitude_km=1.2",
+            "--set",
+            "acquisition.bottom_altitude_km=1.2",
+        ],
+        &[],
+    ));
+    dir.join("raw.h5")
+}
+
+/// The pre-trigger bins (recorded before the pulse leaves, below the station in
+/// altitude) are not drawn: the figure starts at the station, the config's 1.2 km
+/// (it started 1.92 km lower, at −0.72 km, before issue 40); it ends at the window's top.
+#[test]
+fn the_pretrigger_bins_are_left_out_of_the_figure() {
+    let dir = scratch("quicklook-pretrigger");
+    let raw = ground_with_pretrigger(&dir);
+    let q = quicklook::read(&raw, None, false).unwrap();
+    let (lo, hi) = q.signal.z;
+    assert!((lo - 1.2).abs() < 1e-9, "the figure starts at {lo} km");
+    // the window's top, 20 km, rounded up to a whole bin (7.5 m)
+    assert!((20.0..20.0075).contains(&hi), "the figure ends at {hi} km");
+}
+
+/// `--altitude-range LO,HI` is the figure's vertical span; a reversed or unreadable
+/// range is refused in one line and writes nothing.
+#[test]
+fn an_altitude_range_sets_the_figures_span_and_a_bad_one_is_refused() {
+    let dir = scratch("quicklook-range");
+    let raw = ground_with_pretrigger(&dir);
+    let view = quicklook::View {
+        altitude_range_km: Some((2.0, 6.5)),
+    };
+    let q = quicklook::read_view(&raw, None, false, view).unwrap();
+    assert_eq!(q.signal.z, (2.0, 6.5));
+    ok(lidarsim(
+        &dir,
+        &[
+            "quicklook",
+            "raw.h5",
+            "--png",
+            "q.png",
+            "--altitude-range",
+            "2,6.5",
+        ],
+        &[],
+    ));
+    assert!(dir.join("q.png").exists());
+    for bad in ["6,2", "2", "2,x", "nan,3", "0,1e9"] {
+        refused(
+            &dir,
+            &[
+                "quicklook",
+                "raw.h5",
+                "--png",
+                "bad.png",
+                "--altitude-range",
+                bad,
+            ],
+            &["--altitude-range", "LO,HI"],
+            "bad.png",
+        );
+    }
+}

@@ -1,7 +1,7 @@
 //! What the quicklook shows: its grid, each channel's calibration, how a profile's
 //! counts become attenuated backscatter on the grid, and the time or distance axis.
 
-use crate::figures::plot::panel::Clock;
+use crate::figures::plot::panel::{Clock, widen};
 
 use super::grid::Grid;
 
@@ -12,6 +12,25 @@ pub const ROWS: usize = 330;
 /// The highest altitude shown, km: above it a lidar sees only the background and the
 /// air's faint return (a window that ends lower ends the figure there).
 pub const TOP_KM: f64 = 40.0;
+/// The altitudes a quicklook shows (`quicklook --altitude-range LO,HI`).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct View {
+    /// The altitude range drawn, km above sea level, `(low, high)`; `None`: from the
+    /// lowest bin after the pre-trigger bins to the window's top or [`TOP_KM`].
+    pub altitude_range_km: Option<(f64, f64)>,
+}
+
+impl View {
+    /// The vertical span of the figure, km, for bins whose edges reach from `lowest_km`
+    /// to `highest_km` (the pre-trigger bins left out).
+    pub fn z_span_km(&self, lowest_km: f64, highest_km: f64) -> (f64, f64) {
+        match self.altitude_range_km {
+            Some(range) => range,
+            None => widen(lowest_km, highest_km.min(TOP_KM)),
+        }
+    }
+}
+
 /// Profiles read at once.
 pub(super) const BLOCK_PROFILES: usize = 256;
 

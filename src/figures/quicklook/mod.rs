@@ -31,29 +31,38 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::safe_file::{Outputs, Stream};
-pub use figure::{Background, COLUMNS, Calibration, Quicklook, ROWS, TOP_KM, add_profile, x_axis};
+pub use figure::{
+    Background, COLUMNS, Calibration, Quicklook, ROWS, TOP_KM, View, add_profile, x_axis,
+};
 
 /// `lidarsim quicklook FILE --png OUT.png`: reads `file` (raw, merged or onboard
-/// product) and writes the figure.
-pub fn run(file: &Path, png: &Path, channel: Option<&str>, truth: bool) -> Result<()> {
+/// product) and writes the figure, over `view`'s altitudes.
+pub fn run(file: &Path, png: &Path, channel: Option<&str>, truth: bool, view: View) -> Result<()> {
     let mut outputs = Outputs::new([file]);
     let id = outputs.add("--png", png, Stream::Binary)?;
-    let q = read(file, channel, truth)?;
+    let q = read_view(file, channel, truth, view)?;
     let bytes = draw::png_bytes(&q).map_err(|r| Error::output(outputs.shown_path(id), r))?;
     outputs.write(id, |w| w.write_all(&bytes))?;
     outputs.commit()
 }
 
-/// Reads what the figure shows from a raw file or an onboard product.
+/// Reads what the figure shows from a raw file or an onboard product, over the
+/// default altitudes ([`View::default`]).
 pub fn read(file: &Path, channel: Option<&str>, truth: bool) -> Result<Quicklook> {
+    read_view(file, channel, truth, View::default())
+}
+
+/// Reads what the figure shows from a raw file or an onboard product, over `view`'s
+/// altitudes.
+pub fn read_view(file: &Path, channel: Option<&str>, truth: bool, view: View) -> Result<Quicklook> {
     crate::input_file::check("FILE", file)?;
     let f = hdf5::File::open(file)
         .map_err(|_| Error::output(file, "not a lidarsim raw file or product (not HDF5)"))?;
     if f.attr(crate::output::raw_file::content::PRODUCT_ATTRIBUTE)
         .is_ok()
     {
-        product::read(file, &f, channel, truth)
+        product::read(file, &f, channel, truth, view)
     } else {
-        raw::read(file, &f, channel, truth)
+        raw::read(file, &f, channel, truth, view)
     }
 }

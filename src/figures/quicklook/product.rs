@@ -9,7 +9,7 @@ use hdf5::Dataset;
 use ndarray::{Axis, Ix1, Ix2, Ix3, s};
 
 use super::figure::{
-    BLOCK_PROFILES, Background, COLUMNS, Calibration, Quicklook, ROWS, TOP_KM, add_profile, x_axis,
+    BLOCK_PROFILES, Background, COLUMNS, Calibration, Quicklook, ROWS, View, add_profile, x_axis,
 };
 use super::grid::Grid;
 use super::raw::{Vars, day_night, extend_spans, pair, start_unix_s};
@@ -85,6 +85,7 @@ pub(super) fn read(
     f: &hdf5::File,
     channel: Option<&str>,
     truth: bool,
+    view: View,
 ) -> Result<Quicklook> {
     let fail = |why: String| crate::error::Error::output(path, why);
     let first = f
@@ -142,7 +143,7 @@ pub(super) fn read(
         COLUMNS,
         ROWS,
         widen(xlo * x_scale, xhi * x_scale),
-        widen(zlo, zhi.min(TOP_KM)),
+        view.z_span_km(zlo, zhi),
     );
     let mut signal = empty.clone();
     let (mut par, mut perp) = (empty.clone(), empty.clone());

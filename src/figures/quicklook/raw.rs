@@ -6,7 +6,7 @@ use hdf5::Dataset;
 use ndarray::{Axis, Ix1, Ix3, s};
 
 use super::figure::{
-    BLOCK_PROFILES, Background, COLUMNS, Calibration, Quicklook, ROWS, TOP_KM, add_profile, x_axis,
+    BLOCK_PROFILES, Background, COLUMNS, Calibration, Quicklook, ROWS, View, add_profile, x_axis,
 };
 use super::grid::Grid;
 use crate::error::describe_hdf5_error;
@@ -120,11 +120,9 @@ fn background_bins(
     n_profiles: usize,
     n_bins: usize,
 ) -> Result<Vec<usize>> {
-    if let Ok(a) = v.f.attr("pretrigger_bins") {
-        let n: i64 = a.read_scalar().unwrap_or(0);
-        if n > 0 {
-            return Ok((0..(n as usize).min(n_bins)).collect());
-        }
+    let n = pretrigger_bins(v.f);
+    if n > 0 {
+        return Ok((0..n.min(n_bins)).collect());
     }
     let last = n_profiles.saturating_sub(1);
     let row = |name: &str, p: usize| -> Result<Vec<f64>> {
@@ -140,6 +138,14 @@ fn background_bins(
     Ok((0..n_bins.min(noise.len()).min(s0.len()).min(s1.len()))
         .filter(|&i| signal_free(s0[i].max(s1[i]), noise[i]))
         .collect())
+}
+
+/// The root attribute `pretrigger_bins`: bins recorded before the pulse leaves (0 when
+/// absent or not a count).
+fn pretrigger_bins(f: &hdf5::Group) -> usize {
+    f.attr("pretrigger_bins")
+        .and_then(|a| a.read_scalar::<i64>())
+        .map_or(0, |n| n.max(0) as usize)
 }
 
 /// The origin of `time` (Unix seconds): the root attribute `start_time`, else the
@@ -200,6 +206,7 @@ pub(super) fn read(
     f: &hdf5::File,
     channel: Option<&str>,
     truth: bool,
+    view: View,
 ) -> Result<Quicklook> {
     let header = check(path, f)?;
     let v = Vars { path, f };
@@ -236,13 +243,12 @@ pub(super) fn read(
     };
     let altitude_km: Vec<f64> = v.f64s("altitude")?.iter().map(|z| z / 1e3).collect();
     let z_edges = edges(&altitude_km);
-    let zspan = widen(
-        z_edges.iter().copied().fold(f64::INFINITY, f64::min),
-        z_edges
-            .iter()
-            .copied()
-            .fold(f64::NEG_INFINITY, f64::max)
-            .min(TOP_KM),
+    // the pre-trigger bins (before the pulse leaves) are left out of the figure
+    let first_bin = pretrigger_bins(f).min(n_bins);
+    let drawn = &z_edges[first_bin.min(z_edges.len())..];
+    let zspan = view.z_span_km(
+        drawn.iter().copied().fold(f64::INFINITY, f64::min),
+        drawn.iter().copied().fold(f64::NEG_INFINITY, f64::max),
     );
     let xspan = widen(
         (x_first - 0.5 * dx).min(x_last + 0.5 * dx) * x_scale,
@@ -251,7 +257,14 @@ pub(super) fn read(
     let empty = Grid::new(COLUMNS, ROWS, xspan, zspan);
     let bin_rows: Vec<Vec<(usize, f64)>> = z_edges
         .windows(2)
-        .map(|w| empty.rows_of(w[0], w[1]))
+        .enumerate()
+        .map(|(i, w)| {
+            if i < first_bin {
+                Vec::new()
+            } else {
+                empty.rows_of(w[0], w[1])
+            }
+        })
         .collect();
     let range_weight = v.f64s("range_weight")?;
 
