@@ -4,7 +4,7 @@
 # report says so), and writes validation/reports/presets_20_seeds.md.
 #   bash validation/presets_20_seeds.sh [REALIZATIONS] [SEEDS]   (defaults 1000, 20)
 # LIDARSIM_SLOW_REALIZATIONS (default 200) is used for the configs named in SLOW, whose
-# shot-level draws (afterpulses, dead time at GHz rates, multiple scattering per column)
+# shot-level draws (afterpulses, dead time, glued analog pairs, multiple scattering per column)
 # cost seconds a realization on 2 cores.
 # At the validator's overall false-alarm rate (< 2e-3 a run) 20 seeds x ~35 runs give
 # an expected 1.4 false alarms at most; a config with 2 or more INCONSISTENT of 20 is
@@ -14,9 +14,9 @@ cd "$(dirname "$0")/.."
 n=${1:-1000}
 seeds=${2:-20}
 slow_n=${LIDARSIM_SLOW_REALIZATIONS:-200}
-SLOW=" mpl_like caliop_orbit_wide_angle cirrus_small_angle "
+SLOW=" mpl_like caliop_orbit_wide_angle cirrus_small_angle ground_532_depol pollyxt_like_glued "
 cargo build --release --quiet
-bin=target/release/lidarsim
+bin=${LIDARSIM_BIN:-target/release/lidarsim}
 out=validation/reports/presets_20_seeds.md
 tmp=$(mktemp)
 trap 'rm -f "$tmp"' EXIT
