@@ -19,7 +19,6 @@ pub mod us76;
 pub mod water_vapour;
 pub mod wide_angle;
 
-pub use bin_mean::BinMean;
 pub use molecules::{LinePart, MolecularSource, MolecularState, Molecules};
 pub use optics::{Optics, Slab};
 pub use particles::{BackgroundAerosol, Layer};

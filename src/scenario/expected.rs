@@ -1,7 +1,8 @@
 //! The deterministic model's product ([`ExpectedProfile`]): expected counts per shot per
 //! bin and the atmosphere's truth at bin centres, and the memory it takes.
 
-use crate::atmosphere::{BinMean, MolecularState, Optics};
+use crate::atmosphere::bin_mean::BinMean;
+use crate::atmosphere::{MolecularState, Optics};
 use crate::signal::{BinMultipleScattering, PathBytes};
 use crate::snr;
 

@@ -1,9 +1,13 @@
 //! The bin-averaged optics beside the point truth (docs/file-format.md "Bin-averaged
 //! optics"): the particles' extinction and backscatter by species averaged over each
-//! bin's range ([`crate::atmosphere::BinMean`]), what the counts integrate, each
+//! bin's range ([`crate::atmosphere::bin_mean::BinMean`]), what the counts integrate, each
 //! (column, channel, bin), with `cell_methods = "bin: mean"`.
 
-use super::truth::Truth;
+use crate::scenario::ExpectedProfile;
+
+/// A bin mean of one bin of a column's channel (the same type as `truth::Truth`, named
+/// here so that this table does not import the point truth's module, which imports it).
+type BinTruth = fn(&ExpectedProfile, usize) -> f64;
 
 /// The CF attribute that says a variable is the mean over its bin.
 pub(crate) const CELL_METHODS: (&str, &str) = ("cell_methods", "bin: mean");
@@ -12,7 +16,7 @@ pub(crate) const CELL_METHODS: (&str, &str) = ("cell_methods", "bin: mean");
 /// The onboard product averages them over each region bin's native bins, which is the
 /// mean over the region bin (the multiple-scattering factors weighted by extinction,
 /// [`ms_weighted`]).
-pub(crate) const BIN_MEAN_TRUTH: [(&str, &str, &str, Truth); 6] = [
+pub(crate) const BIN_MEAN_TRUTH: [(&str, &str, &str, BinTruth); 6] = [
     (
         "alpha_aer_bin_mean",
         "aerosol extinction coefficient averaged over the bin's range (what the counts integrate)",
@@ -54,7 +58,7 @@ pub(crate) const BIN_MEAN_TRUTH: [(&str, &str, &str, Truth); 6] = [
 /// The extinction a bin-mean multiple-scattering factor weights, by name (the onboard
 /// product's region bin takes `Σ⟨ηα⟩/Σ⟨α⟩` over its native bins, not their factors'
 /// mean).
-pub(crate) fn ms_weighted(name: &str) -> Option<(Truth, Truth)> {
+pub(crate) fn ms_weighted(name: &str) -> Option<(BinTruth, BinTruth)> {
     match name {
         "ms_factor_aer_bin_mean" => Some((
             |e, i| e.bin_mean[i].ms_alpha_aer,
