@@ -61,6 +61,24 @@ pub fn tolerance(s: &str) -> Result<f64, String> {
     }
 }
 
+/// `export-scc-calibration --pol-calib-range MIN,MAX`: two ranges in m, `0 ≤ MIN < MAX`
+/// (the file's recorded range is checked against them when it is read).
+pub fn pol_calib_range_m(s: &str) -> Result<(f64, f64), String> {
+    let reason =
+        || "must be MIN,MAX in m of range with 0 <= MIN < MAX (e.g. 1000,2500)".to_string();
+    let (lo, hi) = s.split_once(',').ok_or_else(reason)?;
+    let m = |t: &str| {
+        t.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|r| r.is_finite() && *r >= 0.0)
+    };
+    match (m(lo), m(hi)) {
+        (Some(lo), Some(hi)) if lo < hi => Ok((lo, hi)),
+        _ => Err(reason()),
+    }
+}
+
 /// Most bits per downlinked count (`onboard --word-bits`): a 64-bit word.
 pub const MAX_WORD_BITS: u32 = 64;
 

@@ -474,6 +474,27 @@ pub fn export_scc(raw: &Path, out: &Path, opts: &scc::SccOptions) -> Result<()> 
     Ok(())
 }
 
+/// `lidarsim export-scc-calibration PLUS45 MINUS45 OUT`: the Δ90 calibration
+/// measurement, written whole or not at all.
+pub fn export_scc_calibration(
+    plus45: &Path,
+    minus45: &Path,
+    out: &Path,
+    opts: &scc::SccCalibrationOptions,
+) -> Result<()> {
+    let mut outputs = Outputs::new([plus45, minus45]);
+    let id = outputs.add("OUT.nc", out, Stream::Binary)?;
+    scc::export_scc_calibration(plus45, minus45, outputs.temp_path(id)?, opts)?;
+    outputs.commit()?;
+    crate::tell!(
+        "Wrote {} (SCC calibration measurement, ±45°) from {} and {}.",
+        out.display(),
+        plus45.display(),
+        minus45.display()
+    );
+    Ok(())
+}
+
 /// `lidarsim validate`: the table on stdout, optionally the JSON; `Ok(consistent)`.
 pub fn validate(
     config: &Path,

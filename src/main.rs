@@ -246,6 +246,28 @@ enum Command {
         #[arg(long, value_delimiter = ',', value_name = "ID,...")]
         channel_ids: Option<Vec<i32>>,
     },
+    /// Writes the two Δ90 depolarization calibration runs (`simulate --calibration
+    /// plus45`, `minus45`) as one SCC raw NetCDF calibration measurement.
+    ExportSccCalibration {
+        /// The +45° run's raw file (`simulate --calibration plus45 -o`).
+        plus45: PathBuf,
+        /// The −45° run's raw file (`simulate --calibration minus45 -o`).
+        minus45: PathBuf,
+        /// Output SCC NetCDF file.
+        out: PathBuf,
+        /// Range (m) where the SCC takes the calibration factor: Pol_Calib_Range_Min,Max.
+        #[arg(long, value_name = "MIN,MAX", value_parser = cli_values::pol_calib_range_m)]
+        pol_calib_range: (f64, f64),
+        /// Measurement_ID, YYYYMMDDccNN (default: start date, station, 00).
+        #[arg(long, value_name = "ID")]
+        measurement_id: Option<String>,
+        /// Two-letter EARLINET station call sign.
+        #[arg(long, default_value = "ls", value_name = "CC")]
+        station: String,
+        /// SCC channel IDs of the calibration channels, the +45° ones first.
+        #[arg(long, value_delimiter = ',', value_name = "ID,...")]
+        channel_ids: Option<Vec<i32>>,
+    },
     /// Statistical check of the simulator against Eq. 4, or (--file) of a raw file's counts
     /// against the expectation it carries; exit 0 when consistent, 1 when not.
     Validate {
@@ -451,6 +473,25 @@ fn main() -> ExitCode {
                 channel_ids: channel_ids.clone(),
             };
             lidarsim::commands::export_scc(raw, out, &opts).map(|()| true)
+        }
+        Command::ExportSccCalibration {
+            plus45,
+            minus45,
+            out,
+            pol_calib_range,
+            measurement_id,
+            station,
+            channel_ids,
+        } => {
+            let opts = lidarsim::output::scc::SccCalibrationOptions {
+                scc: lidarsim::output::scc::SccOptions {
+                    measurement_id: measurement_id.clone(),
+                    station_id: station.clone(),
+                    channel_ids: channel_ids.clone(),
+                },
+                pol_calib_range_m: *pol_calib_range,
+            };
+            lidarsim::commands::export_scc_calibration(plus45, minus45, out, &opts).map(|()| true)
         }
         Command::Validate {
             config,

@@ -5,7 +5,7 @@ Usage: python3 tools/check_scc_file.py OUT.nc
 
 Asserts the dimensions, every variable with its type and dimensions (the layout of
 atmospheric_lidar's save_as_SCC_netcdf, see src/output/scc/ and docs/scc.md) and the
-global attributes. Exits non-zero on the first mismatch.
+global attributes; a calibration measurement's Pol_Calib_Range_Min/Max. Exits non-zero on the first mismatch.
 """
 import re
 import sys
@@ -43,6 +43,8 @@ VARIABLES = {
     "Pressure_at_Lidar_Station": ((), D),
     "Temperature_at_Lidar_Station": ((), D),
 }
+# a calibration measurement (export-scc-calibration) has these besides, both or neither
+POL_CALIB = {"Pol_Calib_Range_Min": (CH, D), "Pol_Calib_Range_Max": (CH, D)}
 ATTRIBUTES = {
     "Measurement_ID": r"\d{8}[0-9A-Za-z]{2}\d{2}",
     "RawData_Start_Date": r"\d{8}",
@@ -66,7 +68,18 @@ def main(path):
             assert v.dimensions == vdims, f"{name}: dims {v.dimensions}, want {vdims}"
             assert v.dtype == dtype, f"{name}: type {v.dtype}, want {dtype}"
             checks += 1
-        extra = set(ds.variables) - set(VARIABLES)
+        calibration = [n in ds.variables for n in POL_CALIB]
+        assert calibration[0] == calibration[1], "Pol_Calib_Range_Min/Max: one alone"
+        if calibration[0]:
+            for name, (vdims, dtype) in POL_CALIB.items():
+                v = ds.variables[name]
+                assert v.dimensions == vdims and v.dtype == dtype, f"{name}: {v.dimensions}"
+            lo = ds.variables["Pol_Calib_Range_Min"][:]
+            hi = ds.variables["Pol_Calib_Range_Max"][:]
+            assert (lo < hi).all(), "Pol_Calib_Range_Min not below Pol_Calib_Range_Max"
+            checks += 2
+        allowed = set(VARIABLES) | (set(POL_CALIB) if calibration[0] else set())
+        extra = set(ds.variables) - allowed
         assert not extra, f"unexpected variables {sorted(extra)}"
         for name, pattern in ATTRIBUTES.items():
             value = ds.getncattr(name)

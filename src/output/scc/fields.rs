@@ -96,6 +96,11 @@ pub struct SccContent {
     /// `Latitude_degrees_north` and `Longitude_degrees_east` (`platform.latitude_deg`,
     /// `platform.longitude_deg`), when the config gives both.
     pub station_lat_lon_deg: Option<(f64, f64)>,
+    /// The measurement's start (whole seconds), which `start_s` and `stop_s` count from.
+    pub start: SystemTime,
+    /// A calibration measurement's `Pol_Calib_Range_Min/Max` (m); `None` for a
+    /// measurement (the variables are not written).
+    pub pol_calib_range_m: Option<(f64, f64)>,
 }
 
 /// Derives the SCC content of `raw` (read from `path`).
@@ -124,7 +129,7 @@ pub fn scc_content(path: &Path, raw: RawRun, opts: &SccOptions) -> Result<SccCon
         )
     })?;
     let stop = t0 + Duration::from_secs(stop_s.iter().copied().max().unwrap_or(0) as u64);
-    let text_attributes = text_attributes(&raw, opts, t0, stop)?;
+    let text_attributes = text_attributes(&raw.config, opts, t0, stop)?;
     Ok(SccContent {
         n_profiles: raw.n_profiles,
         n_bins: raw.n_bins,
@@ -139,6 +144,8 @@ pub fn scc_content(path: &Path, raw: RawRun, opts: &SccOptions) -> Result<SccCon
         text_attributes,
         altitude_m_asl: altitude_m,
         station_lat_lon_deg: station_lat_lon(path, platform)?,
+        start: t0,
+        pol_calib_range_m: None,
     })
 }
 
@@ -269,7 +276,7 @@ fn channels(path: &Path, raw: &RawRun, opts: &SccOptions) -> Result<Vec<SccChann
 /// The receiver's channels as the simulation saw them: the `config` attribute expanded
 /// by the same code ([`crate::receiver::expand`]), so each channel's wavelength and
 /// detector are exactly those its counts were drawn with.
-fn receiver_channels(path: &Path, raw: &RawRun) -> Result<Vec<ChannelConfig>> {
+pub(super) fn receiver_channels(path: &Path, raw: &RawRun) -> Result<Vec<ChannelConfig>> {
     let text = toml::to_string(&raw.config)
         .map_err(|e| bad(path, &format!("the `config` attribute: {e}")))?;
     let loaded = crate::loaded::load_str(&text, path, &[])
@@ -452,8 +459,10 @@ fn no_background(path: &Path, channel: &str, pretrigger_bins: usize) -> Error {
     bad(path, &reason)
 }
 
-fn text_attributes(
-    raw: &RawRun,
+/// The global attributes: measurement ID, start date and times, system (from the run's
+/// `config` attribute).
+pub(super) fn text_attributes(
+    config: &toml::Table,
     opts: &SccOptions,
     start: SystemTime,
     stop: SystemTime,
@@ -463,8 +472,7 @@ fn text_attributes(
     let date = s[0..10].replace('-', "");
     let hms = |t: &str| t[11..19].replace(':', "");
     let id = measurement_id(opts, &date)?;
-    let system = raw
-        .config
+    let system = config
         .get("name")
         .and_then(|v| v.as_str())
         .map_or_else(|| "lidarsim".to_string(), |n| format!("lidarsim: {n}"));

@@ -59,6 +59,7 @@
 //!   seconds after the measurement start (the first profile's start, floored).
 //! * No `Latitude`/`Longitude`/`Location`: lidarsim configs have none.
 
+mod calibration;
 mod fields;
 mod options;
 mod read;
@@ -66,10 +67,11 @@ mod write;
 
 use std::path::Path;
 
+pub use calibration::{CALIBRATION_ROTATIONS_DEG, SccCalibrationOptions};
 pub use fields::{SIGNAL_FREE_SHARE, SccChannel, SccContent, background_bins, signal_free};
 pub use options::SccOptions;
 pub use read::{RawRun, read_raw};
-pub use write::{SCC_VARIABLES, SccType};
+pub use write::{POL_CALIB_VARIABLES, SCC_VARIABLES, SccType};
 
 use crate::error::Result;
 
@@ -80,5 +82,18 @@ use crate::error::Result;
 pub fn export_scc(raw_h5: &Path, out_nc: &Path, opts: &SccOptions) -> Result<()> {
     let raw = read_raw(raw_h5)?;
     let content = fields::scc_content(raw_h5, raw, opts)?;
+    write::write_scc(out_nc, &content)
+}
+
+/// Reads the +45° and −45° calibration runs (`simulate --calibration plus45|minus45`) and
+/// writes their Δ90 calibration measurement as one SCC raw NetCDF file at exactly
+/// `out_nc` (`docs/scc.md` "The ±45° calibration measurement").
+pub fn export_scc_calibration(
+    plus45_h5: &Path,
+    minus45_h5: &Path,
+    out_nc: &Path,
+    opts: &SccCalibrationOptions,
+) -> Result<()> {
+    let content = calibration::calibration_content(plus45_h5, minus45_h5, opts)?;
     write::write_scc(out_nc, &content)
 }

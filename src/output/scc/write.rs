@@ -55,6 +55,10 @@ pub const SCC_VARIABLES: &[(&str, &[&str], SccType)] = &[
     ("Temperature_at_Lidar_Station", &[], SccType::Double),
 ];
 
+/// The variables a calibration measurement adds (`atmospheric_lidar`'s
+/// `LicelCalibrationMeasurement`): the range (m) where the calibration factor is taken.
+pub const POL_CALIB_VARIABLES: [&str; 2] = ["Pol_Calib_Range_Min", "Pol_Calib_Range_Max"];
+
 /// A NetCDF writer's error in plain words: the OS reason of an I/O failure ("no space
 /// left on device"), never the library's debug text (`IOErrorKind(StorageFull)`).
 fn describe(e: &netcdf3::WriteError) -> String {
@@ -114,6 +118,12 @@ fn define(c: &SccContent) -> std::result::Result<DataSet, netcdf3::InvalidDataSe
         match ty {
             SccType::Int => ds.add_var_i32(name, dims)?,
             SccType::Double => ds.add_var_f64(name, dims)?,
+        }
+    }
+    if c.pol_calib_range_m.is_some() {
+        for name in POL_CALIB_VARIABLES {
+            ds.add_var_f64(name, CH)?;
+            ds.add_var_attr_string(name, "units", "m")?;
         }
     }
     add_units(&mut ds)?;
@@ -220,5 +230,10 @@ fn write_channel_vars(w: &mut W, c: &SccContent) -> WResult {
         "First_Signal_Rangebin",
         &per_channel(c, |ch| ch.first_signal_rangebin),
     )?;
-    w.write_var_i32("id_timescale", &vec![0; n])
+    w.write_var_i32("id_timescale", &vec![0; n])?;
+    if let Some((lo, hi)) = c.pol_calib_range_m {
+        w.write_var_f64(POL_CALIB_VARIABLES[0], &vec![lo; n])?;
+        w.write_var_f64(POL_CALIB_VARIABLES[1], &vec![hi; n])?;
+    }
+    Ok(())
 }
