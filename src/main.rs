@@ -236,15 +236,8 @@ enum Command {
         raw: PathBuf,
         /// Output SCC NetCDF file.
         out: PathBuf,
-        /// Measurement_ID, YYYYMMDDccNN (default: start date, station, 00).
-        #[arg(long, value_name = "ID")]
-        measurement_id: Option<String>,
-        /// Two-letter EARLINET station call sign.
-        #[arg(long, default_value = "ls", value_name = "CC")]
-        station: String,
-        /// SCC channel IDs of the file's channels, in order (e.g. 1023,1024).
-        #[arg(long, value_delimiter = ',', value_name = "ID,...")]
-        channel_ids: Option<Vec<i32>>,
+        #[command(flatten)]
+        ids: SccIds,
     },
     /// Writes the two Δ90 depolarization calibration runs (`simulate --calibration
     /// plus45`, `minus45`) as one SCC raw NetCDF calibration measurement.
@@ -258,15 +251,8 @@ enum Command {
         /// Range (m) where the SCC takes the calibration factor: Pol_Calib_Range_Min,Max.
         #[arg(long, value_name = "MIN,MAX", value_parser = cli_values::pol_calib_range_m)]
         pol_calib_range: (f64, f64),
-        /// Measurement_ID, YYYYMMDDccNN (default: start date, station, 00).
-        #[arg(long, value_name = "ID")]
-        measurement_id: Option<String>,
-        /// Two-letter EARLINET station call sign.
-        #[arg(long, default_value = "ls", value_name = "CC")]
-        station: String,
-        /// SCC channel IDs of the calibration channels, the +45° ones first.
-        #[arg(long, value_delimiter = ',', value_name = "ID,...")]
-        channel_ids: Option<Vec<i32>>,
+        #[command(flatten)]
+        ids: SccIds,
     },
     /// Statistical check of the simulator against Eq. 4, or (--file) of a raw file's counts
     /// against the expectation it carries; exit 0 when consistent, 1 when not.
@@ -460,35 +446,18 @@ fn main() -> ExitCode {
             lidarsim::figures::quicklook::run(file, png, channel.as_deref(), *truth, view)
                 .map(|()| true)
         }
-        Command::ExportScc {
-            raw,
-            out,
-            measurement_id,
-            station,
-            channel_ids,
-        } => {
-            let opts = lidarsim::output::scc::SccOptions {
-                measurement_id: measurement_id.clone(),
-                station_id: station.clone(),
-                channel_ids: channel_ids.clone(),
-            };
-            lidarsim::commands::export_scc(raw, out, &opts).map(|()| true)
+        Command::ExportScc { raw, out, ids } => {
+            lidarsim::commands::export_scc(raw, out, &ids.options()).map(|()| true)
         }
         Command::ExportSccCalibration {
             plus45,
             minus45,
             out,
             pol_calib_range,
-            measurement_id,
-            station,
-            channel_ids,
+            ids,
         } => {
             let opts = lidarsim::output::scc::SccCalibrationOptions {
-                scc: lidarsim::output::scc::SccOptions {
-                    measurement_id: measurement_id.clone(),
-                    station_id: station.clone(),
-                    channel_ids: channel_ids.clone(),
-                },
+                scc: ids.options(),
                 pol_calib_range_m: *pol_calib_range,
             };
             lidarsim::commands::export_scc_calibration(plus45, minus45, out, &opts).map(|()| true)
@@ -537,6 +506,31 @@ fn main() -> ExitCode {
         Err(e) => {
             lidarsim::tell!("lidarsim: error: {e}");
             ExitCode::from(2)
+        }
+    }
+}
+
+/// The SCC identifiers of `export-scc` and `export-scc-calibration`.
+#[derive(clap::Args, Debug)]
+struct SccIds {
+    /// Measurement_ID, YYYYMMDDccNN (default: start date, station, 00).
+    #[arg(long, value_name = "ID")]
+    measurement_id: Option<String>,
+    /// Two-letter EARLINET station call sign.
+    #[arg(long, default_value = "ls", value_name = "CC")]
+    station: String,
+    /// SCC channel IDs of the file's channels, in order (e.g. 1023,1024); for a
+    /// calibration, of its channels, the +45° ones first.
+    #[arg(long, value_delimiter = ',', value_name = "ID,...")]
+    channel_ids: Option<Vec<i32>>,
+}
+
+impl SccIds {
+    fn options(&self) -> lidarsim::output::scc::SccOptions {
+        lidarsim::output::scc::SccOptions {
+            measurement_id: self.measurement_id.clone(),
+            station_id: self.station.clone(),
+            channel_ids: self.channel_ids.clone(),
         }
     }
 }

@@ -153,27 +153,7 @@ fn the_two_runs_become_one_calibration_measurement_of_their_polarization_channel
     let attr = |n: &str| r.data_set().get_global_attr_as_string(n).unwrap();
     assert_eq!(attr("RawData_Start_Time_UT"), "000000");
     assert_eq!(attr("RawData_Stop_Time_UT"), "000102");
-    python_check(&dir.join("cal.nc"));
-}
-
-/// netCDF4-python's view of the file (`tools/check_scc_file.py`, which checks the
-/// calibration variables too), when installed (under CI it is, or the test fails).
-fn python_check(out: &Path) {
-    if !common::python_has("scc_calibration: tools/check_scc_file.py", &["netCDF4"]) {
-        return;
-    }
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/check_scc_file.py");
-    let o = std::process::Command::new("python3")
-        .arg(script)
-        .arg(out)
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
+    common::check_scc_file_with_python("scc_calibration", &dir.join("cal.nc"));
 }
 
 #[test]

@@ -171,31 +171,8 @@ fn a_ground_run_exports_with_the_scc_layout_and_its_counts() {
     );
     let p = r.read_var_f64("Pressure_at_Lidar_Station").unwrap()[0];
     assert!((p - 1013.25).abs() < 0.01, "{p}");
-    python_check(&out);
+    common::check_scc_file_with_python("scc_export: tools/check_scc_file.py", &out);
     std::fs::remove_dir_all(&dir).ok();
-}
-
-/// netCDF4-python's view of the file (`tools/check_scc_file.py`), when installed.
-fn python_check(out: &Path) {
-    if !common::python_has("scc_export: tools/check_scc_file.py", &["netCDF4"]) {
-        return;
-    }
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/check_scc_file.py");
-    let o = Command::new("python3")
-        .arg(script)
-        .arg(out)
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    println!(
-        "netCDF4-python: {}",
-        String::from_utf8_lossy(&o.stdout).trim()
-    );
 }
 
 #[test]

@@ -188,3 +188,27 @@ pub fn raw_chunk(ds: &hdf5::Dataset, offset: &[u64], size: u64) -> Vec<u8> {
     assert_eq!(filters, 0, "every filter applied");
     buf
 }
+
+/// netCDF4-python's view of an SCC file (`tools/check_scc_file.py`), when installed
+/// (under CI it is, or `python_has` fails the test); `test` names the caller.
+pub fn check_scc_file_with_python(test: &str, out: &Path) {
+    if !python_has(test, &["netCDF4"]) {
+        return;
+    }
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/check_scc_file.py");
+    let o = std::process::Command::new("python3")
+        .arg(script)
+        .arg(out)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    println!(
+        "netCDF4-python: {}",
+        String::from_utf8_lossy(&o.stdout).trim()
+    );
+}
