@@ -209,8 +209,18 @@ impl SceneModel {
             .iter()
             .map(|c| with_curtain(&c.loaded))
             .collect::<Result<_>>()?;
+        let orbit = super::orbit::orbit_of(lidar)?;
+        // model fields: one segment per profile, sampled along the orbit
+        let configs = match orbit.as_ref() {
+            Some(o) => configs
+                .into_iter()
+                .zip(&lidar.channels)
+                .map(|(c, ch)| with_model_fields(c, &ch.loaded, o, shots, profiles))
+                .collect::<Result<_>>()?,
+            None => configs,
+        };
         // with an orbit, the length of the track the file's latitudes and longitudes describe
-        let along = match super::orbit::orbit_of(lidar)? {
+        let along = match orbit {
             Some(o) => AlongTrack::Orbit(o),
             None => AlongTrack::Speed(crate::geometry::ground_track_speed_m_per_s(
                 first.geometry.platform_altitude_m,
@@ -556,6 +566,28 @@ fn with_curtain(loaded: &LoadedConfig) -> Result<ScenarioConfig> {
         && let Some(file) = scene.curtain.take()
     {
         scene.segments = crate::scene::curtain::segments(&loaded.resolve_path(&file))?;
+    }
+    Ok(cfg)
+}
+
+/// `cfg` with its model fields, if any, turned into one segment per profile.
+fn with_model_fields(
+    mut cfg: ScenarioConfig,
+    loaded: &LoadedConfig,
+    orbit: &crate::scene::orbit::Orbit,
+    shots: u64,
+    profiles: u64,
+) -> Result<ScenarioConfig> {
+    let Some(m) = cfg.scene.as_mut().and_then(|s| s.model_fields.take()) else {
+        return Ok(cfg);
+    };
+    let files: Vec<_> = m.files.iter().map(|f| loaded.resolve_path(f)).collect();
+    for f in &files {
+        crate::input_file::check("scene.model_fields.files", f)?;
+    }
+    let segments = crate::scene::fields::segments(&cfg, &m, &files, orbit, shots, profiles)?;
+    if let Some(s) = cfg.scene.as_mut() {
+        s.segments = segments;
     }
     Ok(cfg)
 }
