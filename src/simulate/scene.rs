@@ -215,7 +215,9 @@ impl SceneModel {
             Some(o) => configs
                 .into_iter()
                 .zip(&lidar.channels)
-                .map(|(c, ch)| with_model_fields(c, &ch.loaded, o, shots, profiles))
+                .map(|(c, ch)| {
+                    crate::scene::fields::with_model_fields(c, &ch.loaded, o, shots, profiles)
+                })
                 .collect::<Result<_>>()?,
             None => configs,
         };
@@ -566,28 +568,6 @@ fn with_curtain(loaded: &LoadedConfig) -> Result<ScenarioConfig> {
         && let Some(file) = scene.curtain.take()
     {
         scene.segments = crate::scene::curtain::segments(&loaded.resolve_path(&file))?;
-    }
-    Ok(cfg)
-}
-
-/// `cfg` with its model fields, if any, turned into one segment per profile.
-fn with_model_fields(
-    mut cfg: ScenarioConfig,
-    loaded: &LoadedConfig,
-    orbit: &crate::scene::orbit::Orbit,
-    shots: u64,
-    profiles: u64,
-) -> Result<ScenarioConfig> {
-    let Some(m) = cfg.scene.as_mut().and_then(|s| s.model_fields.take()) else {
-        return Ok(cfg);
-    };
-    let files: Vec<_> = m.files.iter().map(|f| loaded.resolve_path(f)).collect();
-    for f in &files {
-        crate::input_file::check("scene.model_fields.files", f)?;
-    }
-    let segments = crate::scene::fields::segments(&cfg, &m, &files, orbit, shots, profiles)?;
-    if let Some(s) = cfg.scene.as_mut() {
-        s.segments = segments;
     }
     Ok(cfg)
 }

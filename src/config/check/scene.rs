@@ -14,7 +14,7 @@ impl ScenarioConfig {
         &self,
         c: &Checker,
         scene: &SceneConfig,
-        m: &crate::config::ModelFieldsConfig,
+        m: &crate::config::model_fields::ModelFieldsConfig,
     ) -> Result<()> {
         if scene.curtain.is_some() || !scene.segments.is_empty() {
             return Err(c.fail(

@@ -67,7 +67,10 @@ pub fn build(
     if levels.first().map(|l| l.p_pa) < levels.last().map(|l| l.p_pa) {
         levels.reverse();
     }
-    if levels.windows(2).any(|w| !(w[1].p_pa < w[0].p_pa)) {
+    if levels
+        .windows(2)
+        .any(|w| w[1].p_pa >= w[0].p_pa || w[1].p_pa.is_nan())
+    {
         return Err("levels out of order: the pressure is not strictly monotonic".into());
     }
     if levels.iter().any(|l| l.height_m.is_nan()) {
@@ -78,7 +81,7 @@ pub fn build(
         let tv = |l: &Level| l.t_k * (1.0 + VIRTUAL_FACTOR * l.q);
         let scale = DRY_AIR_GAS_CONSTANT / STANDARD_GRAVITY;
         let z0 = surface_height_m.unwrap_or(0.0);
-        if !(levels[0].p_pa <= ps) {
+        if levels[0].p_pa > ps || ps.is_nan() {
             return Err(format!(
                 "the lowest level's pressure {} Pa is above the surface pressure {ps} Pa",
                 levels[0].p_pa
@@ -91,7 +94,10 @@ pub fn build(
                 a.height_m + scale * 0.5 * (tv(&a) + tv(&b)) * (a.p_pa / b.p_pa).ln();
         }
     }
-    if levels.windows(2).any(|w| !(w[1].height_m > w[0].height_m)) {
+    if levels
+        .windows(2)
+        .any(|w| w[1].height_m <= w[0].height_m || w[1].height_m.is_nan())
+    {
         return Err(
             "levels out of order: the height does not increase as the pressure falls".into(),
         );

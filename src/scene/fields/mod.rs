@@ -110,7 +110,7 @@ pub fn layers(m: &ModelFieldsConfig, c: &FieldColumn) -> Vec<LayerConfig> {
     out
 }
 
-/// The segments of `cfg`'s model fields (files resolved by `resolve`) along `orbit`,
+/// The segments of `cfg`'s model fields `m` (its `files`, resolved) along `orbit`,
 /// one per profile.
 pub fn segments(
     cfg: &ScenarioConfig,
@@ -141,4 +141,26 @@ pub fn segments(
             water_vapour: None,
         })
         .collect())
+}
+
+/// `cfg` with its model fields, if any, turned into one segment per profile.
+pub fn with_model_fields(
+    mut cfg: ScenarioConfig,
+    loaded: &crate::loaded::LoadedConfig,
+    orbit: &Orbit,
+    shots: u64,
+    profiles: u64,
+) -> Result<ScenarioConfig> {
+    let Some(m) = cfg.scene.as_mut().and_then(|s| s.model_fields.take()) else {
+        return Ok(cfg);
+    };
+    let files: Vec<_> = m.files.iter().map(|f| loaded.resolve_path(f)).collect();
+    for f in &files {
+        crate::input_file::check("scene.model_fields.files", f)?;
+    }
+    let segments = segments(&cfg, &m, &files, orbit, shots, profiles)?;
+    if let Some(s) = cfg.scene.as_mut() {
+        s.segments = segments;
+    }
+    Ok(cfg)
 }
