@@ -81,6 +81,7 @@ def axes(nc, nlev, lev_values, lev_attrs):
     nc.createDimension("longitude", len(LON))
     v = nc.createVariable("time", "i4", ("time",))
     v.units, v.calendar, v.long_name = TIME_UNITS, "gregorian", "time"
+    v.standard_name, v.axis = "time", "T"
     v[:] = HOURS.astype("i4")
     v = nc.createVariable("level", "f4" if "units" in lev_attrs and lev_attrs["units"] == "millibars" else "i4", ("level",))
     for k, x in lev_attrs.items():
@@ -88,9 +89,11 @@ def axes(nc, nlev, lev_values, lev_attrs):
     v[:] = lev_values
     v = nc.createVariable("latitude", "f4", ("latitude",))
     v.units, v.long_name = "degrees_north", "latitude"
+    v.standard_name, v.axis = "latitude", "Y"
     v[:] = LAT
     v = nc.createVariable("longitude", "f4", ("longitude",))
     v.units, v.long_name = "degrees_east", "longitude"
+    v.standard_name, v.axis = "longitude", "X"
     v[:] = LON
 
 
@@ -107,6 +110,7 @@ def write_model_levels(path):
     a, b = model_levels()
     nc = netCDF4.Dataset(path, "w", format="NETCDF4")
     nc.Conventions = "CF-1.6"
+    nc.history = "made by tools/make_model_fields.py"
     nc.title = "ERA5-like model-level fields (made up; tools/make_model_fields.py)"
     axes(nc, len(a), np.arange(1, len(a) + 1), {"units": "1", "long_name": "model_level_number"})
     for name, vals, units in (("hyam", a, "Pa"), ("hybm", b, "1")):
@@ -140,6 +144,7 @@ def write_pressure_levels(path):
     plev = np.array([20, 30, 50, 70, 100, 150, 200, 250, 300, 400, 500, 600, 700, 800, 850, 900, 925, 950, 975, 1000.0])
     nc = netCDF4.Dataset(path, "w", format="NETCDF3_CLASSIC")
     nc.Conventions = "CF-1.6"
+    nc.history = "made by tools/make_model_fields.py"
     nc.title = "ERA5-like pressure-level fields (made up; tools/make_model_fields.py)"
     axes(nc, len(plev), plev, {"units": "millibars", "long_name": "pressure_level"})
     shape = (len(HOURS), len(plev), len(LAT), len(LON))
