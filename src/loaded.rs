@@ -145,6 +145,7 @@ mod tests {
             include_str!("config/instrument.rs"),
             include_str!("config/load.rs"),
             include_str!("config/mod.rs"),
+            include_str!("config/model_fields.rs"),
             include_str!("config/multiple_scattering.rs"),
             include_str!("config/overrides.rs"),
             include_str!("config/scenario.rs"),

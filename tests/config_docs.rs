@@ -36,6 +36,7 @@ fn every_config_key_is_documented() {
         "instruments/caliop_3ch.toml",
         "instruments/caliop_orbit.toml",
         "instruments/caliop_curtain.toml",
+        "instruments/caliop_fields.toml",
     ] {
         let lidar = common::lidar(
             cfg,

@@ -6,6 +6,7 @@
 pub mod aerosol_profile;
 pub mod bin_mean;
 pub mod cabannes_line;
+pub mod cloud_optics;
 mod molecules;
 pub mod multiple_scattering;
 mod optics;

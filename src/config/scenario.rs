@@ -50,7 +50,7 @@ pub struct ScenarioConfig {
 
 impl ScenarioConfig {
     /// Every file the config names, with its key, as written (relative to the config
-    /// file): the molecular profile file and the scene's curtain. A key that names a
+    /// file): the molecular profile file, the scene's curtain and model fields. A key that names a
     /// file belongs here, so that the file is an input no output may replace
     /// (`LoadedConfig::files_read`); its reader opens it through `src/input_file.rs`.
     pub fn named_files(&self) -> Vec<(&'static str, &Path)> {
@@ -60,6 +60,11 @@ impl ScenarioConfig {
         }
         if let Some(curtain) = self.scene.as_ref().and_then(|s| s.curtain.as_ref()) {
             files.push(("scene.curtain", curtain.as_path()));
+        }
+        if let Some(m) = self.scene.as_ref().and_then(|s| s.model_fields.as_ref()) {
+            for f in &m.files {
+                files.push(("scene.model_fields.files", f.as_path()));
+            }
         }
         files
     }

@@ -70,6 +70,9 @@ pub struct SceneConfig {
     /// relative to the config file; instead of `segments`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub curtain: Option<PathBuf>,
+    /// A model's fields along the orbit (`src/scene/fields/`), instead of `segments`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model_fields: Option<super::model_fields::ModelFieldsConfig>,
 }
 
 /// One stretch of the track with its own layers, aerosol and surface.

@@ -6,6 +6,7 @@
 //! segments and broken cloud along the track.
 
 pub mod curtain;
+pub mod fields;
 pub mod orbit;
 pub mod sky;
 pub mod sun;

@@ -96,7 +96,9 @@ fn n_segments(cfg: &ScenarioConfig) -> usize {
 impl Track {
     /// Whether `cfg` describes a scene that changes along the track.
     pub fn is_changing(cfg: &ScenarioConfig) -> bool {
-        cfg.scene.as_ref().is_some_and(|s| s.curtain.is_some())
+        cfg.scene
+            .as_ref()
+            .is_some_and(|s| s.curtain.is_some() || s.model_fields.is_some())
             || (0..n_segments(cfg)).any(|i| i > 0 || segment_layers(cfg, i).iter().any(is_broken))
     }
 

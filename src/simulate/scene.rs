@@ -209,8 +209,20 @@ impl SceneModel {
             .iter()
             .map(|c| with_curtain(&c.loaded))
             .collect::<Result<_>>()?;
+        let orbit = super::orbit::orbit_of(lidar)?;
+        // model fields: one segment per profile, sampled along the orbit
+        let configs = match orbit.as_ref() {
+            Some(o) => configs
+                .into_iter()
+                .zip(&lidar.channels)
+                .map(|(c, ch)| {
+                    crate::scene::fields::with_model_fields(c, &ch.loaded, o, shots, profiles)
+                })
+                .collect::<Result<_>>()?,
+            None => configs,
+        };
         // with an orbit, the length of the track the file's latitudes and longitudes describe
-        let along = match super::orbit::orbit_of(lidar)? {
+        let along = match orbit {
             Some(o) => AlongTrack::Orbit(o),
             None => AlongTrack::Speed(crate::geometry::ground_track_speed_m_per_s(
                 first.geometry.platform_altitude_m,

@@ -8,6 +8,57 @@ use crate::error::Result;
 use super::Checker;
 
 impl ScenarioConfig {
+    /// `[scene.model_fields]`: alone, over an orbit, with files, known roles and
+    /// physical radii and efficiency (the files themselves are checked when read).
+    fn validate_model_fields(
+        &self,
+        c: &Checker,
+        scene: &SceneConfig,
+        m: &crate::config::model_fields::ModelFieldsConfig,
+    ) -> Result<()> {
+        if scene.curtain.is_some() || !scene.segments.is_empty() {
+            return Err(c.fail(
+                "scene.model_fields",
+                "gives the scene along the track: use it, scene.curtain or scene.segments, \
+                 one of them",
+            ));
+        }
+        if self.platform.kind == PlatformKind::Ground || self.orbit.is_none() {
+            return Err(c.fail(
+                "scene.model_fields",
+                "model fields are sampled along an orbit: they need a space-borne platform \
+                 with [orbit]",
+            ));
+        }
+        if m.files.is_empty() || m.files.len() > 16 {
+            return Err(c.fail("scene.model_fields.files", "give 1 to 16 files"));
+        }
+        for role in m.variables.keys() {
+            if !crate::config::model_fields::ROLES.contains(&role.as_str()) {
+                return Err(c.fail(
+                    &format!("scene.model_fields.variables.{role}"),
+                    format!(
+                        "is not a role; the roles are {}",
+                        crate::config::model_fields::ROLES.join(", ")
+                    ),
+                ));
+            }
+        }
+        c.range(
+            "scene.model_fields.liquid_effective_radius_um",
+            m.liquid_effective_radius_um,
+            1.0,
+            100.0,
+        )?;
+        c.range(
+            "scene.model_fields.extinction_efficiency",
+            m.extinction_efficiency,
+            1.0,
+            3.0,
+        )?;
+        Ok(())
+    }
+
     /// The surface: an albedo in [0, 1], within the window's reach, space-borne only.
     pub(super) fn validate_surface(&self, c: &Checker, s: &SurfaceConfig) -> Result<()> {
         if self.platform.kind == PlatformKind::Ground {
@@ -40,6 +91,9 @@ impl ScenarioConfig {
         }
         if scene.curtain.is_some() && self.platform.kind == PlatformKind::Ground {
             return Err(c.fail("scene.curtain", "a curtain needs a space-borne platform"));
+        }
+        if let Some(m) = &scene.model_fields {
+            self.validate_model_fields(c, scene, m)?;
         }
         if scene.segments.len() > 10_000 {
             return Err(c.fail("scene.segments", "at most 10,000 segments"));

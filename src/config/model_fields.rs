@@ -1,0 +1,88 @@
+//! `[scene.model_fields]`: the scene read from a model's fields (ERA5, MERRA-2, CAMS,
+//! ICON) along the orbit (`src/scene/fields/`, docs/scenes.md "Model fields").
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use serde::{Deserialize, Serialize};
+
+/// Which shipped mapping of variable names a model's files use.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FieldsModel {
+    /// ECMWF ERA5 (netCDF from the Climate Data Store, or converted from GRIB by cdo).
+    #[default]
+    Era5,
+    /// NASA GMAO MERRA-2 (`M2I3NVASM`, `M2T3NVRAD`).
+    Merra2,
+    /// CAMS reanalysis / forecasts (the IFS names, as ERA5).
+    Cams,
+    /// ICON output regridded to a regular latitude–longitude grid.
+    Icon,
+}
+
+/// How a profile samples the fields between grid points and times.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FieldsInterpolation {
+    /// Bilinear in latitude and longitude, then linear in time.
+    #[default]
+    Linear,
+    /// The nearest grid point and the nearest time.
+    Nearest,
+}
+
+/// The model fields a space-borne run flies through.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelFieldsConfig {
+    /// The netCDF-4 or netCDF-3 files, relative to the config file; each variable is
+    /// taken from the first file that holds it (all on the same grid and times).
+    pub files: Vec<PathBuf>,
+    /// The shipped variable-name mapping.
+    #[serde(default)]
+    pub model: FieldsModel,
+    /// Variable names replacing the mapping's, by role (`temperature = "ta"`, ...).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub variables: BTreeMap<String, String>,
+    /// Linear (bilinear in space, linear in time) or nearest.
+    #[serde(default)]
+    pub interpolation: FieldsInterpolation,
+    /// Droplet effective radius where the files give none, µm.
+    #[serde(default = "default_liquid_radius")]
+    pub liquid_effective_radius_um: f64,
+    /// Extinction efficiency Q of the cloud particles (geometric optics: 2).
+    #[serde(default = "default_efficiency")]
+    pub extinction_efficiency: f64,
+}
+
+fn default_liquid_radius() -> f64 {
+    10.0
+}
+
+fn default_efficiency() -> f64 {
+    2.0
+}
+
+/// The roles a variable can play, the keys of `[scene.model_fields.variables]`
+/// (docs/config.md; `src/scene/fields/names.rs` has each model's names).
+pub const ROLES: [&str; 18] = [
+    "temperature",
+    "specific_humidity",
+    "liquid",
+    "ice",
+    "cloud_fraction",
+    "surface_pressure",
+    "pressure",
+    "geopotential",
+    "height",
+    "surface_geopotential",
+    "liquid_effective_radius",
+    "ice_effective_radius",
+    "hybrid_a",
+    "hybrid_b",
+    "latitude",
+    "longitude",
+    "time",
+    "level",
+];

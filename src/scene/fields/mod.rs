@@ -1,0 +1,166 @@
+//! Model fields as the scene (`[scene.model_fields]`, docs/scenes.md "Model fields"):
+//! a model's temperature, pressure, humidity and cloud water on a regular
+//! latitude–longitude grid with model levels (hybrid a/b with surface pressure),
+//! pressure levels or heights, read from CF netCDF-4 or netCDF-3 files.
+//!
+//! Each profile samples the fields at the time and sub-satellite point of its middle
+//! (bilinear in latitude and longitude, linear in time; or the nearest point and time),
+//! level by level ([`grid`]); its levels become the layers of one segment of the track,
+//! as long as the profile's stretch of it, with the optics of `atmosphere::cloud_optics`
+//! (grid-box mean water spread over the whole box: the cloud fraction is read and
+//! checked but does not yet split the profile into subcolumns). The segments are the
+//! same scene as a curtain's: the truth, shards, onboard and validate see columns.
+
+pub mod column;
+pub mod grid;
+pub mod names;
+pub mod read;
+pub mod reader;
+
+use std::path::PathBuf;
+
+use crate::atmosphere::cloud_optics::{
+    air_density, extinction_per_m, ice_effective_radius_um, phase_optics,
+};
+use crate::config::{
+    CloudPhase, LayerConfig, LayerKind, ModelFieldsConfig, ScenarioConfig, SegmentConfig,
+};
+use crate::error::{Error, Result};
+use crate::scene::orbit::Orbit;
+
+pub use column::FieldColumn;
+pub use read::Sample;
+
+/// Where profile `p` of `profiles` samples the fields, with the along-track span of its
+/// segment: from half a shot before its first shot to half a shot before the next
+/// profile's (so no shot sits on a boundary); the first starts at 0.
+pub fn profile_samples(
+    cfg: &ScenarioConfig,
+    orbit: &Orbit,
+    shots_per_profile: u64,
+    profiles: u64,
+) -> Result<Vec<(Sample, f64)>> {
+    let start = humantime::parse_rfc3339(&cfg.acquisition.start_time)
+        .map_err(|e| Error::Unsupported(format!("acquisition.start_time: {e}")))?;
+    let start_s = start
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64());
+    let shot_s = 1.0 / cfg.instrument.rep_rate_hz;
+    let profile_s = shots_per_profile as f64 * shot_s;
+    let edge = |p: u64| {
+        if p == 0 {
+            0.0
+        } else {
+            orbit.along_track_m(p as f64 * profile_s - 0.5 * shot_s)
+        }
+    };
+    Ok((0..profiles)
+        .map(|p| {
+            let mid = (p as f64 + 0.5) * profile_s;
+            let g = orbit.position(mid);
+            let sample = Sample {
+                time_s: start_s + mid,
+                latitude_deg: g.latitude_deg,
+                longitude_deg: g.longitude_deg,
+            };
+            (sample, (edge(p + 1) - edge(p)) / 1e3)
+        })
+        .collect())
+}
+
+/// The layers of one column: a water cloud layer per level with liquid, an ice cloud
+/// layer per level with ice, each over the level's layer of the column.
+pub fn layers(m: &ModelFieldsConfig, c: &FieldColumn) -> Vec<LayerConfig> {
+    let mut out = Vec::new();
+    for (k, l) in c.levels.iter().enumerate() {
+        let rho = air_density(l.p_pa, l.t_k, l.q);
+        let (base_km, top_km) = (c.interfaces_m[k] / 1e3, c.interfaces_m[k + 1] / 1e3);
+        let water = l.liquid_radius_um.unwrap_or(m.liquid_effective_radius_um);
+        let ice = l
+            .ice_radius_um
+            .unwrap_or_else(|| ice_effective_radius_um(l.t_k));
+        for (phase, q, r_e) in [
+            (CloudPhase::Water, l.liquid, water),
+            (CloudPhase::Ice, l.ice, ice),
+        ] {
+            if q <= 0.0 {
+                continue;
+            }
+            let alpha = extinction_per_m(phase, q, rho, r_e, m.extinction_efficiency) * 1e3;
+            let (lidar_ratio_sr, depolarization) = phase_optics(phase);
+            out.push(LayerConfig {
+                kind: LayerKind::Cloud,
+                base_km,
+                top_km,
+                extinction_per_km: alpha.min(1e4),
+                lidar_ratio_sr,
+                depolarization,
+                multiple_scattering: 1.0,
+                phase: Some(phase),
+                effective_radius_um: Some(r_e),
+                asymmetry_factor: None,
+                angstrom_exponent: None,
+                reference_wavelength_nm: None,
+                lidar_ratio_sr_by_wavelength: Default::default(),
+                cloud_fraction: None,
+                cell_length_km: None,
+            });
+        }
+    }
+    out
+}
+
+/// The segments of `cfg`'s model fields `m` (its `files`, resolved) along `orbit`,
+/// one per profile.
+pub fn segments(
+    cfg: &ScenarioConfig,
+    m: &ModelFieldsConfig,
+    files: &[PathBuf],
+    orbit: &Orbit,
+    shots_per_profile: u64,
+    profiles: u64,
+) -> Result<Vec<SegmentConfig>> {
+    let samples = profile_samples(cfg, orbit, shots_per_profile, profiles)?;
+    let points: Vec<Sample> = samples.iter().map(|s| s.0).collect();
+    let columns =
+        read::columns(m, files, &points).map_err(|(path, why)| Error::output(path, why))?;
+    Ok(columns
+        .iter()
+        .zip(&samples)
+        .map(|(c, (_, length_km))| SegmentConfig {
+            length_km: *length_km,
+            layers: Some(layers(m, c)),
+            aerosol: None,
+            // the config's surface at the model's height
+            surface: cfg.surface.as_ref().zip(c.surface_height_m).map(|(s, z)| {
+                crate::config::SurfaceConfig {
+                    altitude_km: (z / 1e3).clamp(-0.5, 9.0),
+                    ..s.clone()
+                }
+            }),
+            water_vapour: None,
+        })
+        .collect())
+}
+
+/// `cfg` with its model fields, if any, turned into one segment per profile.
+pub fn with_model_fields(
+    mut cfg: ScenarioConfig,
+    loaded: &crate::loaded::LoadedConfig,
+    orbit: &Orbit,
+    shots: u64,
+    profiles: u64,
+) -> Result<ScenarioConfig> {
+    let Some(m) = cfg.scene.as_mut().and_then(|s| s.model_fields.take()) else {
+        return Ok(cfg);
+    };
+    let files: Vec<_> = m.files.iter().map(|f| loaded.resolve_path(f)).collect();
+    for f in &files {
+        crate::input_file::check("scene.model_fields.files", f)?;
+    }
+    let segments = segments(&cfg, &m, &files, orbit, shots, profiles)?;
+    if let Some(s) = cfg.scene.as_mut() {
+        s.segments = segments;
+    }
+    Ok(cfg)
+}

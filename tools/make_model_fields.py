@@ -1,0 +1,187 @@
+#!/usr/bin/env python3
+"""Writes the small ERA5-like model fields of configs/fields/ (docs/scenes.md "Model
+fields"): a warm front's sloping cloud band (liquid below, ice above) crossing the
+CALIOP-like descending pass of configs/instruments/caliop_fields.toml, and a
+stratocumulus-topped boundary layer south of it, over the western Mediterranean
+(30-45 N, 8 W-6 E) on 2024-01-15 at 00 and 01 UTC.
+
+  era5_like_model_levels.nc      netCDF-4 (HDF5, zlib): 40 hybrid model levels
+                                 (hyam, hybm: our own coefficients, not ECMWF's L137),
+                                 t, q, clwc, ciwc, cc per level, sp and z at the surface
+  era5_like_pressure_levels.nc   netCDF-3 classic: 20 pressure levels, the same
+                                 atmosphere with z (geopotential) per level; t packed as
+                                 int16 with scale_factor / add_offset as CDS files are
+
+The numbers are made up to look like a mid-latitude winter night, not taken from ERA5.
+Latitudes run north to south and levels top down, as in ERA5 files.
+
+    /tmp/venv/bin/python tools/make_model_fields.py [OUTDIR]
+"""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import netCDF4
+
+G0 = 9.80665
+OUT = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).resolve().parents[1] / "configs" / "fields"
+LAT = np.arange(45.0, 29.5, -1.0)          # 16, north to south
+LON = np.arange(-8.0, 6.5, 1.0)            # 15
+HOURS = np.array([1087296.0, 1087297.0])   # hours since 1900-01-01: 2024-01-15 00 and 01 UTC
+TIME_UNITS = "hours since 1900-01-01 00:00:00.0"
+
+
+def surface(hour, lat, lon):
+    """Surface pressure (Pa) and height (m) on (lat, lon)."""
+    la, lo = np.meshgrid(lat, lon, indexing="ij")
+    hill = 600.0 * np.exp(-((la - 40.0) ** 2 + (lo + 4.0) ** 2) / 2.0)   # a plateau inland
+    ps = 101500.0 - 150.0 * (la - 30.0) + 40.0 * lo + 60.0 * hour - 11.5 * hill
+    return ps, hill
+
+
+def atmosphere(p, ps, hill, hour, lat, lon):
+    """t, q, clwc, ciwc, cc at pressure p (Pa), broadcast over (lat, lon)."""
+    la, lo = np.meshgrid(lat, lon, indexing="ij")
+    z = hill - 7400.0 * np.log(p / ps)               # rough height for the shapes, m
+    t_sfc = 290.0 - 0.6 * (la - 30.0) + 0.05 * lo + 0.8 * hour
+    t = np.where(z < 11000.0, t_sfc - 6.5e-3 * z, t_sfc - 6.5e-3 * 11000.0 + 1e-3 * (z - 11000.0))
+    q = 0.009 * np.exp(-z / 2300.0) * np.exp(-(la - 30.0) / 25.0)
+    # the warm front: its surface position moves north 0.5 deg/h; the cloud rises
+    # from 1.5 km at the front to 9 km 4 deg north of it, 2.5 km deep
+    front = 35.5 + 0.15 * lo + 0.5 * hour
+    north = la - front
+    base = 1500.0 + 1875.0 * north
+    inside = (north > 0.0) & (north < 4.0) & (z > base) & (z < base + 2500.0)
+    shape = np.where(inside, np.sin(np.pi * np.clip((z - base) / 2500.0, 0, 1)), 0.0)
+    liquid_part = np.clip((t - 253.0) / 15.0, 0.0, 1.0)          # all ice below -20 C
+    clwc = 3e-4 * shape * liquid_part
+    ciwc = 1.5e-5 * shape * (1.0 - liquid_part)
+    # the boundary layer south of 33.5 N: a stratocumulus deck at 0.8-1.3 km
+    sc = (la < 33.5) & (z > 800.0) & (z < 1300.0)
+    clwc = clwc + np.where(sc, 2.5e-4 * np.sin(np.pi * (z - 800.0) / 500.0), 0.0)
+    cc = np.where((clwc + ciwc) > 0.0, np.where(sc, 0.8, 1.0), 0.0)
+    return t, q, clwc, ciwc, cc
+
+
+def model_levels():
+    """Our own 40 hybrid levels: p = a + b*ps with b = eta**2, a = 1e5*(eta - b)."""
+    s = np.linspace(1.0, 0.0, 40, endpoint=False)[::-1]      # top down
+    zl = 32000.0 * (1.0 - s) ** 1.7 + 15.0
+    eta = np.exp(-zl / 7400.0)
+    b = eta ** 2
+    a = 1e5 * (eta - b)
+    return a, b
+
+
+def axes(nc, nlev, lev_values, lev_attrs):
+    nc.createDimension("time", None)
+    nc.createDimension("level", nlev)
+    nc.createDimension("latitude", len(LAT))
+    nc.createDimension("longitude", len(LON))
+    v = nc.createVariable("time", "i4", ("time",))
+    v.units, v.calendar, v.long_name = TIME_UNITS, "gregorian", "time"
+    v.standard_name, v.axis = "time", "T"
+    v[:] = HOURS.astype("i4")
+    v = nc.createVariable("level", "f4" if "units" in lev_attrs and lev_attrs["units"] == "millibars" else "i4", ("level",))
+    for k, x in lev_attrs.items():
+        setattr(v, k, x)
+    v[:] = lev_values
+    v = nc.createVariable("latitude", "f4", ("latitude",))
+    v.units, v.long_name = "degrees_north", "latitude"
+    v.standard_name, v.axis = "latitude", "Y"
+    v[:] = LAT
+    v = nc.createVariable("longitude", "f4", ("longitude",))
+    v.units, v.long_name = "degrees_east", "longitude"
+    v.standard_name, v.axis = "longitude", "X"
+    v[:] = LON
+
+
+META = {
+    "t": ("K", "Temperature"),
+    "q": ("kg kg**-1", "Specific humidity"),
+    "clwc": ("kg kg**-1", "Specific cloud liquid water content"),
+    "ciwc": ("kg kg**-1", "Specific cloud ice water content"),
+    "cc": ("(0 - 1)", "Fraction of cloud cover"),
+}
+
+
+def write_model_levels(path):
+    a, b = model_levels()
+    nc = netCDF4.Dataset(path, "w", format="NETCDF4")
+    nc.Conventions = "CF-1.6"
+    nc.history = "made by tools/make_model_fields.py"
+    nc.title = "ERA5-like model-level fields (made up; tools/make_model_fields.py)"
+    axes(nc, len(a), np.arange(1, len(a) + 1), {"units": "1", "long_name": "model_level_number"})
+    for name, vals, units in (("hyam", a, "Pa"), ("hybm", b, "1")):
+        v = nc.createVariable(name, "f8", ("level",))
+        v.units, v.long_name = units, f"hybrid coefficient {name[-2]} at full levels"
+        v[:] = vals
+    shape = (len(HOURS), len(a), len(LAT), len(LON))
+    data = {k: np.zeros(shape) for k in META}
+    sp = np.zeros((len(HOURS), len(LAT), len(LON)))
+    for i, _ in enumerate(HOURS):
+        ps, hill = surface(float(i), LAT, LON)
+        sp[i] = ps
+        for k in range(len(a)):
+            fields = atmosphere(a[k] + b[k] * ps, ps, hill, float(i), LAT, LON)
+            for name, f in zip(META, fields):
+                data[name][i, k] = f
+    for name, (units, long) in META.items():
+        v = nc.createVariable(name, "f4", ("time", "level", "latitude", "longitude"), zlib=True, complevel=6)
+        v.units, v.long_name = units, long
+        v[:] = data[name]
+    v = nc.createVariable("sp", "f4", ("time", "latitude", "longitude"), zlib=True)
+    v.units, v.long_name = "Pa", "Surface pressure"
+    v[:] = sp
+    v = nc.createVariable("z", "f4", ("time", "latitude", "longitude"), zlib=True)
+    v.units, v.long_name = "m**2 s**-2", "Geopotential (surface)"
+    v[:] = np.stack([surface(float(i), LAT, LON)[1] * G0 for i, _ in enumerate(HOURS)])
+    nc.close()
+
+
+def write_pressure_levels(path):
+    plev = np.array([20, 30, 50, 70, 100, 150, 200, 250, 300, 400, 500, 600, 700, 800, 850, 900, 925, 950, 975, 1000.0])
+    nc = netCDF4.Dataset(path, "w", format="NETCDF3_CLASSIC")
+    nc.Conventions = "CF-1.6"
+    nc.history = "made by tools/make_model_fields.py"
+    nc.title = "ERA5-like pressure-level fields (made up; tools/make_model_fields.py)"
+    axes(nc, len(plev), plev, {"units": "millibars", "long_name": "pressure_level"})
+    shape = (len(HOURS), len(plev), len(LAT), len(LON))
+    data = {k: np.zeros(shape) for k in META}
+    geo = np.zeros(shape)
+    for i, _ in enumerate(HOURS):
+        ps, hill = surface(float(i), LAT, LON)
+        for k, p in enumerate(plev * 100.0):
+            pp = np.minimum(p, ps)                  # below ground: the surface's values
+            fields = atmosphere(pp, ps, hill, float(i), LAT, LON)
+            for name, f in zip(META, fields):
+                data[name][i, k] = f
+            tv = fields[0] * (1.0 + 0.6078 * fields[1])
+            geo[i, k] = G0 * hill + 287.0597 * tv * np.log(ps / p)
+    for name, (units, long) in META.items():
+        if name == "t":
+            lo, hi = data[name].min(), data[name].max()
+            scale = (hi - lo) / 65000.0
+            offset = 0.5 * (hi + lo)
+            v = nc.createVariable(name, "i2", ("time", "level", "latitude", "longitude"))
+            v.set_auto_maskandscale(False)
+            v.scale_factor, v.add_offset = scale, offset
+            v.units, v.long_name = units, long
+            v[:] = np.round((data[name] - offset) / scale).astype("i2")
+        else:
+            v = nc.createVariable(name, "f4", ("time", "level", "latitude", "longitude"))
+            v.units, v.long_name = units, long
+            v[:] = data[name]
+    v = nc.createVariable("z", "f4", ("time", "level", "latitude", "longitude"))
+    v.units, v.long_name = "m**2 s**-2", "Geopotential"
+    v[:] = geo
+    nc.close()
+
+
+if __name__ == "__main__":
+    OUT.mkdir(parents=True, exist_ok=True)
+    write_model_levels(OUT / "era5_like_model_levels.nc")
+    write_pressure_levels(OUT / "era5_like_pressure_levels.nc")
+    for f in sorted(OUT.glob("era5_like_*.nc")):
+        print(f, f.stat().st_size, "bytes")
