@@ -102,13 +102,20 @@ pub fn panels(q: &Quicklook, with_pair: bool) -> Vec<ImagePanel> {
     let bar = "attenuated backscatter (m⁻¹ sr⁻¹)";
     let mut shown = floored(signal);
     let mut masked = String::new();
-    if let Some((x, m)) = &q.mask {
-        // grey where more than half the cell's bins have an S/N below X
-        for (v, share) in shown.iter_mut().zip(m.means()) {
-            if share > 0.5 {
+    // grey where more than half the cell's bins have an S/N below X
+    let below: Option<Vec<bool>> = q
+        .mask
+        .as_ref()
+        .map(|(_, m)| m.means().iter().map(|&s| s > 0.5).collect());
+    let grey = |v: &mut [f64]| {
+        for (v, &b) in v.iter_mut().zip(below.iter().flatten()) {
+            if b {
                 *v = f64::NAN;
             }
         }
+    };
+    if let Some((x, _)) = &q.mask {
+        grey(&mut shown);
         masked = format!(
             "; grey: S/N < {} (from the counts)",
             crate::error::compact(*x)
@@ -137,11 +144,12 @@ pub fn panels(q: &Quicklook, with_pair: bool) -> Vec<ImagePanel> {
     }
     if let (true, Some((par, perp, name))) = (with_pair, &q.pair) {
         let (a, b) = (par.means(), perp.means());
-        let delta: Vec<f64> = a
+        let mut delta: Vec<f64> = a
             .iter()
             .zip(&b)
             .map(|(&p, &s)| if p > scale.lo { s / p } else { f64::NAN })
             .collect();
+        grey(&mut delta);
         let depol = ColourScale {
             lo: DEPOLARIZATION.0,
             hi: DEPOLARIZATION.1,
@@ -150,7 +158,7 @@ pub fn panels(q: &Quicklook, with_pair: bool) -> Vec<ImagePanel> {
         out.push(panel(
             q,
             par,
-            format!("volume depolarization ratio ({name})"),
+            format!("volume depolarization ratio ({name}){masked}"),
             delta,
             depol,
             "volume depolarization ratio",

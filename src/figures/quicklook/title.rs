@@ -27,6 +27,8 @@ pub struct Source {
     pub station: Option<(f64, f64)>,
     /// The platform's altitude, km.
     pub altitude_km: Option<f64>,
+    /// The config's `platform.kind` (`ground`, `space`).
+    pub kind: Option<String>,
 }
 
 impl Source {
@@ -55,6 +57,10 @@ impl Source {
             instrument,
             station: get("latitude_deg").zip(get("longitude_deg")),
             altitude_km: get("altitude_km"),
+            kind: platform
+                .and_then(|p| p.get("kind"))
+                .and_then(|k| k.as_str())
+                .map(str::to_string),
         }
     }
 }
@@ -112,6 +118,15 @@ pub fn title_line(
                 .altitude_km
                 .map_or(String::new(), |z| format!(", {z} km a.s.l."))
         )),
+        (None, None) if source.kind.as_deref().is_some_and(|k| k != "ground") => {
+            parts.push(format!(
+                "{} platform{} (no [orbit]: no track)",
+                source.kind.as_deref().unwrap_or(""),
+                source
+                    .altitude_km
+                    .map_or(String::new(), |z| format!(" at {z} km"))
+            ))
+        }
         (None, None) => parts.push(format!(
             "ground station{} (no latitude, longitude in the config)",
             source
