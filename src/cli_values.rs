@@ -118,6 +118,26 @@ pub fn altitude_range_km(s: &str) -> Result<(f64, f64), String> {
     }
 }
 
+/// Largest `quicklook --mask-snr`.
+pub const MAX_MASK_SNR: f64 = 1.0e6;
+
+/// `quicklook --mask-snr X`: a number from 0 to [`MAX_MASK_SNR`].
+pub fn mask_snr(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if (0.0..=MAX_MASK_SNR).contains(&x) => Ok(x),
+        _ => Err(format!(
+            "must be an S/N from 0 to {} (e.g. 3)",
+            compact(MAX_MASK_SNR)
+        )),
+    }
+}
+
+/// `quicklook --x-axis AXIS`: one of [`crate::figures::quicklook::XAxis::NAMES`].
+pub fn x_axis(s: &str) -> Result<crate::figures::quicklook::XAxis, String> {
+    use crate::figures::quicklook::XAxis;
+    XAxis::parse(s).ok_or_else(|| format!("must be one of {}", XAxis::NAMES.join(", ")))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

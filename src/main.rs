@@ -229,6 +229,23 @@ enum Command {
         /// lowest recorded bin after the pre-trigger bins to the window's top or 40 km).
         #[arg(long, value_name = "LO,HI", allow_negative_numbers = true, value_parser = cli_values::altitude_range_km)]
         altitude_range: Option<(f64, f64)>,
+        /// Channels drawn as panels stacked on one x axis, top to bottom, e.g.
+        /// `532_parallel,532_perpendicular` (instead of --channel).
+        #[arg(
+            long,
+            value_name = "A,B,...",
+            value_delimiter = ',',
+            conflicts_with = "channel"
+        )]
+        channels: Vec<String>,
+        /// The x axis: time (UTC), latitude (an orbit's latitude and longitude),
+        /// along-track (km), profile, or auto (time for a ground file, latitude for an orbit's).
+        #[arg(long, value_name = "AXIS", default_value = "auto", value_parser = cli_values::x_axis)]
+        x_axis: lidarsim::figures::quicklook::XAxis,
+        /// Grey the cells where most bins have an S/N below X, estimated from the counts
+        /// (signal over the square root of the recorded photoelectrons).
+        #[arg(long, value_name = "X", allow_negative_numbers = true, value_parser = cli_values::mask_snr)]
+        mask_snr: Option<f64>,
     },
     /// Converts a raw file (ground run) to the EARLINET SCC raw NetCDF format.
     ExportScc {
@@ -439,12 +456,17 @@ fn main() -> ExitCode {
             channel,
             truth,
             altitude_range,
+            channels,
+            x_axis,
+            mask_snr,
         } => {
             let view = lidarsim::figures::quicklook::View {
                 altitude_range_km: *altitude_range,
+                x_axis: *x_axis,
+                mask_snr: *mask_snr,
             };
-            lidarsim::figures::quicklook::run(file, png, channel.as_deref(), *truth, view)
-                .map(|()| true)
+            let channels: Vec<String> = channel.iter().cloned().chain(channels.clone()).collect();
+            lidarsim::figures::quicklook::run(file, png, &channels, *truth, view).map(|()| true)
         }
         Command::ExportScc { raw, out, ids } => {
             lidarsim::commands::export_scc(raw, out, &ids.options()).map(|()| true)

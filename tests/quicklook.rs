@@ -10,8 +10,8 @@ use std::path::Path;
 
 use common::cli::{lidarsim, ok, refused, scratch};
 use common::config_path;
-use common::image::Image;
-use lidarsim::figures::quicklook::{self, COLUMNS, ROWS};
+use common::image::{Image, find_text};
+use lidarsim::figures::quicklook::{self, COLUMNS, PANEL_HEIGHT, ROWS, TITLE_HEIGHT};
 
 /// The CALIOP-like three channels (532 ∥ and ⊥, 1064), 40 profiles up to 40 km, the
 /// 532 nm detectors without dead time (the quicklook shows the counts as recorded: it
@@ -64,10 +64,10 @@ fn a_pair_with_truth_draws_three_panels() {
     let img = Image::read(&dir.join("q.png"));
     let (w, h, colours) = (img.w, img.h, img.distinct());
     // each panel's colour bar: a column right of the fields running through the scale
-    for k in 0..3 {
-        let y0 = 34 + 430 * k;
+    for k in 0..3u32 {
+        let y0 = (TITLE_HEIGHT + PANEL_HEIGHT * k) as usize;
         assert!(
-            img.has_colour_bar(1280, 1310, y0, y0 + 430, 50),
+            img.has_colour_bar(1280, 1310, y0, y0 + PANEL_HEIGHT as usize, 50),
             "panel {k}'s colour bar"
         );
     }
@@ -89,7 +89,7 @@ fn a_pair_with_truth_draws_three_panels() {
     let h = h as u32;
     let h1 = h1 as u32;
     // 1064 nm has no pair and no truth asked: one panel; the 532 nm pair three
-    assert_eq!(h - h1, 2 * 430, "{h} {h1}");
+    assert_eq!(h - h1, 2 * PANEL_HEIGHT, "{h} {h1}");
     assert!(colours > 200, "{colours} colours");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -300,63 +300,6 @@ fn memory_stays_bounded_on_a_large_file() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `text` as the figures draw their tick labels (the embedded font, 13 px, black on
-/// white): the dark pixels (any channel below 128) of its box, row by row.
-fn rendered(text: &str) -> Vec<Vec<bool>> {
-    use lidarsim::figures::plot::{FONT, ensure_font};
-    use plotters::prelude::*;
-    ensure_font().unwrap();
-    let (w, h) = (120u32, 40u32);
-    let mut rgb = vec![255u8; (w * h * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
-        root.draw(&Text::new(
-            text.to_string(),
-            (10, 10),
-            (FONT, 13).into_font(),
-        ))
-        .unwrap();
-        root.present().unwrap();
-    }
-    let dark: Vec<bool> = rgb
-        .chunks_exact(3)
-        .map(|c| c.iter().any(|&v| v < 128))
-        .collect();
-    let (w, h) = (w as usize, h as usize);
-    let rows: Vec<usize> = (0..h)
-        .filter(|&y| (0..w).any(|x| dark[y * w + x]))
-        .collect();
-    let cols: Vec<usize> = (0..w)
-        .filter(|&x| (0..h).any(|y| dark[y * w + x]))
-        .collect();
-    let (y0, y1, x0, x1) = (
-        rows[0],
-        *rows.last().unwrap(),
-        cols[0],
-        *cols.last().unwrap(),
-    );
-    (y0..=y1)
-        .map(|y| (x0..=x1).map(|x| dark[y * w + x]).collect())
-        .collect()
-}
-
-/// Where `img` shows `text` (its dark pixels exactly, the box's other pixels light), in
-/// rows `y0..y1`: the left edges of every place found.
-fn find_text(img: &Image, text: &str, y0: usize, y1: usize) -> Vec<usize> {
-    let t = rendered(text);
-    let (th, tw) = (t.len(), t[0].len());
-    let dark = |x: usize, y: usize| img.rgb[y * img.w + x].iter().any(|&v| v < 128);
-    let mut found = Vec::new();
-    for y in y0..y1.min(img.h).saturating_sub(th) {
-        for x in 0..img.w.saturating_sub(tw) {
-            if (0..th).all(|j| (0..tw).all(|i| dark(x + i, y + j) == t[j][i])) {
-                found.push(x);
-            }
-        }
-    }
-    found
-}
-
 /// A ground file's time axis reads the UTC clock: `ground_532_depol` (10 profiles of
 /// 30 s from the default start, 2000-01-01T00:00:00Z) spans 00:00–00:05, so the x axis
 /// of the first panel (below its field, rows 380–430) shows `00:01` to `00:04` at
@@ -383,7 +326,8 @@ fn a_ground_quicklook_labels_its_time_axis_by_the_utc_clock() {
         &[],
     ));
     let img = Image::read(&dir.join("q.png"));
-    let (y0, y1) = (34 + 350, 34 + 430);
+    let t = TITLE_HEIGHT as usize;
+    let (y0, y1) = (t + 350, t + 430);
     let at: Vec<usize> = ["00:01", "00:02", "00:03", "00:04"]
         .iter()
         .map(|t| {
@@ -481,6 +425,7 @@ fn an_altitude_range_sets_the_figures_span_and_a_bad_one_is_refused() {
     let raw = ground_with_pretrigger(&dir);
     let view = quicklook::View {
         altitude_range_km: Some((2.0, 6.5)),
+        ..quicklook::View::default()
     };
     let q = quicklook::read_view(&raw, None, false, view).unwrap();
     assert_eq!(q.signal.z, (2.0, 6.5));

@@ -68,8 +68,18 @@ cat "$tmp/pulses.txt"
 mkdir -p docs/figures
 "$L" snr-map configs/paper/scenario1.toml --png docs/figures/snr_map_scenario1.png
 (cd "$tmp" && "$L" quicklook caliop_orbit.h5 --truth --png "$root/docs/figures/quicklook_orbit.png")
+(cd "$tmp" && "$L" quicklook caliop_orbit.h5 --x-axis time --png "$root/docs/figures/quicklook_orbit_time.png" &&
+  "$L" quicklook caliop_orbit.h5 --x-axis along-track --png "$root/docs/figures/quicklook_orbit_along_track.png")
 (cd "$tmp" && "$L" simulate "$root/configs/instruments/caliop_3ch.toml" -o caliop_3ch.h5 --profiles 200 &&
-  "$L" quicklook caliop_3ch.h5 --png "$root/docs/figures/quicklook_pair.png")
+  "$L" quicklook caliop_3ch.h5 --png "$root/docs/figures/quicklook_pair.png" &&
+  "$L" quicklook caliop_3ch.h5 --channels 532_parallel,532_perpendicular,1064_total \
+    --png "$root/docs/figures/quicklook_channels.png")
+# the MPL-like hour (shot by shot: about 3 to 5 minutes on 2 cores)
+(cd "$tmp" && "$L" simulate "$root/configs/ground/mpl_like.toml" -o mpl.h5 --profiles 60 \
+  --set platform.latitude_deg=38.99 --set platform.longitude_deg=-76.84 &&
+  "$L" quicklook mpl.h5 --png "$root/docs/figures/quicklook_altitude_range.png" --altitude-range 0,6 &&
+  "$L" quicklook mpl.h5 --png "$root/docs/figures/quicklook_mask_snr.png" --mask-snr 3 &&
+  "$L" quicklook mpl.h5 --png "$root/docs/figures/quicklook_profile.png" --x-axis profile --altitude-range 0,12)
 (cd "$tmp" && "$L" onboard "$root/configs/instruments/caliop_3ch.toml" --set acquisition.top_altitude_km=40 \
   --set acquisition.bottom_altitude_km=-2 --set acquisition.profiles=200 --scheme caliop -o caliop_3ch_product.h5 &&
   "$L" quicklook caliop_3ch_product.h5 --truth --png "$root/docs/figures/quicklook_product.png")

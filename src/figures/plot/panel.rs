@@ -31,6 +31,9 @@ pub struct Axis {
     pub log: bool,
     /// A time axis labelled by the UTC clock (`HH:MM`) rather than by its numbers.
     pub clock: Option<Clock>,
+    /// Ticks given with their labels, `(value, text)`, rather than nice numbers (a
+    /// track's latitude and longitude).
+    pub marks: Option<Vec<(f64, String)>>,
 }
 
 /// What makes a linear axis of times a clock: value `v` is the UTC time
@@ -59,7 +62,21 @@ impl Axis {
             hi,
             log: false,
             clock: None,
+            marks: None,
         }
+    }
+
+    /// A linear axis whose ticks are `marks`, `(value, text)`, those inside it.
+    pub fn marked(label: impl Into<String>, lo: f64, hi: f64, marks: Vec<(f64, String)>) -> Self {
+        let mut a = Axis::linear(label, lo, hi);
+        let (lo, hi) = (a.lo, a.hi);
+        a.marks = Some(
+            marks
+                .into_iter()
+                .filter(|(v, _)| (lo..=hi).contains(v))
+                .collect(),
+        );
+        a
     }
 
     /// A linear axis of times labelled by the UTC clock (`clock`), `lo` and `hi` in its
@@ -92,6 +109,13 @@ impl Axis {
 
     /// The tick label of coordinate `c`: the clock time, or the number.
     fn tick_label(&self, c: f64) -> String {
+        if let Some(marks) = &self.marks {
+            return marks
+                .iter()
+                .min_by(|a, b| (a.0 - c).abs().total_cmp(&(b.0 - c).abs()))
+                .map(|m| m.1.clone())
+                .unwrap_or_default();
+        }
         match self.clock {
             Some(k) => ticks::clock_label(k.unix_s(c), self.clock_ticks(X_TICKS).1),
             None => ticks::format(self.value(c)),
@@ -112,7 +136,9 @@ impl Axis {
 
     /// The plotters range in the axis' coordinate, with nice ticks as key points.
     fn range(&self, n: usize) -> ticks::TickedRange {
-        let t = if self.clock.is_some() {
+        let t = if let Some(marks) = &self.marks {
+            marks.iter().map(|m| m.0).collect()
+        } else if self.clock.is_some() {
             self.clock_ticks(n).0
         } else if self.log {
             ticks::log(self.lo, self.hi, n)

@@ -7,14 +7,15 @@ use super::figure::Quicklook;
 use super::grid::Grid;
 use crate::figures::plot::colour::ColourScale;
 use crate::figures::plot::panel::{Axis, ImagePanel};
-use crate::figures::plot::text::{FONT, encode_png, ensure_font};
+use crate::figures::plot::text::{encode_png, ensure_font, font, label};
+use plotters::style::text_anchor::{HPos, VPos};
 
 /// Figure width, pixels.
 const WIDTH: u32 = 1400;
 /// Height of one panel, pixels.
-const PANEL_HEIGHT: u32 = 430;
-/// Height of the figure's title, pixels.
-const TITLE_HEIGHT: u32 = 34;
+pub const PANEL_HEIGHT: u32 = 430;
+/// Height of the figure's title (two lines), pixels.
+pub const TITLE_HEIGHT: u32 = 52;
 /// Decades of the signal's colour scale below its top.
 const DECADES: f64 = 3.5;
 /// The signal's colour scale tops at [`HEADROOM`] times this quantile of the cells (the
@@ -60,9 +61,10 @@ fn panel(
     y_edges.reverse(); // row 0 is the top
     ImagePanel {
         title,
-        x: match q.x_clock {
-            Some(clock) => Axis::clock(q.x_label.clone(), g.x.0, g.x.1, clock),
-            None => Axis::linear(q.x_label.clone(), g.x.0, g.x.1),
+        x: match (&q.x_marks, q.x_clock) {
+            (Some(m), _) => Axis::marked(q.x_label.clone(), g.x.0, g.x.1, m.clone()),
+            (None, Some(clock)) => Axis::clock(q.x_label.clone(), g.x.0, g.x.1, clock),
+            (None, None) => Axis::linear(q.x_label.clone(), g.x.0, g.x.1),
         },
         y: Axis::linear("altitude (km)", g.z.0, g.z.1),
         x_edges: step(g.x, g.cols),
@@ -74,8 +76,9 @@ fn panel(
     }
 }
 
-/// The figure's panels, top to bottom.
-pub fn panels(q: &Quicklook) -> Vec<ImagePanel> {
+/// The figure's panels of one channel, top to bottom: its signal, its truth with
+/// `--truth`, and with `with_pair` the volume depolarization of its ∥/⊥ pair.
+pub fn panels(q: &Quicklook, with_pair: bool) -> Vec<ImagePanel> {
     let signal = q.signal.means();
     let truth = q.truth.as_ref().map(Grid::means);
     let bulk = quantile(&signal, BULK_QUANTILE)
@@ -97,14 +100,35 @@ pub fn panels(q: &Quicklook) -> Vec<ImagePanel> {
             .collect()
     };
     let bar = "attenuated backscatter (m⁻¹ sr⁻¹)";
+    let mut shown = floored(signal);
+    let mut masked = String::new();
+    // grey where more than half the cell's bins have an S/N below X
+    let below: Option<Vec<bool>> = q
+        .mask
+        .as_ref()
+        .map(|(_, m)| m.means().iter().map(|&s| s > 0.5).collect());
+    let grey = |v: &mut [f64]| {
+        for (v, &b) in v.iter_mut().zip(below.iter().flatten()) {
+            if b {
+                *v = f64::NAN;
+            }
+        }
+    };
+    if let Some((x, _)) = &q.mask {
+        grey(&mut shown);
+        masked = format!(
+            "; grey: S/N < {} (from the counts)",
+            crate::error::compact(*x)
+        );
+    }
     let mut out = vec![panel(
         q,
         &q.signal,
         format!(
-            "{}: background-subtracted, range-corrected signal over the lidar constant",
+            "{}: background-subtracted, range-corrected signal over the lidar constant{masked}",
             q.channel
         ),
-        floored(signal),
+        shown,
         scale,
         bar,
     )];
@@ -118,13 +142,14 @@ pub fn panels(q: &Quicklook) -> Vec<ImagePanel> {
             bar,
         ));
     }
-    if let Some((par, perp, name)) = &q.pair {
+    if let (true, Some((par, perp, name))) = (with_pair, &q.pair) {
         let (a, b) = (par.means(), perp.means());
-        let delta: Vec<f64> = a
+        let mut delta: Vec<f64> = a
             .iter()
             .zip(&b)
             .map(|(&p, &s)| if p > scale.lo { s / p } else { f64::NAN })
             .collect();
+        grey(&mut delta);
         let depol = ColourScale {
             lo: DEPOLARIZATION.0,
             hi: DEPOLARIZATION.1,
@@ -133,7 +158,7 @@ pub fn panels(q: &Quicklook) -> Vec<ImagePanel> {
         out.push(panel(
             q,
             par,
-            format!("volume depolarization ratio ({name})"),
+            format!("volume depolarization ratio ({name}){masked}"),
             delta,
             depol,
             "volume depolarization ratio",
@@ -142,10 +167,15 @@ pub fn panels(q: &Quicklook) -> Vec<ImagePanel> {
     out
 }
 
-/// The PNG of the quicklook.
-pub fn png_bytes(q: &Quicklook) -> std::result::Result<Vec<u8>, String> {
+/// The PNG of the quicklook of one or more channels of a file (`qs`, one per channel,
+/// read with the same view): a title of two lines, then each channel's panels, stacked
+/// on the same x axis; the volume depolarization only when one channel is drawn.
+pub fn png_bytes(qs: &[Quicklook]) -> std::result::Result<Vec<u8>, String> {
     ensure_font()?;
-    let panels = panels(q);
+    let Some(q) = qs.first() else {
+        return Err("no channel to draw".into());
+    };
+    let panels: Vec<ImagePanel> = qs.iter().flat_map(|c| panels(c, qs.len() == 1)).collect();
     let height = TITLE_HEIGHT + PANEL_HEIGHT * panels.len() as u32;
     let mut rgb = vec![255u8; (WIDTH * height * 3) as usize];
     {
@@ -157,12 +187,25 @@ pub fn png_bytes(q: &Quicklook) -> std::result::Result<Vec<u8>, String> {
         } else {
             "; band along the top: day (yellow), night (navy)"
         };
-        title
-            .titled(
-                &format!("{} — {}{day_note}", q.title, q.background_note),
-                (FONT, 17),
-            )
-            .map_err(|e| e.to_string())?;
+        let mid = (WIDTH / 2) as i32;
+        label(
+            &title,
+            &q.title,
+            (mid, 16),
+            &font(18.0),
+            HPos::Center,
+            VPos::Center,
+        )
+        .map_err(|e| e.to_string())?;
+        label(
+            &title,
+            &format!("{} — {}{day_note}", q.file, q.background_note),
+            (mid, 39),
+            &font(13.0),
+            HPos::Center,
+            VPos::Center,
+        )
+        .map_err(|e| e.to_string())?;
         let marks: Vec<(f64, f64, RGBColor)> = q
             .day
             .iter()

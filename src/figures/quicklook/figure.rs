@@ -3,6 +3,7 @@
 
 use crate::figures::plot::panel::{Clock, widen};
 
+use super::axis::XAxis;
 use super::grid::Grid;
 
 /// The figure's grid: pixel columns and rows of one panel's field.
@@ -18,6 +19,10 @@ pub struct View {
     /// The altitude range drawn, km above sea level, `(low, high)`; `None`: from the
     /// lowest bin after the pre-trigger bins to the window's top or [`TOP_KM`].
     pub altitude_range_km: Option<(f64, f64)>,
+    /// What the x axis shows (`--x-axis`).
+    pub x_axis: XAxis,
+    /// Cells whose bins mostly have an S/N below this are grey (`--mask-snr X`).
+    pub mask_snr: Option<f64>,
 }
 
 impl View {
@@ -37,14 +42,18 @@ pub(super) const BLOCK_PROFILES: usize = 256;
 /// What the figure shows, on its grid.
 #[derive(Debug, Clone)]
 pub struct Quicklook {
-    /// The file and channel.
+    /// The title's line: instrument, date and times, place ([`super::title::title_line`]).
     pub title: String,
+    /// The file's name.
+    pub file: String,
     /// How the background was taken.
     pub background_note: String,
     /// Label of the horizontal axis, with its unit.
     pub x_label: String,
     /// A time axis with a known start: labelled by the UTC clock.
     pub x_clock: Option<Clock>,
+    /// A latitude axis' ticks: `(x, label)`, x in the grid's unit.
+    pub x_marks: Option<Vec<(f64, String)>>,
     /// The estimated attenuated backscatter, [`Grid::means`] layout.
     pub signal: Grid,
     /// The channel's name.
@@ -55,6 +64,9 @@ pub struct Quicklook {
     pub truth: Option<Grid>,
     /// Day (true) and night along x: `(x0, x1, day)`.
     pub day: Vec<(f64, f64, bool)>,
+    /// With `--mask-snr X`: X, and per cell the share (by weight) of the signal's bins
+    /// whose S/N ([`snr`]) is below X.
+    pub mask: Option<(f64, Grid)>,
 }
 
 /// One channel's calibration: counts per shot to attenuated backscatter.
@@ -86,11 +98,36 @@ pub enum Background<'a> {
     Value(f64),
 }
 
+/// The S/N mask of one channel's profiles: the threshold, the grid of shares below it,
+/// and the record's baseline per shot and bin (an analog channel's offset in codes
+/// times the native bins merged; 0 for a photon counter).
+pub struct Mask<'a> {
+    /// `--mask-snr X`.
+    pub threshold: f64,
+    /// Where the shares go.
+    pub grid: &'a mut Grid,
+    /// The baseline per shot and bin, in the record's units.
+    pub offset: f64,
+}
+
+/// The S/N of a bin estimated from its counts alone: `n` recorded over `shots` shots,
+/// `b` the background per shot (from the profile's signal-free bins, as the signal),
+/// `offset` the record's baseline per shot and `g` its codes per photoelectron (1 and 0
+/// for a photon counter): the signal `S = (n − M·b)/g` photoelectrons over the Poisson
+/// noise of all the photoelectrons recorded, `√((n − M·offset)/g)` (at least one).
+pub fn snr(n: f64, shots: f64, b: f64, offset: f64, g: f64) -> f64 {
+    let signal = (n - shots * b) / g;
+    let total = ((n - shots * offset) / g).max(1.0);
+    signal / total.sqrt()
+}
+
 /// Adds one profile of one channel to `grid`: `(N/M − B)/(C·w·E/E₀)` per bin, each bin
 /// over its rows (`bin_rows`), the profile over `columns`; `energy_factor` is the
 /// profile's `E/E₀` at the channel's laser line ([`crate::output::raw_file::read::energy_factors`]).
+/// With `mask`, each bin's 1 (S/N below the threshold) or 0 goes to the mask's grid.
 #[allow(clippy::too_many_arguments)]
 pub fn add_profile(
+    mask: Option<Mask>,
     grid: &mut Grid,
     columns: &[(usize, f64)],
     bin_rows: &[Vec<(usize, f64)>],
@@ -129,49 +166,16 @@ pub fn add_profile(
         }
     });
     grid.add_profile(columns, bin_rows, values);
-}
-
-/// The horizontal axis from the file's profile coordinate: its values scaled to the
-/// shown unit, the label, and for a time axis whose start is known (`start_unix_s`, the
-/// Unix time of `time` 0) the UTC clock that labels it, with the date of `first_s` (the
-/// first profile's time) in the label.
-pub fn x_axis(
-    along_track: bool,
-    span: f64,
-    start_unix_s: Option<f64>,
-    first_s: f64,
-) -> (f64, String, Option<Clock>) {
-    if along_track {
-        return (1e-3, "along-track distance (km)".into(), None);
-    }
-    if let Some(date) = start_unix_s.and_then(|t0| utc_date(t0 + first_s)) {
-        let clock = Clock {
-            origin_unix_s: start_unix_s.unwrap_or(0.0),
-            seconds_per_unit: 1.0,
-        };
-        return (1.0, format!("time (UTC, {date})"), Some(clock));
-    }
-    let (scale, label) = x_scale(span);
-    (scale, label, None)
-}
-
-/// The UTC date `YYYY-MM-DD` of Unix time `t_s` (None outside years 1970–9999).
-fn utc_date(t_s: f64) -> Option<String> {
-    if !(0.0..2.5e11).contains(&t_s) {
-        return None;
-    }
-    let t = std::time::UNIX_EPOCH.checked_add(std::time::Duration::from_secs_f64(t_s))?;
-    let text = humantime::format_rfc3339_seconds(t).to_string();
-    text.get(..10).map(str::to_string)
-}
-
-/// The unit of a time axis of `span` seconds without a known start: its scale and label.
-fn x_scale(span: f64) -> (f64, String) {
-    if span < 600.0 {
-        (1.0, "time since start (s)".into())
-    } else if span < 6.0 * 3600.0 {
-        (1.0 / 60.0, "time since start (min)".into())
-    } else {
-        (1.0 / 3600.0, "time since start (h)".into())
+    if let Some(m) = mask {
+        let g = cal.codes_per_photoelectron;
+        let below = counts.iter().zip(range_weight).map(|(&n, &w)| {
+            if w > 0.0 {
+                let s = snr(n as f64, shots, b, m.offset, g);
+                if s < m.threshold { 1.0 } else { 0.0 }
+            } else {
+                f64::NAN
+            }
+        });
+        m.grid.add_profile(columns, bin_rows, below);
     }
 }

@@ -21,27 +21,40 @@
 //! a grid of the figure's pixels ([`grid::Grid`]); memory is the grid's and one block's,
 //! not the file's (`docs/figures.md` has the measured numbers).
 
+pub mod axis;
 mod draw;
 mod figure;
 pub mod grid;
 mod product;
 mod raw;
+mod title;
 
 use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::safe_file::{Outputs, Stream};
+pub use axis::{XAxis, x_axis};
+pub use draw::{PANEL_HEIGHT, TITLE_HEIGHT};
 pub use figure::{
-    Background, COLUMNS, Calibration, Quicklook, ROWS, TOP_KM, View, add_profile, x_axis,
+    Background, COLUMNS, Calibration, Mask, Quicklook, ROWS, TOP_KM, View, add_profile, snr,
 };
+pub use title::{Source, title_line};
 
 /// `lidarsim quicklook FILE --png OUT.png`: reads `file` (raw, merged or onboard
-/// product) and writes the figure, over `view`'s altitudes.
-pub fn run(file: &Path, png: &Path, channel: Option<&str>, truth: bool, view: View) -> Result<()> {
+/// product) and writes the figure of `channels` (none: the first channel), stacked
+/// top to bottom on one x axis, over `view`'s altitudes and x axis.
+pub fn run(file: &Path, png: &Path, channels: &[String], truth: bool, view: View) -> Result<()> {
     let mut outputs = Outputs::new([file]);
     let id = outputs.add("--png", png, Stream::Binary)?;
-    let q = read_view(file, channel, truth, view)?;
-    let bytes = draw::png_bytes(&q).map_err(|r| Error::output(outputs.shown_path(id), r))?;
+    let qs: Vec<Quicklook> = if channels.is_empty() {
+        vec![read_view(file, None, truth, view)?]
+    } else {
+        channels
+            .iter()
+            .map(|c| read_view(file, Some(c), truth, view))
+            .collect::<Result<_>>()?
+    };
+    let bytes = draw::png_bytes(&qs).map_err(|r| Error::output(outputs.shown_path(id), r))?;
     outputs.write(id, |w| w.write_all(&bytes))?;
     outputs.commit()
 }

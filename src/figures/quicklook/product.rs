@@ -8,11 +8,13 @@ use std::path::Path;
 use hdf5::Dataset;
 use ndarray::{Axis, Ix1, Ix2, Ix3, s};
 
+use super::axis::{XAxis, latitude_marks, x_axis};
 use super::figure::{
-    BLOCK_PROFILES, Background, COLUMNS, Calibration, Quicklook, ROWS, View, add_profile, x_axis,
+    BLOCK_PROFILES, Background, COLUMNS, Calibration, Mask, Quicklook, ROWS, View, add_profile,
 };
 use super::grid::Grid;
-use super::raw::{Vars, day_night, extend_spans, pair, start_unix_s};
+use super::raw::{Vars, day_night, extend_spans, file_name, pair, start_unix_s};
+use super::title::{Source, span_edges, title_line};
 use crate::error::Result;
 use crate::figures::plot::panel::{edges, widen};
 use crate::output::raw_file::read::read_text;
@@ -95,11 +97,11 @@ pub(super) fn read(
         .and_then(|n| f.group(&n).ok())
         .ok_or_else(|| fail("an onboard product with no region group".into()))?;
     let along_track = first.dataset("along_track_distance").is_ok();
-    let xname = if along_track {
-        "along_track_distance"
-    } else {
-        "time"
-    };
+    let kind = view.x_axis.resolve(along_track);
+    if let Some(why) = kind.refusal(along_track, true) {
+        return Err(fail(why));
+    }
+    let xname = kind.variable().unwrap_or("time");
     let regions = regions(path, f, xname)?;
     let all: Vec<&String> = regions.iter().flat_map(|r| &r.channels).collect();
     let name = match channel {
@@ -123,7 +125,29 @@ pub(super) fn read(
         .iter()
         .map(|r| r.x_ends.0.min(r.x_ends.1))
         .fold(f64::INFINITY, f64::min);
-    let (x_scale, x_label, x_clock) = x_axis(along_track, span, t0, x_first);
+    let (x_scale, x_label, x_clock) = x_axis(kind, span, t0, x_first);
+    let title = product_title(path, f, &regions[0].group, t0, along_track)?;
+    let x_marks = match kind {
+        XAxis::Latitude => {
+            // the first region's track places the ticks
+            let v = Vars {
+                path,
+                f: &regions[0].group,
+            };
+            let x: Vec<f64> = v
+                .f64s("along_track_distance")?
+                .iter()
+                .map(|x| x * x_scale)
+                .collect();
+            Some(latitude_marks(
+                &x,
+                &v.f64s("latitude")?,
+                &v.f64s("longitude")?,
+                6.0,
+            ))
+        }
+        _ => None,
+    };
     let (mut xlo, mut xhi, mut zlo, mut zhi) = (
         f64::INFINITY,
         f64::NEG_INFINITY,
@@ -149,6 +173,7 @@ pub(super) fn read(
     let (mut par, mut perp) = (empty.clone(), empty.clone());
     let mut has_pair = false;
     let mut truth_grid = truth.then(|| empty.clone());
+    let mut mask = view.mask_snr.map(|x| (x, empty.clone()));
     let mut day = Vec::new();
     for r in &regions {
         let v = Vars { path, f: &r.group };
@@ -216,14 +241,23 @@ pub(super) fn read(
                 .iter()
                 .map(|&x| empty.columns((x - 0.5 * dx) * x_scale, (x + 0.5 * dx) * x_scale))
                 .collect();
-            for ((k, grid), cal) in jobs.iter_mut().zip(&cals) {
+            for (j, ((k, grid), cal)) in jobs.iter_mut().zip(&cals).enumerate() {
                 let bkg = noise_block(&v, *k, p0, p1)?;
                 let block = counts
                     .read_slice::<u64, _, Ix3>(s![p0..p1, *k..*k + 1, ..])
                     .map_err(|e| v.unreadable("counts", e))?;
                 let block = block.index_axis(Axis(1), 0);
                 for (i, row) in block.outer_iter().enumerate() {
+                    let m = match (&mut mask, j, c) {
+                        (Some((threshold, grid)), 0, Some(_)) => Some(Mask {
+                            threshold: *threshold,
+                            grid,
+                            offset: cal.offset_codes * r.merged,
+                        }),
+                        _ => None,
+                    };
                     add_profile(
+                        m,
                         grid,
                         &columns[i],
                         &bin_rows,
@@ -253,22 +287,53 @@ pub(super) fn read(
         }
     }
     Ok(Quicklook {
-        title: path.file_name().map_or_else(
-            || path.display().to_string(),
-            |n| n.to_string_lossy().into_owned(),
-        ),
+        title,
+        file: file_name(path),
         background_note: format!(
             "{} regions; background: the product's expected background and dark counts",
             regions.len()
         ),
         x_label,
         x_clock,
+        x_marks,
         signal,
         channel: name,
         pair: has_pair.then(|| (par, perp, "perpendicular / parallel".to_string())),
         truth: truth_grid,
         day,
+        mask,
     })
+}
+
+/// The title of a product's figure: the native run's instrument, the UTC times of the
+/// first region's first and last profile, its station or its track.
+fn product_title(
+    path: &Path,
+    root: &hdf5::File,
+    g: &hdf5::Group,
+    t0: Option<f64>,
+    orbit: bool,
+) -> Result<String> {
+    let v = Vars { path, f: g };
+    let time = v.f64s("time")?;
+    let (first, last) = (
+        time.first().copied().unwrap_or(0.0),
+        time.last().copied().unwrap_or(0.0),
+    );
+    let track = if orbit {
+        let (lat, lon) = (v.f64s("latitude")?, v.f64s("longitude")?);
+        lat.first()
+            .zip(lon.first())
+            .zip(lat.last().zip(lon.last()))
+            .map(|((a, b), (c, d))| ((*a, *b), (*c, *d)))
+    } else {
+        None
+    };
+    Ok(title_line(
+        &Source::of(root),
+        t0.map(|t| span_edges(t + first, t + last, time.len())),
+        track,
+    ))
 }
 
 /// Channel `c`'s calibration in a product's region: its lidar constant and how its counts

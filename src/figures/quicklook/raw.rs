@@ -5,10 +5,12 @@ use std::path::Path;
 use hdf5::Dataset;
 use ndarray::{Axis, Ix1, Ix3, s};
 
+use super::axis::{XAxis, latitude_marks, x_axis};
 use super::figure::{
-    BLOCK_PROFILES, Background, COLUMNS, Calibration, Quicklook, ROWS, View, add_profile, x_axis,
+    BLOCK_PROFILES, Background, COLUMNS, Calibration, Mask, Quicklook, ROWS, View, add_profile,
 };
 use super::grid::Grid;
+use super::title::{Source, span_edges, title_line};
 use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
 use crate::figures::plot::panel::{edges, widen};
@@ -44,6 +46,15 @@ impl Vars<'_> {
         self.ds(name)?
             .read_raw::<f64>()
             .map_err(|e| self.unreadable(name, e))
+    }
+
+    /// Where profiles `a..b` lie along x: the values of `kind`'s variable, or their
+    /// indices.
+    pub fn x_of(&self, kind: XAxis, a: usize, b: usize) -> Result<Vec<f64>> {
+        match kind.variable() {
+            Some(name) => self.f64_range(name, a, b),
+            None => Ok((a..b).map(|p| p as f64).collect()),
+        }
     }
 
     /// Values `a..b` of a 1-D variable.
@@ -224,18 +235,33 @@ pub(super) fn read(
     let pair = pair(&names, &polarization, &wavelength, c);
 
     // the axes: profiles along x, bins along z
-    let xname = if header.along_track {
-        "along_track_distance"
-    } else {
-        "time"
-    };
+    let kind = view.x_axis.resolve(header.along_track);
+    if let Some(why) = kind.refusal(header.along_track, false) {
+        return Err(v.fail(why));
+    }
     let (x_first, x_last) = (
-        v.f64_range(xname, 0, 1)?[0],
-        v.f64_range(xname, n_profiles - 1, n_profiles)?[0],
+        v.x_of(kind, 0, 1)?[0],
+        v.x_of(kind, n_profiles - 1, n_profiles)?[0],
     );
     let t0 = start_unix_s(f, f.dataset("time").ok().as_ref());
-    let (x_scale, x_label, x_clock) =
-        x_axis(header.along_track, (x_last - x_first).abs(), t0, x_first);
+    let (x_scale, x_label, x_clock) = x_axis(kind, (x_last - x_first).abs(), t0, x_first);
+    let title = raw_title(&v, t0, n_profiles, header.along_track)?;
+    let x_marks = match kind {
+        XAxis::Latitude => {
+            let x: Vec<f64> = v
+                .f64s("along_track_distance")?
+                .iter()
+                .map(|x| x * x_scale)
+                .collect();
+            Some(latitude_marks(
+                &x,
+                &v.f64s("latitude")?,
+                &v.f64s("longitude")?,
+                6.0,
+            ))
+        }
+        _ => None,
+    };
     let dx = if n_profiles > 1 {
         (x_last - x_first) / (n_profiles - 1) as f64
     } else {
@@ -281,6 +307,7 @@ pub(super) fn read(
         .map(|&k| background_bins(&v, &per_profile, k, n_profiles, n_bins))
         .collect::<Result<_>>()?;
     let mut grids = vec![empty.clone(); channels.len()];
+    let mut mask = view.mask_snr.map(|x| (x, empty.clone()));
     let mut truth_grid = truth.then(|| empty.clone());
     let atb = truth.then_some(&per_profile);
     let counts = v.ds("counts")?;
@@ -289,16 +316,17 @@ pub(super) fn read(
     let mut day = Vec::new();
     for p0 in (0..n_profiles).step_by(BLOCK_PROFILES) {
         let p1 = (p0 + BLOCK_PROFILES).min(n_profiles);
-        let x: Vec<f64> = v.f64_range(xname, p0, p1)?;
+        let x: Vec<f64> = v.x_of(kind, p0, p1)?;
         let shots: Vec<u64> = counts_shots(&v, p0, p1)?;
         let energy = energy_factors(path, f, &header, p0..p1, &nominal)?;
         let columns: Vec<Vec<(usize, f64)>> = x
             .iter()
             .map(|&x| empty.columns((x - 0.5 * dx) * x_scale, (x + 0.5 * dx) * x_scale))
             .collect();
-        for (g, (&k, (cal, bins))) in grids
+        for (j, (g, (&k, (cal, bins)))) in grids
             .iter_mut()
             .zip(channels.iter().zip(cals.iter().zip(&bkg)))
+            .enumerate()
         {
             let block = counts
                 .read_slice::<u64, _, Ix3>(s![p0..p1, k..k + 1, ..])
@@ -306,7 +334,16 @@ pub(super) fn read(
             // (a selection that keeps the channel axis reads 6 times faster in HDF5)
             let block = block.index_axis(Axis(1), 0);
             for (i, row) in block.outer_iter().enumerate() {
+                let m = match (&mut mask, j) {
+                    (Some((threshold, grid)), 0) => Some(Mask {
+                        threshold: *threshold,
+                        grid,
+                        offset: cal.offset_codes,
+                    }),
+                    _ => None,
+                };
                 add_profile(
+                    m,
                     g,
                     &columns[i],
                     &bin_rows,
@@ -348,19 +385,52 @@ pub(super) fn read(
         _ => None,
     };
     Ok(Quicklook {
-        title: path.file_name().map_or_else(
-            || path.display().to_string(),
-            |n| n.to_string_lossy().into_owned(),
-        ),
+        title,
+        file: file_name(path),
         background_note,
         x_label,
         x_clock,
+        x_marks,
         signal,
         channel: names[c].clone(),
         pair,
         truth: truth_grid,
         day,
+        mask,
     })
+}
+
+/// The file's name, as the figure shows it.
+pub(super) fn file_name(path: &Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
+/// The title of a raw file's figure: its instrument, the UTC times of its first and last
+/// profile, its station or its track.
+fn raw_title(v: &Vars, t0: Option<f64>, n: usize, orbit: bool) -> Result<String> {
+    let (first, last) = (
+        v.f64_range("time", 0, 1)?[0],
+        v.f64_range("time", n - 1, n)?[0],
+    );
+    let point = |p: usize| -> Result<(f64, f64)> {
+        Ok((
+            v.f64_range("latitude", p, p + 1)?[0],
+            v.f64_range("longitude", p, p + 1)?[0],
+        ))
+    };
+    let track = if orbit {
+        Some((point(0)?, point(n - 1)?))
+    } else {
+        None
+    };
+    Ok(title_line(
+        &Source::of(v.f),
+        t0.map(|t| span_edges(t + first, t + last, n)),
+        track,
+    ))
 }
 
 /// `n_shots` of profiles `p0..p1`.
