@@ -12,9 +12,9 @@ pub trait CountSink {
     /// `0..width` given the bin, so that `(offset + V)/width`, for any `V` uniform on
     /// `[0, 1)` and independent, is uniform on `[0, 1)` and independent of the bin and of
     /// every other count: with the rate constant within a bin, the photon's time within
-    /// it as a fraction of the bin, drawn at no cost (issue 41; `AliasTable::place`,
-    /// [`ShotSampler::placement`](super::ShotSampler::placement) gives `(offset, width)`
-    /// again from `draw`). A sink that needs no times takes it as `add(bin, 1)`.
+    /// it as a fraction of the bin, drawn at no cost (issue 41; `AliasTable::place`;
+    /// `ShotSampler::placement` gives `(offset, width)` again from `draw`). A sink that
+    /// needs no times takes it as `add(bin, 1)`.
     #[inline(always)]
     fn add_placed(&mut self, bin: usize, draw: u64, offset: u64, width: u64) {
         let _ = (draw, offset, width);
