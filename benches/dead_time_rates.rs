@@ -77,6 +77,9 @@ fn main() {
             // ~2e6 photons or 2e5 shot-bins per run, whichever is more
             let shots =
                 ((2e6 / (lambda * BINS as f64)).max(2e5 / BINS as f64) as u64).clamp(200, 65_536);
+            if std::env::var("STRATEGY").is_ok() {
+                eprintln!("{lambda}: {}", sampler.strategy());
+            }
             let recorded = DeadTimedShots::new(sampler.clone(), dead);
             let mut acc = vec![0u64; BINS];
             // warm up (tables built on first use)

@@ -135,6 +135,25 @@ impl AliasTable {
         c.bins[usize::from((x & self.mask) >= c.thr)] as usize
     }
 
+    /// The bin for the uniform `u64` `x` (as [`bin_for`](Self::bin_for)) and where `x`
+    /// fell among the draws of its column half: `(bin, offset, width)`, `offset < width`.
+    /// Given the half (and so given the bin), `offset` is uniform on `0..width`, so
+    /// `(offset + V)/width` is uniform on `[0, 1)` for a `V` uniform on `[0, 1)`,
+    /// independent of the bin and of every other draw: the photon's place within its
+    /// bin, for free (issue 41). A half of width `w` holds `offset` to `1/w`.
+    #[inline(always)]
+    pub(crate) fn place(&self, x: u64) -> (usize, u64, u64) {
+        let c = &self.cols[(x >> self.shift) as usize];
+        let lo = x & self.mask;
+        let side = lo >= c.thr;
+        let (offset, width) = if side {
+            (lo - c.thr, self.mask - c.thr + 1)
+        } else {
+            (lo, c.thr)
+        };
+        (c.bins[usize::from(side)] as usize, offset, width)
+    }
+
     /// Realised probability of each column half, for tests: `(bin, P)` pairs, a bin
     /// possibly more than once (ids need not be small).
     #[cfg(test)]

@@ -517,7 +517,8 @@ impl ShotSampler {
 
     /// Draw one shot and report its counts to `sink` as `(bin, count ≥ 1)`
     /// events: dense-table bins, then dense-PD bins, each once and in bin
-    /// order, then the sparse counts one at a time in random order (a sparse
+    /// order, then the sparse counts one at a time in random order, each by
+    /// [`CountSink::add_placed`] with its place within its bin (a sparse
     /// bin may be reported several times in one shot). Per-shot counts are
     /// `u32`: λ must stay well below `4e9` per bin and shot.
     /// The random stream consumed depends only on the sampler and the rng.
@@ -560,10 +561,17 @@ impl ShotSampler {
                 TotalSampler::Pd(p) => p.sample(rng) as u64,
             };
             for _ in 0..n {
-                let bin = sp.alias.bin_for(rng.next_u64());
-                sink.add(bin, 1);
+                let x = rng.next_u64();
+                let (bin, offset, width) = sp.alias.place(x);
+                sink.add_placed(bin, x, offset, width);
             }
         }
+    }
+
+    /// `(bin, offset, width)` of a sparse count placed by `draw`, as
+    /// [`CountSink::add_placed`] received it (`None` without a sparse set).
+    pub(crate) fn placement(&self, draw: u64) -> Option<(usize, u64, u64)> {
+        self.sparse.as_ref().map(|sp| sp.alias.place(draw))
     }
 
     /// Add one shot's counts into `acc` (`acc.len() == bins()`).

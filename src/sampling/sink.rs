@@ -7,6 +7,20 @@
 pub trait CountSink {
     fn add(&mut self, bin: usize, count: u32);
 
+    /// One count in `bin` from the sparse path's placement by the uniform `draw`, with
+    /// where the draw fell among the draws of that bin: `offset < width`, uniform on
+    /// `0..width` given the bin, so that `(offset + V)/width`, for any `V` uniform on
+    /// `[0, 1)` and independent, is uniform on `[0, 1)` and independent of the bin and of
+    /// every other count: with the rate constant within a bin, the photon's time within
+    /// it as a fraction of the bin, drawn at no cost (issue 41; `AliasTable::place`;
+    /// `ShotSampler::placement` gives `(offset, width)` again from `draw`). A sink that
+    /// needs no times takes it as `add(bin, 1)`.
+    #[inline(always)]
+    fn add_placed(&mut self, bin: usize, draw: u64, offset: u64, width: u64) {
+        let _ = (draw, offset, width);
+        self.add(bin, 1);
+    }
+
     /// A count that may be 0 (reported only when it is not, unless the sink can take a
     /// zero for free: an accumulator adds it without a branch that the draws of a bin
     /// with `P(K = 0)` near ½ would mispredict).

@@ -1,55 +1,65 @@
 //! The photon path of the dead time at the ideal detector's cost ([`ClusterShots`]): the
-//! shot's photons go straight into the record, as without dead time, and only the
-//! *clusters* (runs of adjacent bins hit in the same shot, or a bin hit more than once)
-//! are corrected afterwards, in time order, the dead time carried from bin to bin.
+//! shot's photons go straight into the record, as without dead time, each with its time
+//! within its bin handed over by the shot path's own placement draw; only the photons
+//! that can meet another within τ are looked at again, in time order, the dead time
+//! carried from bin to bin.
 //!
 //! # Method
 //!
 //! The photons of a shot are the shot path's ([`ShotSampler::sample_shot`], the same
-//! draws), reported to a [`CountSink`] that adds each to the record at once and stamps its
-//! bin with the shot's number. A photon can lose (or cost) a count only within τ of
-//! another; with Δt ≥ 2τ that needs a second photon in its bin or in a neighbouring one.
-//! The sink flags a bin when its photon lands next to (or in) a bin already hit in the
-//! shot; after the shot each flagged cluster is recorded exactly, in time order, from its
-//! first bin (entered live: the bin before it is empty and at least τ long), and the record
-//! corrected by the difference. Per bin of a cluster, entered dead for `r ∈ [0, τ)`:
+//! draws), reported to a [`CountSink`] that adds each to the record at once. A sparse
+//! photon arrives with `(offset, width)` ([`CountSink::add_placed`]): its time within its
+//! bin is `t = Δt·(offset + V)/width`, `V` uniform on `[0, 1)`, drawn only if needed (the
+//! offset is the alias draw's leftover bits, uniform given the bin: issue 41's first
+//! fact made free). A dense-path count has no offset: `width = 1`, its time all `V`.
 //!
-//! * **one photon**: its time `t = Δt·U` (one `u64`), drawn only when it matters (`r > 0`
-//!   or the next bin hit): lost if `t < r`, else recorded and leaving `max(0, t + τ − Δt)`;
-//!   both models alike (a paralyzable detector's lost photon at `t < r < τ` leaves nothing
-//!   past `Δt ≥ 2τ`);
-//! * **two photons, alone** (no residual in, none needed out): one `u64` against
-//!   `P(|U₁ − U₂| < τ/Δt) = 1 − (1 − τ/Δt)²`: one count lost, else none; both models;
-//! * **more photons**, non-paralyzable: the counting tables given the photons
-//!   ([`counting::Family::record_bin`], exact, residual in and out); paralyzable (or more
-//!   than [`counting::MAX_PHOTONS`]): the bin's arrival times, sorted, swept with the
-//!   detector live from `r` on, every photon restarting the dead time.
+//! With Δt ≥ 2τ, a photon alone in its bin whose whole cell `[offset, offset + 1)/width`
+//! lies in `[τ/Δt, 1 − τ/Δt]` has no other photon within τ, in either model: it is
+//! recorded and leaves the detector live at its bin's end. Per photon the sink does one
+//! read and write of its own bin's state (this shot's stamp, whether the bin is
+//! flagged, its latest photon), appends `(offset, width)` to the shot's log (each bin's
+//! photons chained), and flags the bin when the photon is its second or lies within τ of
+//! an edge (a 64×64-bit multiply and a compare: `min(offset, width − 1 − offset) <
+//! ⌊width·p⌋ + 1`, `p ≥ τ/Δt`), branch-free. After the shot each run of adjacent flagged
+//! bins is recorded exactly: entered live (the bin before it is empty or holds one photon
+//! at least τ before its end), its photons' times taken from the log (`V` drawn from the
+//! arrival stream where `width < 2^53`, else the cell's middle, finer than an `f64`
+//! time), each bin's sorted and swept in time order, the dead time carried into the next,
+//! every photon restarting it (paralyzable) or only a recorded one (non-paralyzable);
+//! it leaves nothing the bin after it feels (empty, or one photon at least τ after its
+//! start). The record is corrected by the counts lost.
 //!
 //! Exact: each photon's time is uniform in its bin and independent of the others' (the
-//! rate constant within a bin), drawn lazily, and a time is left undrawn only where no
-//! outcome depends on it. The photons drawn, shot for shot, are the shot path's.
+//! rate constant within a bin); where a decision used only the offset, the time given
+//! it is the offset's cell with `V` uniform in it, and `V` is drawn where a decision needs
+//! it. The photons drawn, shot for shot, are the shot path's; a time is never drawn
+//! twice.
 //!
 //! # Cost
 //!
-//! Per photon, next to the ideal detector's own draw: a read of its bin's and neighbours'
-//! stamps and a write; per cluster bin one `u64` (or the bin's tables or sweep). Measured
-//! by `benches/dead_time_rates.rs` (`validation/reports/dead_time_cost.md`).
+//! Per photon, next to the ideal detector's own draw: the state read and write, the log
+//! entry and the edge test; per flagged photon (a bin hit twice, or within τ of an edge:
+//! probability `2τ/Δt`, 0.35 % at τ = 3.5 ns, Δt = 2 µs) its time and its bin's sort and
+//! sweep. Measured by `benches/dead_time_rates.rs` (`validation/reports/dead_time_cost.md`).
 //!
 //! [`ShotSampler::sample_shot`]: crate::sampling::ShotSampler::sample_shot
 
 use rand::Rng;
 
 use super::model::{DeadTime, DeadTimeModel};
-use super::record::{ARRIVAL_STREAM, sorted_uniform_times};
-use crate::detector::counting::{self, Family};
+use super::record::ARRIVAL_STREAM;
 use crate::sampling::{CountSink, SHOT_BLOCK, ShotSampler, add_block_sums, stream_rng};
 
-/// The shot number's place in a bin's state (the count this shot below it).
+/// The shot number's place in a bin's state.
 const STAMP_SHIFT: u32 = 32;
+/// A bin flagged this shot.
+const FLAG: u64 = 1 << 31;
+/// The bin's first photon came without a draw (dense path): its time is all `V`.
+const NO_DRAW: u64 = 1 << 30;
 /// The state's count bits.
-const COUNT_MASK: u64 = (1 << 31) - 1;
-/// A bin whose cluster is recorded.
-const DONE: u64 = 1 << 31;
+const COUNT_MASK: u64 = NO_DRAW - 1;
+/// Widths from here on hold the time to an `f64`'s precision without a `V`.
+const FINE_WIDTH: u64 = 1 << 53;
 
 const TWO_POW_64: f64 = 18_446_744_073_709_551_616.0;
 
@@ -61,44 +71,66 @@ pub(super) struct ClusterShots<'a> {
     pub(super) dead: &'a DeadTime,
 }
 
+/// A bin's state: `[stamp | FLAG | NO_DRAW | count, draw of its first photon]`.
+type State = [u64; 2];
+
 /// Per block of shots: the bins' states (padded by one bin each side), the flagged bins,
-/// the counting tables, a buffer of arrival times.
+/// a buffer of times.
 struct Block {
-    state: Vec<u64>,
+    state: Vec<State>,
     flagged: Vec<u32>,
-    /// The hit bins, where more were flagged than `flagged` holds.
+    /// The flagged bins, where more were flagged than `flagged` holds.
     all: Vec<u32>,
-    family: Option<std::sync::Arc<Family>>,
     times: Vec<f64>,
-    /// `⌊P(|U₁ − U₂| < τ/Δt)·2^64⌋`.
-    pair_lost: u64,
+    /// `⌈(τ/Δt)·2^64⌉`: a photon's cell within `⌊width·edge/2^64⌋ + 1` of an edge is
+    /// flagged.
+    edge: u64,
 }
 
-/// The sink of one shot's photons: into the record at once, their bins stamped, the bins
-/// flagged without a branch (`flagged[n]` written, `n` advanced by the flag; past the
-/// buffer's end every hit bin is looked at instead).
-struct StampSink<'b> {
+/// The sink of one shot's photons: into the record at once, their bins' states updated
+/// and flagged without a branch (`flagged[n]` written, `n` advanced by the flag; past the
+/// buffer's end every flagged bin is looked up instead).
+struct PlacedSink<'b> {
     acc: &'b mut [u64],
-    state: &'b mut [u64],
+    state: &'b mut [State],
     stamp: u64,
+    edge: u64,
     flagged: &'b mut [u32],
     n: usize,
 }
 
-impl CountSink for StampSink<'_> {
+impl CountSink for PlacedSink<'_> {
+    /// Dense-path counts: photons without a draw, their bin flagged (their times drawn).
     #[inline(always)]
     fn add(&mut self, bin: usize, count: u32) {
         self.acc[bin] += u64::from(count);
-        let w = &mut self.state[bin..bin + 3];
-        // stamped this shot: the same shot number in the top 32 bits
-        let hit = |s: u64| (s ^ self.stamp) >> STAMP_SHIFT == 0;
-        let here = w[1];
-        let again = hit(here);
-        let near = hit(w[0]) | hit(w[2]);
-        w[1] = if again { here } else { self.stamp } + u64::from(count);
+        let st = &mut self.state[bin + 1];
+        let again = (st[0] ^ self.stamp) >> STAMP_SHIFT == 0;
+        st[0] = if again {
+            st[0] + u64::from(count)
+        } else {
+            self.stamp | NO_DRAW | u64::from(count)
+        } | FLAG;
         let last = self.flagged.len() - 1;
         self.flagged[self.n.min(last)] = bin as u32;
-        self.n += usize::from(again | near | (count > 1));
+        self.n += 1;
+    }
+
+    #[inline(always)]
+    fn add_placed(&mut self, bin: usize, draw: u64, offset: u64, width: u64) {
+        self.acc[bin] += 1;
+        let st = &mut self.state[bin + 1];
+        let again = (st[0] ^ self.stamp) >> STAMP_SHIFT == 0;
+        let e = ((u128::from(width) * u128::from(self.edge)) >> 64) as u64 + 1;
+        let near = offset.min(width - 1 - offset) < e;
+        let flag = u64::from(again | near) << 31;
+        // branch-free (a second photon in a bin is not rare enough to predict)
+        let keep = u64::from(again).wrapping_neg();
+        st[0] = (((st[0] & keep) | (self.stamp & !keep)) + 1) | flag;
+        st[1] = (st[1] & keep) | (draw & !keep);
+        let last = self.flagged.len() - 1;
+        self.flagged[self.n.min(last)] = bin as u32;
+        self.n += (flag >> 31) as usize;
     }
 }
 
@@ -109,18 +141,14 @@ impl ClusterShots<'_> {
     }
 
     fn block(&self) -> Block {
-        let (tau, dt) = (self.dead.tau_s, self.dead.bin_width_s);
-        let p = tau / dt;
-        // 1 − (1 − p)², without cancellation
-        let lost = p * (2.0 - p);
+        let p = self.dead.tau_s / self.dead.bin_width_s;
         Block {
-            state: vec![0; self.photons.bins() + 2],
+            state: vec![[0; 2]; self.photons.bins() + 2],
             flagged: vec![0; self.photons.bins().max(64)],
             all: Vec::new(),
-            family: (self.dead.model == DeadTimeModel::Nonparalyzable)
-                .then(|| counting::family(tau, dt)),
             times: Vec::new(),
-            pair_lost: (lost * TWO_POW_64) as u64,
+            // p ≤ ½; rounded up, so that no cell within τ of an edge goes unflagged
+            edge: ((p * TWO_POW_64) as u64).saturating_add(1),
         }
     }
 
@@ -157,7 +185,7 @@ impl ClusterShots<'_> {
         for shot in 0..shots {
             acc.iter_mut().for_each(|a| *a = 0);
             if shot > 0 && shot % (1 << 31) == 0 {
-                block.state.iter_mut().for_each(|s| *s = 0);
+                block.state.iter_mut().for_each(|s| *s = [0; 2]);
             }
             self.shot(
                 &mut rng,
@@ -173,7 +201,7 @@ impl ClusterShots<'_> {
     /// One shot (number `shot` < 2³¹ of its block): the photons into `acc`, then the
     /// flagged clusters corrected.
     #[inline(always)]
-    fn shot<R: Rng + ?Sized, A: Rng + ?Sized>(
+    fn shot<R: Rng + Clone, A: Rng + ?Sized>(
         &self,
         rng: &mut R,
         arrivals: &mut A,
@@ -182,15 +210,15 @@ impl ClusterShots<'_> {
         acc: &mut [u64],
     ) {
         let stamp = (shot + 1) << STAMP_SHIFT;
-        let mut sink = StampSink {
+        let n = draw_photons(
+            self.photons,
+            rng,
             acc,
-            state: &mut block.state,
+            &mut block.state,
+            &mut block.flagged,
             stamp,
-            flagged: &mut block.flagged,
-            n: 0,
-        };
-        self.photons.sample_shot(rng, &mut sink);
-        let n = sink.n;
+            block.edge,
+        );
         if n > 0 {
             self.correct(arrivals, stamp, n, block, acc);
         }
@@ -211,110 +239,96 @@ impl ClusterShots<'_> {
             state,
             flagged,
             all,
-            family,
             times,
-            pair_lost,
+            ..
         } = block;
-        let hit = |s: u64| (s ^ stamp) >> STAMP_SHIFT == 0;
+        let flagged_now = |s: &State| (s[0] ^ stamp) >> STAMP_SHIFT == 0 && s[0] & FLAG != 0;
         let starts: &[u32] = if n < flagged.len() {
             &flagged[..n]
         } else {
-            // more flagged than the buffer holds: every hit bin
+            // more flagged than the buffer holds: every flagged bin
             all.clear();
-            all.extend((0..state.len() as u32 - 2).filter(|&b| hit(state[b as usize + 1])));
+            all.extend(
+                (0..state.len() as u32 - 2).filter(|&b| flagged_now(&state[b as usize + 1])),
+            );
             all
         };
+        let tau = self.dead.tau_s / self.dead.bin_width_s;
+        let paralyzable = self.dead.model == DeadTimeModel::Paralyzable;
         for &b in starts {
             let mut j = b as usize + 1;
-            if state[j] & DONE != 0 {
-                continue;
+            if !flagged_now(&state[j]) {
+                continue; // its cluster is recorded
             }
-            while hit(state[j - 1]) {
+            while flagged_now(&state[j - 1]) {
                 j -= 1;
             }
-            self.cluster(
-                arrivals,
-                j,
-                state,
-                family.as_deref(),
-                times,
-                *pair_lost,
-                acc,
-            );
-        }
-    }
-
-    /// Records the cluster whose first bin has state index `j` (bin `j − 1`) exactly,
-    /// entered live, correcting `acc`; marks its bins done.
-    #[allow(clippy::too_many_arguments)]
-    fn cluster<A: Rng + ?Sized>(
-        &self,
-        rng: &mut A,
-        mut j: usize,
-        state: &mut [u64],
-        family: Option<&Family>,
-        times: &mut Vec<f64>,
-        pair_lost: u64,
-        acc: &mut [u64],
-    ) {
-        let (tau, dt) = (self.dead.tau_s, self.dead.bin_width_s);
-        let stamp = state[j] >> STAMP_SHIFT;
-        let mut r = 0.0f64;
-        loop {
-            let c = (state[j] & COUNT_MASK) as u32;
-            state[j] |= DONE;
-            let next = state[j + 1] >> STAMP_SHIFT == stamp;
-            let (k, left) = if c == 1 {
-                if r == 0.0 && !next {
-                    (1, 0.0)
-                } else {
-                    let t = dt * unit_f64(rng.next_u64());
-                    if t < r {
-                        (0, 0.0)
+            // the cluster from bin j − 1 on, entered live; times in bins from its start
+            let mut live_at = 0.0f64;
+            while flagged_now(&state[j]) {
+                let c = state[j][0] & COUNT_MASK;
+                times.clear();
+                // the first photon at its draw's place (its cell consulted), the others
+                // anywhere (their draws decided nothing: the bin was flagged by them)
+                let first = (state[j][0] & NO_DRAW == 0)
+                    .then(|| self.photons.placement(state[j][1]))
+                    .flatten();
+                if let Some((_, offset, width)) = first {
+                    let v = if width >= FINE_WIDTH {
+                        0.5
                     } else {
-                        (1, (t + tau - dt).max(0.0))
+                        unit_f64(arrivals.next_u64())
+                    };
+                    times.push((offset as f64 + v) / width as f64);
+                }
+                while (times.len() as u64) < c {
+                    times.push(unit_f64(arrivals.next_u64()));
+                }
+                times.sort_unstable_by(f64::total_cmp);
+                let mut k = 0u64;
+                for &t in times.iter() {
+                    let live = t >= live_at;
+                    k += u64::from(live);
+                    if live | paralyzable {
+                        live_at = t + tau;
                     }
                 }
-            } else if c == 2 && r == 0.0 && !next {
-                (2 - u32::from(rng.next_u64() < pair_lost), 0.0)
-            } else {
-                match family {
-                    Some(f) if c <= counting::MAX_PHOTONS => f.record_bin(rng, c, r, next),
-                    _ => self.sweep_bin(rng, c, r, times),
-                }
-            };
-            let i = j - 1;
-            acc[i] = acc[i] + u64::from(k) - u64::from(c);
-            if !next {
-                return;
+                acc[j - 1] -= c - k;
+                state[j][0] &= !FLAG;
+                live_at = (live_at - 1.0).max(0.0);
+                j += 1;
             }
-            r = left;
-            j += 1;
         }
     }
+}
 
-    /// One bin of `c` photons by their arrival times, entered dead for `r`: the recorded
-    /// count and the dead time left at its end (paralyzable: every photon restarts it).
-    fn sweep_bin<A: Rng + ?Sized>(
-        &self,
-        rng: &mut A,
-        c: u32,
-        r: f64,
-        times: &mut Vec<f64>,
-    ) -> (u32, f64) {
-        let (tau, dt) = (self.dead.tau_s, self.dead.bin_width_s);
-        let paralyzable = self.dead.model == DeadTimeModel::Paralyzable;
-        sorted_uniform_times(rng, c, 0.0, dt, times);
-        let (mut k, mut live_at) = (0u32, r);
-        for &t in times.iter() {
-            let live = t >= live_at;
-            k += u32::from(live);
-            if live | paralyzable {
-                live_at = t + tau;
-            }
-        }
-        (k, (live_at - dt).max(0.0))
-    }
+/// The shot's photons into the record, the bins' states and the flagged list (returns
+/// how many were flagged); the generator a local copy and the buffers arguments of their
+/// own: behind references in a struct, the generator's state went through memory on
+/// every photon (the sink's stores might alias it), which made the photons' loop 2–3×
+/// the ideal detector's (measured, perf).
+#[inline(never)]
+fn draw_photons<R: Rng + Clone>(
+    photons: &ShotSampler,
+    rng: &mut R,
+    acc: &mut [u64],
+    state: &mut [State],
+    flagged: &mut [u32],
+    stamp: u64,
+    edge: u64,
+) -> usize {
+    let mut local = rng.clone();
+    let mut sink = PlacedSink {
+        acc,
+        state,
+        stamp,
+        edge,
+        flagged,
+        n: 0,
+    };
+    photons.sample_shot(&mut local, &mut sink);
+    *rng = local;
+    sink.n
 }
 
 /// A uniform in [0, 1) from the top 53 bits of `x`.
