@@ -8,12 +8,14 @@ use std::path::Path;
 use hdf5::Dataset;
 use ndarray::{Axis, Ix1, Ix2, Ix3, s};
 
-use super::axis::{XAxis, latitude_marks, x_axis};
+use super::axis::{XAxis, x_axis};
 use super::figure::{
     BLOCK_PROFILES, Background, COLUMNS, Calibration, Mask, Quicklook, ROWS, View, add_profile,
 };
 use super::grid::Grid;
-use super::raw::{Vars, day_night, extend_spans, file_name, pair, start_unix_s};
+use super::raw::{
+    Vars, day_night, extend_spans, file_name, pair, start_unix_s, track_latitude_marks,
+};
 use super::title::{Source, span_edges, title_line};
 use crate::error::Result;
 use crate::figures::plot::panel::{edges, widen};
@@ -128,24 +130,14 @@ pub(super) fn read(
     let (x_scale, x_label, x_clock) = x_axis(kind, span, t0, x_first);
     let title = product_title(path, f, &regions[0].group, t0, along_track)?;
     let x_marks = match kind {
-        XAxis::Latitude => {
-            // the first region's track places the ticks
-            let v = Vars {
+        // the first region's track places the ticks
+        XAxis::Latitude => Some(track_latitude_marks(
+            &Vars {
                 path,
                 f: &regions[0].group,
-            };
-            let x: Vec<f64> = v
-                .f64s("along_track_distance")?
-                .iter()
-                .map(|x| x * x_scale)
-                .collect();
-            Some(latitude_marks(
-                &x,
-                &v.f64s("latitude")?,
-                &v.f64s("longitude")?,
-                6.0,
-            ))
-        }
+            },
+            x_scale,
+        )?),
         _ => None,
     };
     let (mut xlo, mut xhi, mut zlo, mut zhi) = (

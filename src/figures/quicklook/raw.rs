@@ -10,7 +10,7 @@ use super::figure::{
     BLOCK_PROFILES, Background, COLUMNS, Calibration, Mask, Quicklook, ROWS, View, add_profile,
 };
 use super::grid::Grid;
-use super::title::{Source, span_edges, title_line};
+use super::title::{Source, attr_text, span_edges, title_line};
 use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
 use crate::figures::plot::panel::{edges, widen};
@@ -162,15 +162,7 @@ fn pretrigger_bins(f: &hdf5::Group) -> usize {
 /// The origin of `time` (Unix seconds): the root attribute `start_time`, else the
 /// `units` of `time` ("seconds since …").
 pub(super) fn start_unix_s(root: &hdf5::Group, time: Option<&Dataset>) -> Option<f64> {
-    let text = |a: hdf5::Attribute| {
-        a.read_scalar::<hdf5::types::VarLenUnicode>()
-            .map(|s| s.as_str().to_string())
-            .or_else(|_| {
-                a.read_scalar::<hdf5::types::VarLenAscii>()
-                    .map(|s| s.as_str().to_string())
-            })
-            .ok()
-    };
+    let text = |a: hdf5::Attribute| attr_text(&a);
     let start = root.attr("start_time").ok().and_then(text).or_else(|| {
         time.and_then(|t| t.attr("units").ok())
             .and_then(text)
@@ -178,6 +170,22 @@ pub(super) fn start_unix_s(root: &hdf5::Group, time: Option<&Dataset>) -> Option
     })?;
     let t = humantime::parse_rfc3339(start.trim()).ok()?;
     Some(t.duration_since(std::time::UNIX_EPOCH).ok()?.as_secs_f64())
+}
+
+/// The latitude ticks of a group's track (`along_track_distance` × `x_scale` against
+/// its `latitude` and `longitude`), about six.
+pub(super) fn track_latitude_marks(v: &Vars, x_scale: f64) -> Result<Vec<(f64, String)>> {
+    let x: Vec<f64> = v
+        .f64s("along_track_distance")?
+        .iter()
+        .map(|x| x * x_scale)
+        .collect();
+    Ok(latitude_marks(
+        &x,
+        &v.f64s("latitude")?,
+        &v.f64s("longitude")?,
+        6.0,
+    ))
 }
 
 /// Appends `more` spans to `day`, joining the first to the last when they agree.
@@ -247,19 +255,7 @@ pub(super) fn read(
     let (x_scale, x_label, x_clock) = x_axis(kind, (x_last - x_first).abs(), t0, x_first);
     let title = raw_title(&v, t0, n_profiles, header.along_track)?;
     let x_marks = match kind {
-        XAxis::Latitude => {
-            let x: Vec<f64> = v
-                .f64s("along_track_distance")?
-                .iter()
-                .map(|x| x * x_scale)
-                .collect();
-            Some(latitude_marks(
-                &x,
-                &v.f64s("latitude")?,
-                &v.f64s("longitude")?,
-                6.0,
-            ))
-        }
+        XAxis::Latitude => Some(track_latitude_marks(&v, x_scale)?),
         _ => None,
     };
     let dx = if n_profiles > 1 {

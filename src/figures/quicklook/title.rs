@@ -8,7 +8,11 @@ use super::axis::{latitude_text, longitude_text, utc};
 
 /// A text attribute of `g` (variable-length UTF-8 or ASCII).
 pub(super) fn text_attr(g: &hdf5::Group, name: &str) -> Option<String> {
-    let a = g.attr(name).ok()?;
+    attr_text(&g.attr(name).ok()?)
+}
+
+/// The text of a variable-length UTF-8 or ASCII attribute.
+pub(super) fn attr_text(a: &hdf5::Attribute) -> Option<String> {
     a.read_scalar::<hdf5::types::VarLenUnicode>()
         .map(|s| s.as_str().to_string())
         .or_else(|_| {
