@@ -70,6 +70,7 @@ fn main() {
             tau_s: TAU,
             model,
             bin_width_s: DT,
+            pixels: 1,
         };
         for &n in &rates {
             let lambda = n * DT;

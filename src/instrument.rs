@@ -123,6 +123,7 @@ impl Instrument {
                     tau_s: d.dead_time_s,
                     model: d.dead_time_model,
                     bin_width_s: i.bin_width_s,
+                    pixels: d.pixels.unwrap_or(1),
                 }),
             analog: None,
             afterpulsing: None,

@@ -19,6 +19,7 @@ fn simulate_stationary(model: DeadTimeModel, n: f64, shots: u64, seed: u64) -> (
         tau_s: TAU,
         model,
         bin_width_s: DT,
+        pixels: 1,
     };
     let photons = ShotSampler::new(&[n * DT; BINS]);
     let mut rng = stream_rng(seed, 0, 0);
@@ -67,6 +68,7 @@ fn recorded_rates_follow_the_dead_time_formulas() {
             tau_s: TAU,
             model,
             bin_width_s: DT,
+            pixels: 1,
         };
         for n in [1e3, 1e5, 1e7, 5e7, 1.0 / TAU, 2e8] {
             if model == DeadTimeModel::Paralyzable && n > 1.0 / TAU {
@@ -157,6 +159,7 @@ fn the_recorded_mean_model_follows_a_rate_step() {
             tau_s: TAU,
             model,
             bin_width_s: dt,
+            pixels: 1,
         };
         let mut lambda = vec![0.0; 40];
         lambda[10..30].iter_mut().for_each(|l| *l = 1e8 * dt);
@@ -511,6 +514,7 @@ fn the_counting_paths_follow_the_arrival_sweep() {
             tau_s: TAU,
             model: DeadTimeModel::Nonparalyzable,
             bin_width_s: dt,
+            pixels: 1,
         };
         assert!(dead.by_counts());
         let photons = ShotSampler::new(&lambda);
@@ -573,6 +577,7 @@ fn the_counting_paths_do_not_depend_on_the_thread_count() {
         tau_s: TAU,
         model: DeadTimeModel::Nonparalyzable,
         bin_width_s: DT,
+        pixels: 1,
     };
     let shots = 3 * lidarsim::sampling::SHOT_BLOCK - 7;
     let run = |threads: usize| {
@@ -630,6 +635,7 @@ fn the_recorded_variance_is_the_windows_own_at_high_rates() {
         tau_s: tau,
         model: DeadTimeModel::Nonparalyzable,
         bin_width_s: dt,
+        pixels: 1,
     };
     for (x, low) in [(1.0, 1.02), (10.0, 1.5), (40.0, 5.0)] {
         let n = x / tau;

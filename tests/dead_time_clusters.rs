@@ -119,6 +119,7 @@ fn check(model: DeadTimeModel, (n, dt, bins, count): Case, every_photon: bool) -
         tau_s: TAU,
         model,
         bin_width_s: dt,
+        pixels: 1,
     };
     let photons = ShotSampler::new(&vec![n * dt; bins]);
     let mut shots = DeadTimedShots::new(photons, dead);

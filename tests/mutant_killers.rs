@@ -348,6 +348,7 @@ fn recorded_moments_follow_the_law_of_total_variance() {
             tau_s: tau,
             model,
             bin_width_s: dt,
+            pixels: 1,
         };
         if model == DeadTimeModel::Paralyzable {
             let (n, lambda) = (5e7, 5e7 * dt);
@@ -415,6 +416,7 @@ fn a_profile_longer_than_a_shot_block_records_each_shot_once() {
             tau_s: 1e-9,
             model,
             bin_width_s: 1e-6,
+            pixels: 1,
         };
         let mut recorded = vec![0u64; 4];
         recorded_profile(&sampler, &dead, seed, profile, shots, &mut recorded);
@@ -602,6 +604,7 @@ fn a_window_past_the_grid_limit_takes_the_stationary_formulas() {
             tau_s: tau,
             model,
             bin_width_s: dt,
+            pixels: 1,
         };
         let want = match model {
             DeadTimeModel::Nonparalyzable => n * dt / (1.0 + n * tau),
@@ -641,6 +644,7 @@ fn dead_time_carries_across_bin_edges() {
             tau_s: tau,
             model,
             bin_width_s: dt,
+            pixels: 1,
         };
         let means: Vec<f64> = (0..30)
             .map(|profile| {

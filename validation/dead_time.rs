@@ -88,6 +88,7 @@ fn measure(model: DeadTimeModel, n: f64, path: &'static str, seed: u64) -> Row {
         tau_s: TAU,
         model,
         bin_width_s: DT,
+        pixels: 1,
     };
     let lambda = n * DT;
     let shots = ((1e7 / (lambda * BINS as f64)) as u64).clamp(50_000, 100_000_000);
@@ -289,6 +290,7 @@ fn plot(rows: &[Row], path: &std::path::Path) {
                 tau_s: TAU,
                 model,
                 bin_width_s: DT,
+                pixels: 1,
             };
             (0..=300)
                 .map(|i| 10f64.powf(3.0 + 5.5 * i as f64 / 300.0))

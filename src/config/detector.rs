@@ -17,6 +17,10 @@ pub struct DetectorConfig {
     /// `"nonparalyzable"` or `"paralyzable"`.
     #[serde(default)]
     pub dead_time_model: DeadTimeModel,
+    /// Detector pixels sharing the channel's photons evenly, each with its own dead time
+    /// (ICESat-2's 16 per strong beam); absent = 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pixels: Option<u32>,
     /// Mean gain G of the photomultiplier, electrons per photoelectron (analog).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gain: Option<f64>,

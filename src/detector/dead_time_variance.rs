@@ -55,6 +55,14 @@ impl DeadTime {
     /// variance exact for a non-paralyzable detector (module docs), the renewal form
     /// [`recorded_variance`](Self::recorded_variance) for a paralyzable one.
     pub fn recorded_mean_and_variance(&self, lambda: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        if self.pixels > 1 {
+            // k independent pixels at λ/k: means and variances add
+            let k = self.pixels as f64;
+            let share: Vec<f64> = lambda.iter().map(|l| l / k).collect();
+            let (m, v) = self.pixel().recorded_mean_and_variance(&share);
+            let times_k = |x: Vec<f64>| x.into_iter().map(|x| k * x).collect();
+            return (times_k(m), times_k(v));
+        }
         if self.model == DeadTimeModel::Paralyzable {
             let var = lambda.iter().map(|&l| self.recorded_variance(l)).collect();
             return (self.recorded_means(lambda), var);
@@ -172,6 +180,7 @@ mod tests {
             tau_s,
             model: DeadTimeModel::Nonparalyzable,
             bin_width_s,
+            pixels: 1,
         }
     }
 

@@ -26,6 +26,9 @@ use crate::error::Result;
 /// Longest dead time a photon counter may have, s.
 pub const MAX_DEAD_TIME_S: f64 = 1e-6;
 
+/// Most pixels of a photon counter (`instrument.detector.pixels`).
+pub const MAX_PIXELS: u32 = 1024;
+
 /// Checks `[instrument.detector]`: a dead time from 0 to [`MAX_DEAD_TIME_S`] (none in
 /// analog mode), and the analog keys where the mode records analog (refused elsewhere).
 pub fn validate(config: &ScenarioConfig, c: &Checker) -> Result<()> {
@@ -36,6 +39,7 @@ pub fn validate(config: &ScenarioConfig, c: &Checker) -> Result<()> {
             0.0,
             MAX_DEAD_TIME_S,
         )?;
+        validate_pixels(d, config, c)?;
         validate_analog(d, config.instrument.bin_width_s, c)?;
         if let Some(sin) = &d.signal_induced_noise {
             validate_induced(sin, c)?;
@@ -43,6 +47,40 @@ pub fn validate(config: &ScenarioConfig, c: &Checker) -> Result<()> {
         if let Some(ap) = &d.afterpulsing {
             validate_afterpulsing(ap, d.mode, c)?;
         }
+    }
+    Ok(())
+}
+
+/// `pixels`: 1 to [`MAX_PIXELS`], on a photon counter with dead time (each pixel's own
+/// dead time is what makes them differ from one pixel; an analog record sums them).
+fn validate_pixels(d: &DetectorConfig, config: &ScenarioConfig, c: &Checker) -> Result<()> {
+    let Some(p) = d.pixels else { return Ok(()) };
+    let key = "instrument.detector.pixels";
+    if p == 0 || p > MAX_PIXELS {
+        return Err(c.fail(key, &format!("must be from 1 to {MAX_PIXELS}, got {p}")));
+    }
+    if p > 1 && d.mode != DetectionMode::PhotonCounting {
+        return Err(c.fail(
+            key,
+            "splits a photon counter's dead time over pixels; this detector records analog \
+             (mode = \"analog\" or \"both\"): leave pixels out",
+        ));
+    }
+    let i = &config.instrument;
+    if p > 1 && (i.pulse_energy_jitter > 0.0 || i.energy_drift.is_some()) {
+        return Err(c.fail(
+            key,
+            "with a pulse energy that varies (instrument.pulse_energy_jitter or energy_drift) \
+             is not drawn by this version: set pixels = 1 or a constant pulse energy",
+        ));
+    }
+    if p > 1 && d.dead_time_s == 0.0 {
+        return Err(c.fail(
+            key,
+            "splits the dead time over pixels, and instrument.detector.dead_time_s is 0 \
+             (an ideal detector's pixels record what one would): set a dead time or leave \
+             pixels out",
+        ));
     }
     Ok(())
 }

@@ -25,6 +25,12 @@ pub fn channel_seed(seed: u64, k: usize) -> u64 {
     }
 }
 
+/// Seed of pixel `p` of a detector of several pixels: a stream of its own for each (the
+/// photons of k pixels are k independent draws at a k-th of the rate).
+pub fn pixel_seed(seed: u64, p: u32) -> u64 {
+    seed ^ (u64::from(p) + 1).wrapping_mul(0xA24B_AED4_963E_E407)
+}
+
 /// The sampler of one stream of counts (the total, or one component), built once per run.
 #[derive(Debug, Clone)]
 pub enum StreamSampler {
@@ -49,6 +55,14 @@ pub enum StreamSampler {
     AggregateNormal(Vec<f64>, f64),
     /// Every shot drawn and recorded through the detector's dead time.
     DeadTimed(Box<dead_time::DeadTimedShots>),
+    /// A detector of `pixels` pixels, each drawn by `pixel` (the photons' share 1/k,
+    /// one pixel's dead time) from its own seed ([`pixel_seed`]), the counts summed.
+    Pixels {
+        /// One pixel's sampler.
+        pixel: Box<dead_time::DeadTimedShots>,
+        /// k.
+        pixels: u32,
+    },
     /// Every shot drawn and recorded by an analog chain (ADC codes).
     AnalogShots(Box<ShotSampler>, Box<Analog>),
     /// A profile's photoelectrons drawn by the inner (aggregate) sampler, recorded by an
@@ -115,6 +129,17 @@ impl StreamSampler {
     /// ensures the method is `shot`).
     pub fn through_detector(self, dead: Option<DeadTime>) -> Self {
         match (self, dead) {
+            (StreamSampler::Shot(s), Some(d)) if d.pixels > 1 => {
+                let k = f64::from(d.pixels);
+                let share: Vec<f64> = s.means().iter().map(|m| m / k).collect();
+                StreamSampler::Pixels {
+                    pixel: Box::new(dead_time::DeadTimedShots::new(
+                        ShotSampler::new(&share),
+                        d.pixel(),
+                    )),
+                    pixels: d.pixels,
+                }
+            }
             (StreamSampler::Shot(s), Some(d)) => {
                 StreamSampler::DeadTimed(Box::new(dead_time::DeadTimedShots::new(*s, d)))
             }
@@ -190,6 +215,11 @@ impl StreamSampler {
                 approx::aggregate_approx_profile(l, seed, profile, shots, *threshold, acc)
             }
             StreamSampler::DeadTimed(s) => s.profile(seed, profile, shots, acc),
+            StreamSampler::Pixels { pixel, pixels } => {
+                for p in 0..*pixels {
+                    pixel.profile(pixel_seed(seed, p), profile, shots, acc)
+                }
+            }
             StreamSampler::AnalogShots(s, a) => {
                 crate::detector::recorded_profile(s, a.as_ref(), seed, profile, shots, acc)
             }

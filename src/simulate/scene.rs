@@ -548,6 +548,15 @@ fn draw_run(
         (StreamSampler::DeadTimed(s), Some(b)) => {
             return sunlit_dead_time_run(s.photons(), s.dead(), b, seed, p, n, acc);
         }
+        // each pixel its share of the sunlight, through its own dead time
+        (StreamSampler::Pixels { pixel, pixels }, Some(b)) => {
+            let share = b / f64::from(*pixels);
+            for k in 0..*pixels {
+                let s = super::sampler::pixel_seed(seed, k);
+                sunlit_dead_time_run(pixel.photons(), pixel.dead(), share, s, p, n, acc);
+            }
+            return;
+        }
         (StreamSampler::Modulated(m), Some(b)) if m.has_detector() => {
             let mut add_sky = |shot: &mut ShotCounts| add_background(&mut sky_rng, b, bins, shot);
             return m.add_run(seed, p, energies(), acc, &mut add_sky);

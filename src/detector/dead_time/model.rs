@@ -18,11 +18,43 @@ pub struct DeadTime {
     pub model: DeadTimeModel,
     /// Δt of a bin, s.
     pub bin_width_s: f64,
+    /// Pixels k ≥ 1 sharing the photons evenly, each with this dead time of its own
+    /// (`instrument.detector.pixels`): each sees the rate n/k, independently (a Poisson
+    /// stream split at random is k independent Poisson streams), and the channel
+    /// records their sum, so every law here is k times one pixel's at n/k.
+    pub pixels: u32,
 }
 
 impl DeadTime {
-    /// Stationary recorded rate for a true rate `n` (s⁻¹): `n/(1+nτ)` or `n·e^{−nτ}`.
+    /// One pixel of the detector (the same dead time, `pixels = 1`).
+    pub fn pixel(&self) -> DeadTime {
+        DeadTime { pixels: 1, ..*self }
+    }
+
+    /// `k·f(one pixel, λ/k)` for the detector's k pixels (f itself for one pixel).
+    fn summed_over_pixels(
+        &self,
+        lambda: &[f64],
+        f: impl Fn(&DeadTime, &[f64]) -> Vec<f64>,
+    ) -> Vec<f64> {
+        if self.pixels <= 1 {
+            return f(self, lambda);
+        }
+        let k = self.pixels as f64;
+        let share: Vec<f64> = lambda.iter().map(|l| l / k).collect();
+        f(&self.pixel(), &share)
+            .into_iter()
+            .map(|x| k * x)
+            .collect()
+    }
+
+    /// Stationary recorded rate for a true rate `n` (s⁻¹): `n/(1+nτ)` or `n·e^{−nτ}`
+    /// (k pixels: k times that at n/k).
     pub fn stationary_rate(&self, n: f64) -> f64 {
+        if self.pixels > 1 {
+            let k = self.pixels as f64;
+            return k * self.pixel().stationary_rate(n / k);
+        }
         match self.model {
             DeadTimeModel::Nonparalyzable => n / (1.0 + n * self.tau_s),
             DeadTimeModel::Paralyzable => n * (-n * self.tau_s).exp(),
@@ -32,7 +64,7 @@ impl DeadTime {
     /// Mean recorded counts per shot per bin for true means `lambda` per bin (see the
     /// module docs).
     pub fn recorded_means(&self, lambda: &[f64]) -> Vec<f64> {
-        self.solve(lambda, |_, _| {})
+        self.summed_over_pixels(lambda, |d, l| d.solve(l, |_, _| {}))
     }
 
     /// The mean-rate solver of [`recorded_means`](Self::recorded_means); before each bin
@@ -127,6 +159,10 @@ impl DeadTime {
     /// Variance of a bin's recorded count per shot (renewal theory, module docs), for the
     /// bin's true mean `lambda` per shot.
     pub fn recorded_variance(&self, lambda: f64) -> f64 {
+        if self.pixels > 1 {
+            let k = self.pixels as f64;
+            return k * self.pixel().recorded_variance(lambda / k);
+        }
         let dt = self.bin_width_s;
         let n = lambda / dt;
         let x = n * self.tau_s;
@@ -149,6 +185,7 @@ mod tests {
             tau_s: 3.5e-9,
             model,
             bin_width_s: 2e-6,
+            pixels: 1,
         }
     }
 

@@ -295,6 +295,20 @@ pub fn variables(
                 )
             }),
     );
+    if channels
+        .iter()
+        .any(|c| c.instrument.dead_time.is_some_and(|d| d.pixels > 1))
+    {
+        vars.push(var(
+            "detector_pixels",
+            Channel,
+            "pixels of the photon counter, sharing its photons evenly, each with the dead time \
+             of its own (the counts are their sum); written when some channel has more than one",
+            "1",
+            &[],
+            instrument(|c| c.instrument.dead_time.map_or(1.0, |d| f64::from(d.pixels))),
+        ));
+    }
     vars.extend(truth::column_variables(lidar, columns));
     match layout {
         TruthLayout::Static => {}

@@ -377,6 +377,7 @@ fn not_background(
                     tau_s: d.dead_time_s,
                     model: d.dead_time_model,
                     bin_width_s: raw.bin_width_s,
+                    pixels: d.pixels.unwrap_or(1),
                 }
                 .recorded_means(noise),
                 None => noise.to_vec(),

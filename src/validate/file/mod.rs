@@ -198,6 +198,27 @@ fn channels(path: &Path, f: &hdf5::File, h: &RawHeader) -> Result<Channels> {
         ));
     }
     refuse_other_laws(path, f, h)?;
+    let pixels = match f.dataset("detector_pixels") {
+        Ok(_) => {
+            let p = read_all(path, f, "detector_pixels")?;
+            let bad_pixel = |x: f64| {
+                !(x >= 1.0 && x <= f64::from(crate::detector::MAX_PIXELS) && x.fract() == 0.0)
+            };
+            if p.len() != h.channels.len() {
+                return Err(bad("`detector_pixels` is not (channel)".into()));
+            }
+            if let Some(k) = p.iter().position(|&x| bad_pixel(x)) {
+                return Err(bad(format!(
+                    "`detector_pixels` of channel {} is {}; it must be a whole number from 1 to {}",
+                    h.channels[k],
+                    p[k],
+                    crate::detector::MAX_PIXELS
+                )));
+            }
+            p.iter().map(|&x| x as u32).collect()
+        }
+        Err(_) => vec![1u32; tau.len()],
+    };
     let dead = if tau.iter().any(|&t| t > 0.0) {
         let models = crate::output::raw_file::read::read_text(path, f, "dead_time_model")?;
         if models.len() != tau.len() {
@@ -211,7 +232,8 @@ fn channels(path: &Path, f: &hdf5::File, h: &RawHeader) -> Result<Channels> {
             .ok_or_else(|| bad("has no positive root attribute `bin_width_s`".into()))?;
         tau.iter()
             .zip(&models)
-            .map(|(&t, m)| {
+            .zip(&pixels)
+            .map(|((&t, m), &pixels)| {
                 let model = match m.as_str() {
                     "paralyzable" => DeadTimeModel::Paralyzable,
                     _ => DeadTimeModel::Nonparalyzable,
@@ -220,6 +242,7 @@ fn channels(path: &Path, f: &hdf5::File, h: &RawHeader) -> Result<Channels> {
                     tau_s: t,
                     model,
                     bin_width_s: width,
+                    pixels,
                 })
             })
             .collect()
