@@ -43,6 +43,29 @@ fn expect_config_error(overrides: &[&str], key: &str, reason: &str) {
 fn bad_values_name_their_key() {
     let cases: &[(&[&str], &str, &str)] = &[
         (
+            &["instrument.detector={dead_time_s=3e-9, pixels=0}"],
+            "instrument.detector.pixels",
+            "from 1 to 1024",
+        ),
+        (
+            &["instrument.detector={pixels=4}"],
+            "instrument.detector.pixels",
+            "dead_time_s is 0",
+        ),
+        (
+            &["instrument.detector={dead_time_s=3e-9, pixels=4, mode=\"both\"}"],
+            "instrument.detector.pixels",
+            "records analog",
+        ),
+        (
+            &[
+                "instrument.detector={dead_time_s=3e-9, pixels=4}",
+                "instrument.pulse_energy_jitter=0.01",
+            ],
+            "instrument.detector.pixels",
+            "pulse energy that varies",
+        ),
+        (
             &["instrument.pulse_energy_j=-1"],
             "instrument.pulse_energy_j",
             "within",
