@@ -54,6 +54,14 @@ pub struct ModelFieldsConfig {
     /// Extinction efficiency Q of the cloud particles (geometric optics: 2).
     #[serde(default = "default_efficiency")]
     pub extinction_efficiency: f64,
+    /// Subcolumns per profile drawn from the cloud fraction by maximum-random overlap
+    /// (1 = the grid-box mean water spread over the whole box).
+    #[serde(default = "default_subcolumns")]
+    pub subcolumns: u32,
+}
+
+fn default_subcolumns() -> u32 {
+    10
 }
 
 fn default_liquid_radius() -> f64 {

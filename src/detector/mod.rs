@@ -57,7 +57,7 @@ fn validate_pixels(d: &DetectorConfig, config: &ScenarioConfig, c: &Checker) -> 
     let Some(p) = d.pixels else { return Ok(()) };
     let key = "instrument.detector.pixels";
     if p == 0 || p > MAX_PIXELS {
-        return Err(c.fail(key, &format!("must be from 1 to {MAX_PIXELS}, got {p}")));
+        return Err(c.fail(key, format!("must be from 1 to {MAX_PIXELS}, got {p}")));
     }
     if p > 1 && d.mode != DetectionMode::PhotonCounting {
         return Err(c.fail(

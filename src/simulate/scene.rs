@@ -216,7 +216,13 @@ impl SceneModel {
                 .into_iter()
                 .zip(&lidar.channels)
                 .map(|(c, ch)| {
-                    crate::scene::fields::with_model_fields(c, &ch.loaded, o, shots, profiles)
+                    crate::scene::fields::with_model_fields(
+                        c,
+                        &ch.loaded,
+                        o,
+                        (shots, profiles),
+                        seed,
+                    )
                 })
                 .collect::<Result<_>>()?,
             None => configs,

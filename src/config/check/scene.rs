@@ -44,6 +44,13 @@ impl ScenarioConfig {
                 ));
             }
         }
+        let most = crate::limits::MAX_SUBCOLUMNS;
+        if m.subcolumns == 0 || m.subcolumns > most {
+            return Err(c.fail(
+                "scene.model_fields.subcolumns",
+                format!("must be from 1 to {most}, got {}", m.subcolumns),
+            ));
+        }
         c.range(
             "scene.model_fields.liquid_effective_radius_um",
             m.liquid_effective_radius_um,

@@ -6,16 +6,20 @@
 //! Each profile samples the fields at the time and sub-satellite point of its middle
 //! (bilinear in latitude and longitude, linear in time; or the nearest point and time),
 //! level by level ([`grid`]); its levels become the layers of one segment of the track,
-//! as long as the profile's stretch of it, with the optics of `atmosphere::cloud_optics`
-//! (grid-box mean water spread over the whole box: the cloud fraction is read and
-//! checked but does not yet split the profile into subcolumns). The segments are the
-//! same scene as a curtain's: the truth, shards, onboard and validate see columns.
+//! as long as the profile's stretch of it, with the optics of `atmosphere::cloud_optics`.
+//! With `subcolumns = n > 1` (default 10) the profile's stretch is cut into up to n
+//! sub-segments, the [`subcolumns`] of its cloud fraction by maximum-random overlap,
+//! each cloudy level holding the in-cloud water q/C, the profile's shots spread evenly
+//! over them (identical subcolumns merged); with 1, the grid-box mean water over the
+//! whole box. The segments are the same scene as a curtain's: the truth, shards,
+//! onboard and validate see columns.
 
 pub mod column;
 pub mod grid;
 pub mod names;
 pub mod read;
 pub mod reader;
+pub mod subcolumns;
 
 use std::path::PathBuf;
 
@@ -71,8 +75,19 @@ pub fn profile_samples(
 /// The layers of one column: a water cloud layer per level with liquid, an ice cloud
 /// layer per level with ice, each over the level's layer of the column.
 pub fn layers(m: &ModelFieldsConfig, c: &FieldColumn) -> Vec<LayerConfig> {
+    layers_where(m, c, |_| Some(1.0))
+}
+
+/// [`layers`] of a subcolumn: level k (bottom up) holds `in_cloud(k)` times its water,
+/// or none where `None`.
+fn layers_where(
+    m: &ModelFieldsConfig,
+    c: &FieldColumn,
+    in_cloud: impl Fn(usize) -> Option<f64>,
+) -> Vec<LayerConfig> {
     let mut out = Vec::new();
     for (k, l) in c.levels.iter().enumerate() {
+        let Some(factor) = in_cloud(k) else { continue };
         let rho = air_density(l.p_pa, l.t_k, l.q);
         let (base_km, top_km) = (c.interfaces_m[k] / 1e3, c.interfaces_m[k + 1] / 1e3);
         let water = l.liquid_radius_um.unwrap_or(m.liquid_effective_radius_um);
@@ -80,8 +95,8 @@ pub fn layers(m: &ModelFieldsConfig, c: &FieldColumn) -> Vec<LayerConfig> {
             .ice_radius_um
             .unwrap_or_else(|| ice_effective_radius_um(l.t_k));
         for (phase, q, r_e) in [
-            (CloudPhase::Water, l.liquid, water),
-            (CloudPhase::Ice, l.ice, ice),
+            (CloudPhase::Water, l.liquid * factor, water),
+            (CloudPhase::Ice, l.ice * factor, ice),
         ] {
             if q <= 0.0 {
                 continue;
@@ -111,45 +126,96 @@ pub fn layers(m: &ModelFieldsConfig, c: &FieldColumn) -> Vec<LayerConfig> {
 }
 
 /// The segments of `cfg`'s model fields `m` (its `files`, resolved) along `orbit`,
-/// one per profile.
+/// a profile's [`profile_subcolumns`] for each of `profiles` profiles of
+/// `shots_per_profile` shots, drawn from `seed` (the run's).
 pub fn segments(
     cfg: &ScenarioConfig,
     m: &ModelFieldsConfig,
     files: &[PathBuf],
     orbit: &Orbit,
-    shots_per_profile: u64,
-    profiles: u64,
+    (shots_per_profile, profiles): (u64, u64),
+    seed: u64,
 ) -> Result<Vec<SegmentConfig>> {
     let samples = profile_samples(cfg, orbit, shots_per_profile, profiles)?;
     let points: Vec<Sample> = samples.iter().map(|s| s.0).collect();
     let columns =
         read::columns(m, files, &points).map_err(|(path, why)| Error::output(path, why))?;
-    Ok(columns
-        .iter()
-        .zip(&samples)
-        .map(|(c, (_, length_km))| SegmentConfig {
-            length_km: *length_km,
-            layers: Some(layers(m, c)),
+    let mut out = Vec::new();
+    for (p, (c, (_, length_km))) in columns.iter().zip(&samples).enumerate() {
+        // the config's surface at the model's height
+        let surface = cfg.surface.as_ref().zip(c.surface_height_m).map(|(s, z)| {
+            crate::config::SurfaceConfig {
+                altitude_km: (z / 1e3).clamp(-0.5, 9.0),
+                ..s.clone()
+            }
+        });
+        let segment = |length_km: f64, layers: Vec<LayerConfig>| SegmentConfig {
+            length_km,
+            layers: Some(layers),
             aerosol: None,
-            // the config's surface at the model's height
-            surface: cfg.surface.as_ref().zip(c.surface_height_m).map(|(s, z)| {
-                crate::config::SurfaceConfig {
-                    altitude_km: (z / 1e3).clamp(-0.5, 9.0),
-                    ..s.clone()
-                }
-            }),
+            surface: surface.clone(),
             water_vapour: None,
-        })
-        .collect())
+        };
+        for (share, layers) in profile_subcolumns(m, c, seed, p as u64, shots_per_profile) {
+            out.push(segment(length_km * share, layers));
+        }
+    }
+    Ok(out)
 }
 
-/// `cfg` with its model fields, if any, turned into one segment per profile.
+/// The subcolumns of profile `p` (its column `c`, `shots` shots), each with its share of
+/// the profile's stretch (its share of the shots) and its layers: one with the grid-box
+/// mean where `subcolumns` is 1 or no level is partly cloudy.
+fn profile_subcolumns(
+    m: &ModelFieldsConfig,
+    c: &FieldColumn,
+    seed: u64,
+    p: u64,
+    shots: u64,
+) -> Vec<(f64, Vec<LayerConfig>)> {
+    let partly = |l: &column::Level| {
+        (l.liquid > 0.0 || l.ice > 0.0) && l.cloud_fraction > 0.0 && l.cloud_fraction < 1.0
+    };
+    let n = (m.subcolumns as u64).min(shots.max(1)) as usize;
+    if n <= 1 {
+        return vec![(1.0, layers(m, c))];
+    }
+    if !c.levels.iter().any(partly) {
+        // every level overcast or clear: one subcolumn holds them all (water where the
+        // cloud fraction is 0 makes no cloud, as in SCOPS)
+        let overcast = |k: usize| (c.levels[k].cloud_fraction > 0.0).then_some(1.0);
+        return vec![(1.0, layers_where(m, c, overcast))];
+    }
+    let top = c.levels.len() - 1;
+    let fraction_top_down: Vec<f64> = c.levels.iter().rev().map(|l| l.cloud_fraction).collect();
+    let mut masks = subcolumns::of_profile(&fraction_top_down, n, seed, p);
+    // subcolumns are exchangeable: identical ones side by side make one segment
+    masks.sort();
+    let counts = subcolumns::shot_counts(shots, n);
+    let mut groups: Vec<(Vec<bool>, u64)> = Vec::new();
+    for (mask, count) in masks.into_iter().zip(counts) {
+        match groups.last_mut() {
+            Some((last, total)) if *last == mask => *total += count,
+            _ => groups.push((mask, count)),
+        }
+    }
+    groups
+        .into_iter()
+        .map(|(mask, count)| {
+            let in_cloud = |k: usize| mask[top - k].then(|| 1.0 / c.levels[k].cloud_fraction);
+            (count as f64 / shots as f64, layers_where(m, c, in_cloud))
+        })
+        .collect()
+}
+
+/// `cfg` with its model fields, if any, turned into segments: a profile's subcolumns
+/// for each profile of `shots` shots, drawn from the run's `seed`.
 pub fn with_model_fields(
     mut cfg: ScenarioConfig,
     loaded: &crate::loaded::LoadedConfig,
     orbit: &Orbit,
-    shots: u64,
-    profiles: u64,
+    (shots, profiles): (u64, u64),
+    seed: u64,
 ) -> Result<ScenarioConfig> {
     let Some(m) = cfg.scene.as_mut().and_then(|s| s.model_fields.take()) else {
         return Ok(cfg);
@@ -158,7 +224,7 @@ pub fn with_model_fields(
     for f in &files {
         crate::input_file::check("scene.model_fields.files", f)?;
     }
-    let segments = segments(&cfg, &m, &files, orbit, shots, profiles)?;
+    let segments = segments(&cfg, &m, &files, orbit, (shots, profiles), seed)?;
     if let Some(s) = cfg.scene.as_mut() {
         s.segments = segments;
     }
