@@ -105,6 +105,7 @@ const OWNERS: OwnerChecks = OwnerChecks {
     detector: crate::detector::validate,
     ozone: crate::atmosphere::ozone::validate,
     water_vapour: crate::atmosphere::water_vapour::validate,
+    molecular: crate::atmosphere::profile_file::validate_tables,
     orbit: crate::scene::orbit::validate,
     simulation: |config, c| validate_tolerance(&config.simulation, c),
     multiple_scattering: crate::atmosphere::multiple_scattering::validate,

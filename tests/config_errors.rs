@@ -43,6 +43,43 @@ fn expect_config_error(overrides: &[&str], key: &str, reason: &str) {
 fn bad_values_name_their_key() {
     let cases: &[(&[&str], &str, &str)] = &[
         (
+            &["atmosphere.molecular.model=\"msis\""],
+            "atmosphere.molecular.model",
+            "unknown model `msis`",
+        ),
+        (
+            &[
+                "atmosphere.molecular.model={altitude_km=[0.0, 1.0], pressure_hpa=[1013.0], \
+               temperature_k=[288.0, 281.0]}",
+            ],
+            "atmosphere.molecular.model",
+            "must be as long: 2, 1 and 2",
+        ),
+        (
+            &[
+                "atmosphere.molecular.model={altitude_km=[0.0, 1.0], pressure_hpa=[1013.0, -1.0], \
+               temperature_k=[288.0, 281.0]}",
+            ],
+            "atmosphere.molecular.model",
+            "index 1: pressure_hpa must be > 0",
+        ),
+        (
+            &[
+                "atmosphere.molecular.model={altitude_km=[1.0, 0.5], pressure_hpa=[900.0, 950.0], \
+               temperature_k=[288.0, 281.0]}",
+            ],
+            "atmosphere.molecular.model",
+            "index 1: altitude 0.5 km is not above",
+        ),
+        (
+            &[
+                "atmosphere.molecular.model={altitude_km=[0.0], pressure_hpa=[1013.0], \
+               temperature_k=[288.0]}",
+            ],
+            "atmosphere.molecular.model",
+            "at least 2 rows",
+        ),
+        (
             &["instrument.detector={dead_time_s=3e-9, pixels=0}"],
             "instrument.detector.pixels",
             "from 1 to 1024",
@@ -321,6 +358,40 @@ fn missing_files_are_reported_with_their_path() {
     assert!(err.to_string().contains("/nonexistent/x.toml"), "{err}");
     let err = load(&["atmosphere.molecular.model={file=\"no_such_profile.txt\"}"]).unwrap_err();
     assert!(err.to_string().contains("no_such_profile.txt"), "{err}");
+}
+
+/// A molecular profile given as a table in the config is the same atmosphere as the file
+/// holding its rows: the same expected signal, bit for bit.
+#[test]
+fn a_molecular_table_is_its_file() {
+    let file = config_path("atmospheres/nrlmsis21_buenos_aires_january.txt");
+    let rows: Vec<Vec<f64>> = std::fs::read_to_string(&file)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| l.split_whitespace().map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert!(rows.len() > 80);
+    let column = |k: usize| {
+        let v: Vec<String> = rows.iter().map(|r| format!("{:?}", r[k])).collect();
+        v.join(", ")
+    };
+    let table = format!(
+        "atmosphere.molecular.model={{altitude_km=[{}], pressure_hpa=[{}], temperature_k=[{}]}}",
+        column(0),
+        column(1),
+        column(2)
+    );
+    let by_file = format!(
+        "atmosphere.molecular.model={{file={:?}}}",
+        file.to_str().unwrap()
+    );
+    let a = load(&[&by_file]).unwrap().expected().unwrap();
+    let b = load(&[&table]).unwrap().expected().unwrap();
+    let us76 = load(&[]).unwrap().expected().unwrap();
+    assert_eq!(a.signal, b.signal);
+    assert_ne!(a.signal, us76.signal);
 }
 
 #[test]

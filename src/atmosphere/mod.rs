@@ -161,6 +161,16 @@ impl Atmosphere {
                 })?;
                 MolecularSource::Profile(profile)
             }
+            MolecularModel::Table {
+                altitude_km,
+                pressure_hpa,
+                temperature_k,
+            } => MolecularSource::Profile(MolecularProfile::from_table(
+                altitude_km,
+                pressure_hpa,
+                temperature_k,
+                &loaded.file_label(),
+            )?),
         };
         let rho_n = m
             .depolarization

@@ -30,6 +30,7 @@
 
 use std::path::Path;
 
+use crate::config::{Checker, MolecularModel, ScenarioConfig};
 use crate::constants::BOLTZMANN_J_PER_K;
 use crate::error::{Error, Result};
 
@@ -95,6 +96,36 @@ fn parse_header(names: &[&str]) -> std::result::Result<Columns, String> {
             names.join(" ")
         )),
     }
+}
+
+/// Checks the molecular profiles a config gives as tables (`atmosphere.molecular.model`,
+/// each segment's `molecular`) as a profile file's rows are checked, errors at their key.
+pub fn validate_tables(config: &ScenarioConfig, c: &Checker) -> Result<()> {
+    let segments = config.scene.iter().flat_map(|s| s.segments.iter());
+    let own = segments.enumerate().filter_map(|(i, seg)| {
+        Some((
+            format!("scene.segments[{i}].molecular"),
+            seg.molecular.as_ref()?,
+        ))
+    });
+    let base = (
+        "atmosphere.molecular.model".to_string(),
+        &config.atmosphere.molecular.model,
+    );
+    for (key, model) in std::iter::once(base).chain(own) {
+        if let MolecularModel::Table {
+            altitude_km,
+            pressure_hpa,
+            temperature_k,
+        } = model
+        {
+            match MolecularProfile::from_table(altitude_km, pressure_hpa, temperature_k, "") {
+                Err(Error::Config { reason, .. }) => return Err(c.fail(&key, reason)),
+                other => other.map(drop)?,
+            }
+        }
+    }
+    Ok(())
 }
 
 impl MolecularProfile {
@@ -202,6 +233,55 @@ impl MolecularProfile {
             altitude_m,
             number_density_m3,
             pressure_pa: (!pressure_pa.is_empty()).then_some(pressure_pa),
+        })
+    }
+
+    /// The profile of a config's table (`atmosphere.molecular.model = { altitude_km,
+    /// pressure_hpa, temperature_k }`, or a model column's): the rows of a profile file of
+    /// pressures and temperatures, checked as [`parse`](Self::parse) checks them; errors
+    /// name `source_name`, the key `atmosphere.molecular.model` and the row.
+    pub fn from_table(
+        altitude_km: &[f64],
+        pressure_hpa: &[f64],
+        temperature_k: &[f64],
+        source_name: &str,
+    ) -> Result<Self> {
+        let fail =
+            |reason: String| Error::config(source_name, "atmosphere.molecular.model", reason);
+        if altitude_km.len() != pressure_hpa.len() || altitude_km.len() != temperature_k.len() {
+            return Err(fail(format!(
+                "altitude_km, pressure_hpa and temperature_k must be as long: {}, {} and {}",
+                altitude_km.len(),
+                pressure_hpa.len(),
+                temperature_k.len()
+            )));
+        }
+        if altitude_km.len() < 2 {
+            return Err(fail(format!(
+                "need at least 2 rows, found {}",
+                altitude_km.len()
+            )));
+        }
+        let mut text = String::from("altitude_km pressure_hpa temperature_k\n");
+        for ((z, p), t) in altitude_km.iter().zip(pressure_hpa).zip(temperature_k) {
+            // round-trip formatting: the parse below reads back exactly these values
+            text.push_str(&format!("{z:e} {p:e} {t:e}\n"));
+        }
+        // one rule for every check: the file's, each row numbered after the header
+        Self::parse(&text, source_name).map_err(|e| match e {
+            Error::Config { reason, .. } => {
+                // "line N: why" of the text above is index N − 2 of the arrays (line 1 is
+                // the header)
+                let row = reason
+                    .strip_prefix("line ")
+                    .and_then(|r| r.split_once(": "))
+                    .and_then(|(n, why)| Some((n.parse::<usize>().ok()?.checked_sub(2)?, why)));
+                match row {
+                    Some((k, why)) => fail(format!("index {k}: {why}")),
+                    None => fail(reason),
+                }
+            }
+            e => e,
         })
     }
 

@@ -61,6 +61,16 @@ pub fn profiles(config: &ScenarioConfig) -> impl Iterator<Item = (String, &Water
     base.chain(own)
 }
 
+/// Whether model fields give every profile its water vapour (their molecules come from
+/// the fields: each profile's specific humidity, docs/model.md §4k).
+pub fn from_fields(config: &ScenarioConfig) -> bool {
+    config
+        .scene
+        .as_ref()
+        .and_then(|s| s.model_fields.as_ref())
+        .is_some_and(|m| m.molecules == crate::config::FieldsMolecules::Fields)
+}
+
 /// Checks one profile, `prefix` naming its table in errors.
 fn check(w: &WaterVapourConfig, prefix: &str, c: &Checker) -> Result<()> {
     let key = |k: &str| format!("{prefix}.{k}");

@@ -86,6 +86,16 @@ pub enum MolecularModel {
         /// Path of the profile file.
         file: PathBuf,
     },
+    /// A profile given in the config (a model column's, a sonde's), as a profile file's
+    /// `altitude_km pressure_hpa temperature_k` rows.
+    Table {
+        /// Altitudes above sea level, km, strictly increasing.
+        altitude_km: Vec<f64>,
+        /// Pressures, hPa, > 0.
+        pressure_hpa: Vec<f64>,
+        /// Temperatures, K, > 0.
+        temperature_k: Vec<f64>,
+    },
 }
 
 /// Where the aerosol's near-surface extinction comes from (paper Table 1 has both).

@@ -51,7 +51,7 @@ pub use instrument::{
     Channel, EnergyDriftConfig, InstrumentConfig, OverlapConfig, WAVELENGTH_RANGE_NM,
 };
 pub use load::{Parsed, deserialize, parse, plain_serde_message};
-pub use model_fields::{FieldsInterpolation, FieldsModel, ModelFieldsConfig};
+pub use model_fields::{FieldsInterpolation, FieldsModel, FieldsMolecules, ModelFieldsConfig};
 pub use multiple_scattering::{MultipleScatteringConfig, MultipleScatteringModel};
 pub use overrides::{apply_override, attribute_to_override};
 pub use scenario::ScenarioConfig;

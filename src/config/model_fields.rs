@@ -58,6 +58,21 @@ pub struct ModelFieldsConfig {
     /// (1 = the grid-box mean water spread over the whole box).
     #[serde(default = "default_subcolumns")]
     pub subcolumns: u32,
+    /// Where each profile's molecules come from: the fields' pressure, temperature and
+    /// humidity, or the config's `atmosphere.molecular.model` and water vapour.
+    #[serde(default)]
+    pub molecules: FieldsMolecules,
+}
+
+/// The molecules of a model-field scene (`scene.model_fields.molecules`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FieldsMolecules {
+    /// Each profile's levels: N = p/(k_B·T) and the water vapour from q.
+    #[default]
+    Fields,
+    /// The config's molecular model and water vapour, the same everywhere.
+    Config,
 }
 
 fn default_subcolumns() -> u32 {

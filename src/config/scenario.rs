@@ -58,6 +58,11 @@ impl ScenarioConfig {
         if let MolecularModel::File { file } = &self.atmosphere.molecular.model {
             files.push(("atmosphere.molecular.model.file", file.as_path()));
         }
+        for seg in self.scene.iter().flat_map(|s| &s.segments) {
+            if let Some(MolecularModel::File { file }) = &seg.molecular {
+                files.push(("scene.segments.molecular.file", file.as_path()));
+            }
+        }
         if let Some(curtain) = self.scene.as_ref().and_then(|s| s.curtain.as_ref()) {
             files.push(("scene.curtain", curtain.as_path()));
         }

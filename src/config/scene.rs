@@ -95,6 +95,10 @@ pub struct SegmentConfig {
     /// = that one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub water_vapour: Option<WaterVapourConfig>,
+    /// The molecules of this stretch (replacing `atmosphere.molecular.model`): `"us76"`,
+    /// a profile file or a table; absent = that one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub molecular: Option<crate::config::MolecularModel>,
 }
 
 /// A segment's aerosol: `"none"` or a whole `[atmosphere.aerosol]` table.

@@ -409,7 +409,8 @@ pub fn check_kind(
             file,
             key("species"),
             "H2O needs a water-vapour profile: give [atmosphere.water_vapour] \
-                 (altitude_km, mixing_ratio_g_per_kg)",
+                 (altitude_km, mixing_ratio_g_per_kg) or model fields with their molecules \
+                 (scene.model_fields.molecules = \"fields\")",
         )),
         (ChannelKind::Raman, _) if polarization != Channel::Total => Err(Error::config(
             file,

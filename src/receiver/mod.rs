@@ -248,7 +248,8 @@ fn expand_one(
         kind,
         species,
         config.instrument.channel,
-        config.atmosphere.water_vapour.is_some(),
+        config.atmosphere.water_vapour.is_some()
+            || crate::atmosphere::water_vapour::from_fields(&config),
         &key,
         file,
     )?;

@@ -165,6 +165,7 @@ pub fn segments(path: &Path) -> Result<Vec<SegmentConfig>> {
                 aerosol: None,
                 surface: None,
                 water_vapour: None,
+                molecular: None,
             }
         })
         .collect())

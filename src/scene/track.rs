@@ -235,7 +235,7 @@ impl Track {
         most.min(cap)
     }
 
-    /// The config of one column: the segment's layers, aerosol, surface and water vapour in place of
+    /// The config of one column: the segment's layers, aerosol, surface, water vapour and molecules in place of
     /// the atmosphere's, its absent broken layers removed and its present ones whole.
     pub fn column_config(&self, base: &ScenarioConfig, c: Column) -> ScenarioConfig {
         let mut cfg = base.clone();
@@ -251,6 +251,9 @@ impl Track {
             }
             if let Some(w) = &seg.water_vapour {
                 cfg.atmosphere.water_vapour = Some(w.clone());
+            }
+            if let Some(m) = &seg.molecular {
+                cfg.atmosphere.molecular.model = m.clone();
             }
         }
         let mut k = 0;

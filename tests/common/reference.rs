@@ -575,7 +575,9 @@ impl RefAtmosphere {
                 assert_eq!(n, "us76");
                 true
             }
-            MolecularModel::File { .. } => panic!("the reference knows US76 only"),
+            MolecularModel::File { .. } | MolecularModel::Table { .. } => {
+                panic!("the reference knows US76 only")
+            }
         };
         let rho = m.depolarization.unwrap_or_else(|| rayleigh_rho_n(wl));
         let width = cfg.instrument.filter_width_nm;

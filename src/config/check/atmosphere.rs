@@ -8,26 +8,32 @@ use crate::error::Result;
 
 use super::{Checker, OwnerChecks};
 
+/// A molecular model's name (`atmosphere.molecular.model` or a segment's `molecular`,
+/// `key`); a file is read at build, a table checked by its owner (`owners.molecular`).
+pub(super) fn check_molecular_model(model: &MolecularModel, key: &str, c: &Checker) -> Result<()> {
+    match model {
+        MolecularModel::Named(name) if name != "us76" && name != "none" => Err(c.fail(
+            key,
+            format!(
+                "unknown model `{name}`: expected \"us76\", \"none\", {{ file = \"...\" }} or \
+                 {{ altitude_km = [...], pressure_hpa = [...], temperature_k = [...] }}"
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
 impl ScenarioConfig {
     pub(super) fn validate_atmosphere(&self, c: &Checker, owners: &OwnerChecks) -> Result<()> {
         let m = &self.atmosphere.molecular;
-        if let MolecularModel::Named(name) = &m.model
-            && name != "us76"
-            && name != "none"
-        {
-            return Err(c.fail(
-                "atmosphere.molecular.model",
-                format!(
-                    "unknown model `{name}`: expected \"us76\", \"none\" or {{ file = \"...\" }}"
-                ),
-            ));
-        }
+        check_molecular_model(&m.model, "atmosphere.molecular.model", c)?;
         if let Some(rho) = m.depolarization {
             c.range("atmosphere.molecular.depolarization", rho, 0.0, 0.2)?;
         }
         c.range("atmosphere.molecular.grid_m", m.grid_m, 0.1, 1000.0)?;
         (owners.ozone)(self, c)?;
         (owners.water_vapour)(self, c)?;
+        (owners.molecular)(self, c)?;
         if let Some(a) = &self.atmosphere.aerosol {
             c.positive("atmosphere.aerosol.visibility_km", a.visibility_km, 1e4)?;
             c.range(

@@ -78,6 +78,9 @@ pub struct OwnerChecks {
     pub ozone: OwnerCheck,
     /// `[atmosphere.water_vapour]` and the segments' (the mixing-ratio profile).
     pub water_vapour: OwnerCheck,
+    /// The molecular profiles given as tables: `atmosphere.molecular.model` and the
+    /// segments' `molecular` (a profile file's rows).
+    pub molecular: OwnerCheck,
     /// `[orbit]` (an orbit that exists).
     pub orbit: OwnerCheck,
     /// `[simulation]` (the sampler's tolerance).

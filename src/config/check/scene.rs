@@ -141,6 +141,9 @@ impl ScenarioConfig {
             if let Some(surface) = &seg.surface {
                 self.validate_surface(c, surface)?;
             }
+            if let Some(model) = &seg.molecular {
+                super::atmosphere::check_molecular_model(model, &key("molecular"), c)?;
+            }
         }
         Ok(())
     }

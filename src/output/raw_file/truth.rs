@@ -199,9 +199,10 @@ pub fn column_variables(lidar: &Lidar, columns: &[&[ExpectedProfile]]) -> Vec<Va
         vars.push(v);
     }
     let config = &lidar.channels[0].loaded.config;
-    let humid = crate::atmosphere::water_vapour::profiles(config)
-        .next()
-        .is_some();
+    let humid = crate::atmosphere::water_vapour::from_fields(config)
+        || crate::atmosphere::water_vapour::profiles(config)
+            .next()
+            .is_some();
     if filter_tables(lidar) {
         let mut data = Vec::new();
         for e in columns.iter().flat_map(|col| col.iter()) {

@@ -26,8 +26,10 @@ use std::path::PathBuf;
 use crate::atmosphere::cloud_optics::{
     air_density, extinction_per_m, ice_effective_radius_um, phase_optics,
 };
+
 use crate::config::{
-    CloudPhase, LayerConfig, LayerKind, ModelFieldsConfig, ScenarioConfig, SegmentConfig,
+    CloudPhase, FieldsMolecules, LayerConfig, LayerKind, ModelFieldsConfig, MolecularModel,
+    ScenarioConfig, SegmentConfig, WaterVapourConfig,
 };
 use crate::error::{Error, Result};
 use crate::scene::orbit::Orbit;
@@ -149,18 +151,43 @@ pub fn segments(
                 ..s.clone()
             }
         });
+        let (molecular, water_vapour) = match m.molecules {
+            FieldsMolecules::Fields => (Some(molecules(c)), Some(water_vapour(c))),
+            FieldsMolecules::Config => (None, None),
+        };
         let segment = |length_km: f64, layers: Vec<LayerConfig>| SegmentConfig {
             length_km,
             layers: Some(layers),
             aerosol: None,
             surface: surface.clone(),
-            water_vapour: None,
+            water_vapour: water_vapour.clone(),
+            molecular: molecular.clone(),
         };
         for (share, layers) in profile_subcolumns(m, c, seed, p as u64, shots_per_profile) {
             out.push(segment(length_km * share, layers));
         }
     }
     Ok(out)
+}
+
+/// The molecules of a column: its levels' heights, pressures and temperatures as a
+/// profile table (N = p/(k_B·T) at each level, ln N and ln p linear in height between
+/// levels, docs/model.md §4; above the model's top US76 continues it, scaled to match).
+pub fn molecules(c: &FieldColumn) -> MolecularModel {
+    MolecularModel::Table {
+        altitude_km: c.levels.iter().map(|l| l.height_m / 1e3).collect(),
+        pressure_hpa: c.levels.iter().map(|l| l.p_pa / 100.0).collect(),
+        temperature_k: c.levels.iter().map(|l| l.t_k).collect(),
+    }
+}
+
+/// The water vapour of a column for the H₂O Raman channels: the mass mixing ratio to dry
+/// air `r = q/(1 − q)` of each level's specific humidity q, in g kg⁻¹.
+pub fn water_vapour(c: &FieldColumn) -> WaterVapourConfig {
+    WaterVapourConfig {
+        altitude_km: c.levels.iter().map(|l| l.height_m / 1e3).collect(),
+        mixing_ratio_g_per_kg: c.levels.iter().map(|l| 1e3 * l.q / (1.0 - l.q)).collect(),
+    }
 }
 
 /// The subcolumns of profile `p` (its column `c`, `shots` shots), each with its share of
