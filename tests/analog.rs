@@ -260,7 +260,7 @@ fn a_both_pair_glues_with_the_files_constant() {
         err.contains("analog") && err.trim_end().lines().count() == 1,
         "{err}"
     );
-    let names = strings(&f, "channel");
+    let names = strings(&f, "channel_name");
     assert_eq!(
         names,
         [
@@ -408,7 +408,7 @@ fn the_glued_pollyxt_preset_validates_and_each_pair_has_a_common_linear_range() 
     let config = config_path("ground/pollyxt_like_glued.toml");
     common::h5::validate_preset_consistent(&dir, &config, "acquisition.accumulation_time_s=5");
     let f = simulate(&dir, &config, "glued.h5", "1");
-    let names = strings(&f, "channel");
+    let names = strings(&f, "channel_name");
     let linear = channel_rows(&f, "linear_range", names.len());
     for pair in ["355_total", "532_total", "1064_total"] {
         let k = |s: &str| {
@@ -449,7 +449,7 @@ fn a_both_pair_records_the_same_photons_shot_for_shot() {
     ];
     let f = common::h5::simulate_with(&dir, &config, "same.h5", "200", &more);
     let counts = floats(&f, "counts");
-    let names = strings(&f, "channel");
+    let names = strings(&f, "channel_name");
     let lsb = floats(&f, "adc_volts_per_count")[0];
     let offset = floats(&f, "analog_offset")[0] / lsb;
     let c = floats(&f, "analog_counts_per_photoelectron")[0];
@@ -656,7 +656,7 @@ fn the_glued_pairs_common_range_is_where_the_records_are_proportional() {
     let dir = scratch("glue-proportional");
     let config = config_path("ground/pollyxt_like_glued.toml");
     let f = simulate(&dir, &config, "glued.h5", "1");
-    let names = strings(&f, "channel");
+    let names = strings(&f, "channel_name");
     let n_ch = names.len();
     let row = |name: &str| channel_rows(&f, name, n_ch);
     let (recorded, linear) = (row("expected_counts"), row("linear_range"));

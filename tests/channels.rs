@@ -350,7 +350,7 @@ fn three_channels_in_one_file() {
     let bins = f.dataset("altitude").unwrap().shape()[0];
     assert_eq!(counts.shape(), vec![6, 3, bins]);
     assert_eq!(
-        strings(&f, "channel"),
+        strings(&f, "channel_name"),
         ["532_parallel", "532_perpendicular", "1064_total"]
     );
     let wl: Vec<f64> = f.dataset("wavelength").unwrap().read_raw().unwrap();

@@ -43,7 +43,7 @@ fn calibration_config(dir: &Path, d: f64, rotation_deg: f64) -> PathBuf {
 /// calibration constant of the perpendicular channel.
 fn ratios(dir: &Path, config: &Path, out: &str) -> (Vec<f64>, f64) {
     let f = simulate(dir, config, out, "1");
-    let names = strings(&f, "channel");
+    let names = strings(&f, "channel_name");
     let k = |n: &str| names.iter().position(|c| c == n).unwrap();
     let (par, per) = (k("532_parallel"), k("532_perpendicular"));
     let signal = channel_rows(&f, "expected_signal", names.len());
@@ -189,7 +189,7 @@ fn the_total_and_cross_layout_has_its_delta90_constant() {
         common::h5::simulate_with(&dir, &config, out, "1", &more)
     };
     let (plus, minus) = (run(45.0, "p.h5"), run(-45.0, "m.h5"));
-    let names = strings(&plus, "channel");
+    let names = strings(&plus, "channel_name");
     let k = |n: &str| names.iter().position(|c| c == n).unwrap();
     let truth = floats(&plus, "polarization_calibration_constant");
     for (total, cross, by_hand) in [

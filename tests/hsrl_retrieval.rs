@@ -36,7 +36,7 @@ fn the_hsrl_retrieval_of_the_expected_signals_recovers_backscatter_and_extinctio
         "a.h5",
         "2",
     );
-    let names = strings(&f, "channel");
+    let names = strings(&f, "channel_name");
     let k = |name: &str| names.iter().position(|c| c == name).unwrap();
     let (t, m) = (k("355_copolar_total"), k("355_copolar_molecular"));
     assert_eq!(strings(&f, "channel_kind")[m], "hsrl_molecular");
@@ -121,7 +121,7 @@ fn notch_fm(sigma_ghz: f64) -> f64 {
 fn a_filter_table_makes_the_molecular_share_follow_the_temperature() {
     let dir = scratch("hsrl-notch");
     let f = simulate(&dir, &notch_config(&dir), "n.h5", "2");
-    let names = strings(&f, "channel");
+    let names = strings(&f, "channel_name");
     let n = names.len();
     let m = names
         .iter()
@@ -276,7 +276,7 @@ fn the_surface_echo_passes_the_particle_share_and_no_raman_line() {
 /// particle backscatter and extinction over the bins of the layers more than two bins from
 /// their edges, and how many bins that was.
 fn hsrl_worst(f: &hdf5::File, fm: &dyn Fn(usize) -> f64, fp: f64) -> (f64, f64, usize) {
-    let names = strings(f, "channel");
+    let names = strings(f, "channel_name");
     let n = names.len();
     let k = |name: &str| names.iter().position(|c| c == name).unwrap();
     let (t, m, x) = (

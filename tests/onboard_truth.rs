@@ -163,7 +163,7 @@ fn a_straddling_profile_has_the_shares_of_its_shots_and_the_mean_native_truth() 
 
 /// The channel names of `group` of `file`.
 fn channel_names(file: &Path, group: &str) -> Vec<String> {
-    let names = read::<hdf5::types::VarLenUnicode>(file, group, "channel").0;
+    let names = read::<hdf5::types::VarLenUnicode>(file, group, "channel_name").0;
     names.iter().map(|n| n.as_str().to_string()).collect()
 }
 
@@ -506,7 +506,7 @@ fn region_profiles_are_geolocated_at_their_centres() {
         .unwrap();
     assert_eq!(
         coords.as_str(),
-        "time latitude longitude along_track_distance altitude"
+        "time latitude longitude along_track_distance altitude channel_name"
     );
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -30,7 +30,7 @@ fn preset_file(dir: &Path) -> hdf5::File {
 /// from every layer edge where the aerosol extinction is above 1e-6 m⁻¹; and how many
 /// bins that was.
 fn ansmann_worst(f: &hdf5::File, elastic: usize, raman: usize) -> (f64, usize) {
-    let n = strings(f, "channel").len();
+    let n = strings(f, "channel_name").len();
     let signal = &per_channel(f, "expected_signal", n)[raman];
     let range = floats(f, "range");
     let overlap = floats(f, "overlap");
@@ -79,7 +79,7 @@ fn ansmann_worst(f: &hdf5::File, elastic: usize, raman: usize) -> (f64, usize) {
 fn the_ansmann_retrieval_of_the_expected_raman_signal_recovers_the_aerosol() {
     let dir = scratch("raman-ansmann");
     let f = preset_file(&dir);
-    let names = strings(&f, "channel");
+    let names = strings(&f, "channel_name");
     let k = |name: &str| names.iter().position(|c| c == name).unwrap();
     for (elastic, raman) in [("355_total", "387_raman_N2"), ("532_total", "607_raman_N2")] {
         let (worst, bins) = ansmann_worst(&f, k(elastic), k(raman));
@@ -100,7 +100,7 @@ fn the_ansmann_retrieval_of_the_expected_raman_signal_recovers_the_aerosol() {
 fn a_raman_channel_is_described_and_its_truth_is_its_own() {
     let dir = scratch("raman-describe");
     let f = preset_file(&dir);
-    let names = strings(&f, "channel");
+    let names = strings(&f, "channel_name");
     let n = names.len();
     let k = |name: &str| names.iter().position(|c| c == name).unwrap();
     let (e, r) = (k("355_total"), k("387_raman_N2"));
@@ -228,7 +228,7 @@ fn validate_rejects_a_raman_expectation_two_percent_off() {
     std::fs::copy(dir.join("v.h5"), dir.join("off.h5")).unwrap();
     {
         let f = hdf5::File::open_rw(dir.join("off.h5")).unwrap();
-        let names = strings(&f, "channel");
+        let names = strings(&f, "channel_name");
         for name in ["expected_signal", "expected_counts"] {
             let d = f.dataset(name).unwrap();
             let shape = d.shape();

@@ -40,7 +40,7 @@ const BAND_SHARE: f64 = 0.774;
 /// The worst relative error of the retrieval over the bins of full overlap where the
 /// profile has more than 0.01 g/kg, and how many bins that was.
 fn retrieval_worst(f: &hdf5::File) -> (f64, usize) {
-    let names = strings(f, "channel");
+    let names = strings(f, "channel_name");
     let n = names.len();
     let k = |name: &str| names.iter().position(|c| c == name).unwrap();
     let (h, m) = (k("407_raman_H2O"), k("387_raman_N2"));
@@ -95,7 +95,7 @@ fn the_water_vapour_retrieval_of_the_expected_signals_recovers_the_mixing_ratio(
 fn a_water_vapour_channel_is_described_and_its_truth_is_its_own() {
     let dir = scratch("wv-describe");
     let f = simulate(&dir, &config_path("ground/pollyxt_like.toml"), "p.h5", "2");
-    let names = strings(&f, "channel");
+    let names = strings(&f, "channel_name");
     let n = names.len();
     let h = names.iter().position(|c| c == "407_raman_H2O").unwrap();
     assert_eq!(strings(&f, "channel_kind")[h], "raman");

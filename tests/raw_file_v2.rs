@@ -72,7 +72,7 @@ fn same_arguments_and_source_date_epoch_give_identical_bytes() {
 }
 
 #[test]
-fn the_layout_is_format_version_4() {
+fn the_layout_is_format_version_5() {
     let dir = scratch("layout");
     let out = dir.join("s1.h5");
     simulate(
@@ -91,13 +91,18 @@ fn the_layout_is_format_version_4() {
         .unwrap()
         .read_scalar()
         .unwrap();
-    assert_eq!(v, 4);
+    assert_eq!(v, 5);
     assert_eq!(f.dataset("pulse_energy").unwrap().shape(), vec![4, 1]);
     assert!(str_attr(&f, "Conventions").starts_with("CF-1."));
     let counts = f.dataset("counts").unwrap();
     assert_eq!(counts.shape(), vec![4, 1, 334]);
-    assert_eq!(str_attr(&counts, "coordinates"), "time altitude range");
-    let ch: Vec<VarLenUnicode> = f.dataset("channel").unwrap().read_raw().unwrap();
+    assert_eq!(
+        str_attr(&counts, "coordinates"),
+        "time altitude range channel_name"
+    );
+    let ch: Vec<i64> = f.dataset("channel").unwrap().read_raw().unwrap();
+    assert_eq!(ch, [0]);
+    let ch: Vec<VarLenUnicode> = f.dataset("channel_name").unwrap().read_raw().unwrap();
     assert_eq!(ch[0].as_str(), "532_total");
     let time = f.dataset("time").unwrap();
     assert_eq!(
@@ -293,8 +298,8 @@ fn each_channel_has_the_energy_of_its_laser_line() {
 }
 
 /// Readers of older files keep working: the PollyXT-like file made a format-3 file
-/// (`pulse_energy` (profile), the first channel's, as version 3 wrote it; the version
-/// attribute 3) is read by `validate --file` (consistent), `quicklook` (every channel at
+/// (`pulse_energy` (profile), the first channel's, and `channel` the names, as version
+/// 3 wrote them; the version attribute 3) is read by `validate --file` (consistent), `quicklook` (every channel at
 /// its own energy: the same figure as the format-4 file's), `curtain` and `export-scc`.
 #[test]
 fn a_format_3_file_is_still_read_by_every_reader() {
@@ -333,6 +338,16 @@ fn a_format_3_file_is_still_read_by_every_reader() {
         f.attr("lidarsim_format_version")
             .unwrap()
             .write_scalar(&3i32)
+            .unwrap();
+        // before format 5, `channel` held the names (no `channel_name`)
+        let names: Vec<VarLenUnicode> = f.dataset("channel_name").unwrap().read_raw().unwrap();
+        f.unlink("channel_name").unwrap();
+        f.unlink("channel").unwrap();
+        f.new_dataset::<VarLenUnicode>()
+            .shape(names.len())
+            .create("channel")
+            .unwrap()
+            .write_raw(&names)
             .unwrap();
         // closed for certain before the readers open it (a handle still open here, with
         // the other tests of this binary running beside it, left the file locked: "not

@@ -10,7 +10,12 @@ and with `ncdump -h` (if on PATH), and checks that:
     optional signal/background/dark components have its shape and type and sum to it;
   * the dimensions are named exactly `profile`, `channel` and `bin` (no `phony_dim_*`)
     in every reader, with the same lengths;
-  * format version 4 (3 and 2 are read as older formats): `pulse_energy` is (profile,
+  * format version 5: `channel` numbers the channels 0, 1, ... (int), `channel_name`
+    holds their distinct names (strings), every other variable with the channel
+    dimension lists `channel_name` in its `coordinates` attribute, xarray attaches it as
+    a coordinate, and `ds.set_xindex("channel_name").sel(channel_name=NAME)` is
+    `ds.isel(channel=K)` (formats 2 to 4: `channel` the names);
+  * format version 4 and later (3 and 2 are read as older formats): `pulse_energy` is (profile,
     channel), finite and >= 0, each channel's at its own laser line (a channel's
     `pulse_energy / nominal_pulse_energy` is the profile's energy factor, shared by
     every channel: one laser's shots; 1e-12); text attributes come back from h5py as `str`; xarray decodes
@@ -64,7 +69,7 @@ DIMS = ("profile", "channel", "bin")
 # the format-3 dimensions of the truth: the scene's columns and a profile's column slots
 TRUTH_DIMS = ("column", "k")
 # variables that need no units: strings
-NO_UNITS = {"channel"} | set(CHANNEL_TEXT)
+NO_UNITS = {"channel", "channel_name"} | set(CHANNEL_TEXT)
 
 
 class Checker:
@@ -120,7 +125,8 @@ def check_h5py(path, c, structure_only):
         for name, value in f.attrs.items():
             c.check(not isinstance(value, bytes), f"h5py: root attribute {name} comes back as bytes, not str")
         if not structure_only:
-            for name in REQUIRED_VARIABLES:
+            version = int(f.attrs.get("lidarsim_format_version", 0))
+            for name in REQUIRED_VARIABLES + (["channel_name"] if version >= 5 else []):
                 c.check(name in datasets, f"h5py: required variable {name!r} missing")
             for name in REQUIRED_ROOT_ATTRIBUTES:
                 c.check(name in f.attrs, f"h5py: required root attribute {name!r} missing")
@@ -186,15 +192,46 @@ def check_h5py(path, c, structure_only):
             c.check(bool(np.all(counted[..., dead, :] <= total[..., dead, :] * (1 + 1e-9))),
                     "h5py: expected_counts above signal + background + dark (dead time)")
             version = int(f.attrs["lidarsim_format_version"])
-            c.check(version in (2, 3, 4), f"h5py: lidarsim_format_version {version} is not 2 to 4")
+            c.check(version in (2, 3, 4, 5), f"h5py: lidarsim_format_version {version} is not 2 to 5")
             if version >= 4:
                 check_energy(data, c)
             check_truth(data, c)
+        check_channel_labels(f, datasets, c)
         for name in DIMS:
             if name in f:
                 c.check(f[name].attrs.get("CLASS") is not None and as_text(f[name].attrs["CLASS"]) == "DIMENSION_SCALE",
                         f"h5py: {name} is not a dimension scale")
     return dims
+
+
+def check_channel_labels(f, datasets, c):
+    """Format 5: `channel` 0, 1, ... (integers), `channel_name` distinct strings of the
+    same length, listed in the `coordinates` of every other variable with the channel
+    dimension; formats 2 to 4: `channel` the distinct names."""
+    import numpy as np
+
+    if "channel" not in f:
+        return
+    version = int(f.attrs.get("lidarsim_format_version", 0))
+    channel = f["channel"][()]
+    if version < 5:
+        names = [as_text(x) for x in channel]
+        c.check(all(isinstance(x, str) for x in names), "h5py: channel names (format < 5) are not strings")
+        c.check(len(set(names)) == len(names), f"h5py: channel names {names} are not distinct")
+        return
+    c.check(channel.dtype.kind == "i" and np.array_equal(channel, np.arange(len(channel))),
+            f"h5py: channel is {channel.dtype} {channel.tolist()}, not the integers 0 .. n-1")
+    if not c.check("channel_name" in f, "h5py: format 5 without channel_name"):
+        return
+    names = [as_text(x) for x in f["channel_name"][()]]
+    c.check(all(isinstance(x, str) and x for x in names) and len(set(names)) == len(names) == len(channel),
+            f"h5py: channel_name {names} are not {len(channel)} distinct non-empty strings")
+    for name, ds in datasets.items():
+        dims = [d.values()[0].name.lstrip("/") if len(d) else "" for d in ds.dims]
+        if "channel" in dims and name not in ("channel", "channel_name"):
+            coords = str(as_text(ds.attrs.get("coordinates", ""))).split()
+            c.check("channel_name" in coords, f"h5py: {name} has the channel dimension but its coordinates {coords} "
+                    "do not list channel_name")
 
 
 def check_energy(data, c):
@@ -321,7 +358,16 @@ def check_xarray(path, engine, c, dims):
             if engine == "h5netcdf":
                 import numpy as np
                 c.check(bool(np.all(np.isfinite(beta.values))), f"xarray[{engine}]: the recipe gives NaN")
-        if "channel" in ds:
+        if "channel_name" in ds.variables:
+            # format 5: the names are a coordinate, and the one-call recipe of the README selects by name
+            c.check("channel_name" in ds.coords, f"xarray[{engine}]: channel_name is not a coordinate")
+            names = ds["channel_name"].values.tolist()
+            c.check(all(isinstance(x, str) for x in names), f"xarray[{engine}]: channel_name values are not str")
+            by_name = ds.set_xindex("channel_name").sel(channel_name=names[-1])
+            c.check(int(by_name["channel"]) == len(names) - 1 and
+                    bool((by_name.counts == ds.counts.isel(channel=-1)).all()),
+                    f"xarray[{engine}]: set_xindex('channel_name').sel(channel_name=...) is not that channel")
+        elif "channel" in ds:
             c.check(all(isinstance(x, str) for x in ds["channel"].values.tolist()),
                     f"xarray[{engine}]: channel names are not str")
 

@@ -21,11 +21,18 @@ import numpy as np
 import xarray as xr
 
 
+def _names(group):
+    """A region group's channel names: `channel_name` beside the numbered `channel`
+    (format 5), or the strings of `channel` (formats 2 to 4)."""
+    label = "channel_name" if "channel_name" in group else "channel"
+    return list(group[label].asstr()[:])
+
+
 def _regions(path, channel):
     """The region groups of `path` holding `channel`, in file order."""
     with h5py.File(path, "r") as f:
         names = sorted((g for g in f if g.startswith("region_")), key=lambda g: int(g[7:]))
-        return [g for g in names if channel in f[g]["channel"].asstr()[:]]
+        return [g for g in names if channel in _names(f[g])]
 
 
 def _spacing(values, fallback):
@@ -43,11 +50,13 @@ def stitch(path, channel, per_metre=True):
     for g in groups:
         ds = xr.open_dataset(path, engine="h5netcdf", group=g)
         res_m = float(ds.attrs["vertical_resolution_m"])
-        counts = ds.counts.sel(channel=channel).astype("float64") / ds.n_shots
+        by = "channel_name" if "channel_name" in ds.variables else "channel"
+        counts = ds.counts.isel(channel=list(ds[by].values).index(channel))
+        counts = counts.astype("float64") / ds.n_shots
         if per_metre:
             counts = counts / res_m
         da = counts.swap_dims(bin="altitude", profile="time").drop_vars(
-            [c for c in ("bin", "profile", "channel") if c in counts.coords]
+            [c for c in ("bin", "profile", "channel", "channel_name") if c in counts.coords]
         )
         step_m = abs(_spacing(ds.altitude.values, res_m))
         parts.append((da, step_m, int(ds.attrs["shots_averaged"])))

@@ -75,7 +75,7 @@ def retrieve(raw: xr.Dataset, channel: str = CHANNEL, lidar_ratio_scale: float =
     ``lidar_ratio_scale`` multiplies the aerosol lidar ratio handed to the retrieval,
     ``reference_scattering_ratio`` is the assumed (β_aer + β_mol)/β_mol at the
     reference: 1 and 1 are the right values, anything else a deliberate error."""
-    ch = raw.sel(channel=channel)
+    ch = raw.sel(channel_name=channel)  # the channels by name (format 5 numbers them)
     truth = ch.isel(column=0)  # a static scene has one column of truth
 
     # Counts per shot, averaged over the profiles. The counts are unsigned: convert

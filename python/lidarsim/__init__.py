@@ -180,11 +180,21 @@ def _dataset(variables: list, root: list) -> xr.Dataset:
     if decode:  # xarray's own decoding, as its file reader does it (with the
         # coordinates already taken from the variables before the first that needed it)
         ds = xr.decode_cf(xr.Dataset(data, attrs=attrs(root)))
-        return ds.set_coords([c for c in coords if c in ds.data_vars])
-    # nothing else to decode but the coordinates (what decode_cf would do, in a third of
-    # its time)
-    return xr.Dataset({k: v for k, v in data.items() if k not in coords},
-                      coords={k: data[k] for k in coords}, attrs=attrs(root))
+        ds = ds.set_coords([c for c in coords if c in ds.data_vars])
+    else:  # nothing else to decode but the coordinates (what decode_cf would do, in a
+        # third of its time)
+        ds = xr.Dataset({k: v for k, v in data.items() if k not in coords},
+                        coords={k: data[k] for k in coords}, attrs=attrs(root))
+    return _by_name(ds)
+
+
+def _by_name(ds: xr.Dataset) -> xr.Dataset:
+    """``ds`` with its channels indexed by name too (format 5's numbered ``channel`` and
+    its label ``channel_name``): ``ds.sel(channel_name="532_total")`` in one call, as
+    ``ds.set_xindex("channel_name")`` gives a Dataset read from a file."""
+    if "channel_name" in ds.coords and "channel_name" not in ds.xindexes:
+        ds = ds.set_xindex("channel_name")
+    return ds
 
 
 def _one_channel(ds: xr.Dataset, cfg: Config, channel: Optional[str]) -> xr.Dataset:
@@ -294,8 +304,11 @@ def per_profile(ds: xr.Dataset, name: str) -> xr.DataArray:
     data = _as_per_profile(ds, name)
     attrs = dict(ds[name].attrs) if name in ds else {}
     attrs.pop("coordinates", None)
+    coords = {"profile": ds["profile"], "channel": ds["channel"]}
+    if "channel_name" in ds.coords:
+        coords["channel_name"] = ds["channel_name"]
     return xr.DataArray(data, dims=("profile", "channel", "bin"),
-                        coords={"profile": ds["profile"], "channel": ds["channel"]},
+                        coords=coords,
                         name=name, attrs=attrs)
 
 

@@ -44,7 +44,7 @@ def test_expect_equals_the_cli_csv_to_the_last_bit(tmp_path):
         theirs = table[:, k]
         same = (ours == theirs) | (np.isnan(ours) & np.isnan(theirs))
         assert same.all(), f"{name}: {ours[~same][:3]} against {theirs[~same][:3]}"
-    assert ds.channel.item() == "532_perpendicular"
+    assert ds.channel_name.item() == "532_perpendicular"
     assert ds.snr.dims == ("bin",)
     # the file's S/N takes the profile's whole shots (15), the CSV's rep_rate x time
     # (20.16 Hz x 0.744 s = 14.999): Eq. 4 grows as the root of the shots

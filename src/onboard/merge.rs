@@ -165,10 +165,7 @@ fn region_spec(
             .map_err(unreadable(&f.path))
     };
     let altitude = g.dataset("altitude").map_err(unreadable(&f.path))?;
-    let channels = g
-        .dataset("channel")
-        .and_then(|c| c.read_raw::<hdf5::types::VarLenUnicode>())
-        .map_err(unreadable(&f.path))?;
+    let (channels, numbers) = region_channels(&f.path, &g)?;
     let r = &f.regions[k];
     let fixed = fixed_variables(&beta_mol_attributes(&g, &f.path)?, |name| {
         g.dataset(name)
@@ -185,7 +182,8 @@ fn region_spec(
         },
         first_profile: 0,
         profiles,
-        channels: channels.iter().map(|c| c.as_str().to_string()).collect(),
+        channels,
+        channel_numbers: numbers,
         altitude_m: altitude.read_raw::<f64>().map_err(unreadable(&f.path))?,
         shots: f.regions[k].shots,
         merge: g
@@ -198,6 +196,19 @@ fn region_spec(
             num("vertical_resolution_m")?,
         ),
     })
+}
+
+/// The names and numbers of region `g`'s channels (`channel_name`, `channel`); a
+/// product of an earlier version, whose `channel` held the names, is refused.
+fn region_channels(path: &Path, g: &Group) -> Result<(Vec<String>, Vec<i64>)> {
+    let prefix = format!("{}/", g.name().trim_start_matches('/'));
+    match crate::output::raw_file::integrity::channel_labels(path, g, &prefix)? {
+        (names, Some(numbers)) => Ok((names, numbers)),
+        _ => Err(Error::output(
+            path,
+            format!("`{prefix}channel` holds the names: a product of an earlier version"),
+        )),
+    }
 }
 
 /// The attributes of a region's `beta_mol` beyond its long name and units, as the run
@@ -223,20 +234,14 @@ fn beta_mol_attributes(g: &Group, path: &Path) -> Result<Vec<(String, AttrValue)
 /// the whole run records it.
 fn header(f: &ProductShard, file: &hdf5::File) -> Result<ProductHeader> {
     let g = file.group("region_0").map_err(unreadable(&f.path))?;
-    let read = || -> hdf5::Result<(Vec<String>, String)> {
-        let channels = g
-            .dataset("channel")?
-            .read_raw::<hdf5::types::VarLenUnicode>()?;
-        let units = g
-            .dataset("time")?
-            .attr("units")?
-            .read_scalar::<hdf5::types::VarLenUnicode>()?;
-        Ok((
-            channels.iter().map(|c| c.as_str().to_string()).collect(),
-            units.as_str().to_string(),
-        ))
-    };
-    let (channels, time_units) = read().map_err(unreadable(&f.path))?;
+    let (channels, _) = region_channels(&f.path, &g)?;
+    let time_units = g
+        .dataset("time")
+        .and_then(|d| d.attr("units"))
+        .and_then(|a| a.read_scalar::<hdf5::types::VarLenUnicode>())
+        .map_err(unreadable(&f.path))?
+        .as_str()
+        .to_string();
     Ok(ProductHeader {
         channels,
         time_units,

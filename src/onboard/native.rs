@@ -224,6 +224,11 @@ impl NativeRun {
                         .iter()
                         .map(|&c| names[c].clone())
                         .collect(),
+                    channel_numbers: r
+                        .channel_indices(names.len())
+                        .iter()
+                        .map(|&c| c as i64)
+                        .collect(),
                     altitude_m,
                     shots: r.shots,
                     merge: u32::try_from(r.merge).unwrap_or(u32::MAX),

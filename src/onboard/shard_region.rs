@@ -28,12 +28,13 @@ impl ShardRegion {
     /// Region group `g` of the shard at `path`, checked as a raw file's variables are
     /// ([`crate::output::raw_file::read`]): `counts` (profile, channel, bin) of unsigned
     /// integers holding the values it declares, `time` and `n_shots` (profile), `channel`
-    /// (channel), `altitude` (bin), finite coordinates, `shots_averaged` ≥ 1.
+    /// (channel; numbered, named by `channel_name`, or the names in earlier products),
+    /// `altitude` (bin), finite coordinates, `shots_averaged` ≥ 1.
     pub(super) fn of(g: &Group, path: &Path) -> Result<ShardRegion> {
-        use crate::output::raw_file::integrity::{check_at_least_one, check_calibration};
-        use crate::output::raw_file::read::{
-            check_finite, check_storage, is_float, is_unsigned, read_text,
+        use crate::output::raw_file::integrity::{
+            channel_labels, check_at_least_one, check_calibration,
         };
+        use crate::output::raw_file::read::{check_finite, check_storage, is_float, is_unsigned};
         let region = g.name().trim_start_matches('/').to_string();
         let bad = |why: String| Error::output(path, format!("{region}: {why}"));
         let get = |name: &str| {
@@ -111,10 +112,12 @@ impl ShardRegion {
             geolocation: g.dataset("latitude").is_ok(),
         };
         out.check_fixed(g, path, &region)?;
-        // the calibration every reader divides by, as a raw file's
-        let names = read_text(path, g, "channel")?;
+        // the channels' names and numbers, and the calibration every reader divides by,
+        // as a raw file's
+        let prefix = format!("{region}/");
+        let (names, _) = channel_labels(path, g, &prefix)?;
         let analog = vec![false; names.len()];
-        check_calibration(path, g, &format!("{region}/"), &names, &analog)?;
+        check_calibration(path, g, &prefix, &names, &analog)?;
         out.check_truth(g, path, &region)?;
         Ok(out)
     }

@@ -1,7 +1,8 @@
 //! The onboard product (`lidarsim onboard`, docs/file-format.md): one HDF5 group per altitude
 //! region of the scheme (`region_0` … from the top), each with its own `profile`,
-//! `channel` (the channels the region holds: all of them but where a channel has a layout
-//! of its own, as CALIOP's 1064 nm) and `bin` dimension scales, `altitude`, `time`, `n_shots` and
+//! `channel` (the numbers of the channels the region holds, named by `channel_name`: all
+//! of them but where a channel has a layout of its own, as CALIOP's 1064 nm) and `bin`
+//! dimension scales, `altitude`, `time`, `n_shots` and
 //! `counts (profile, channel, bin)` (integer sums, u32), and the region's attributes
 //! `altitude_min_km`, `altitude_max_km`, `vertical_resolution_m`, `shots_averaged`,
 //! `native_bins_merged`, and the truth averaged as the counts (`onboard::truth`).
@@ -21,7 +22,7 @@ use hdf5::{Dataset, File, Group};
 
 use super::raw_file::chunk::{self, Filling};
 use super::raw_file::layout::{create_file, create_group, create_var, write_index};
-use super::raw_file::{AttrValue, check::Row, hdf5_ds};
+use super::raw_file::{AttrValue, CHANNEL_NAME, check::Row, hdf5_ds};
 use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
 
@@ -48,8 +49,11 @@ pub struct RegionSpec {
     pub first_profile: usize,
     /// Downlinked profiles in the file.
     pub profiles: usize,
-    /// The channels it holds (its `channel` coordinate).
+    /// The names of the channels it holds (its `channel_name` coordinate).
     pub channels: Vec<String>,
+    /// Their numbers among the run's channels (its `channel` coordinate, as a raw file
+    /// numbers them: 0, 1, …), strictly increasing.
+    pub channel_numbers: Vec<i64>,
     /// Bin-centre altitude of each downlinked bin, m.
     pub altitude_m: Vec<f64>,
     /// Shots summed per profile.
@@ -333,13 +337,14 @@ fn dimension_scales(g: &Group, r: &RegionSpec, channels: &[String]) -> hdf5::Res
     )?;
     text(&profile, "units", "1")?;
     hdf5_ds::set_scale(&profile, "profile")?;
-    let channel = create_var::<VarLenUnicode>(g, "channel", &[channels.len()])?;
-    let names: Vec<VarLenUnicode> = channels
-        .iter()
-        .map(|c| c.parse().unwrap_or_default())
-        .collect();
-    channel.write_raw(&names)?;
-    text(&channel, "long_name", "receiver channel")?;
+    let channel = create_var::<i64>(g, "channel", &[channels.len()])?;
+    channel.write_raw(&r.channel_numbers)?;
+    text(
+        &channel,
+        "long_name",
+        "receiver channel number (as the raw file numbers it)",
+    )?;
+    text(&channel, "units", "1")?;
     hdf5_ds::set_scale(&channel, "channel")?;
     let bin = create_var::<i64>(g, "bin", &[r.altitude_m.len()])?;
     write_index(&bin, 0, r.altitude_m.len())?;
@@ -350,6 +355,14 @@ fn dimension_scales(g: &Group, r: &RegionSpec, channels: &[String]) -> hdf5::Res
     )?;
     text(&bin, "units", "1")?;
     hdf5_ds::set_scale(&bin, "bin")?;
+    let name = create_var::<VarLenUnicode>(g, CHANNEL_NAME, &[channels.len()])?;
+    let names: Vec<VarLenUnicode> = channels
+        .iter()
+        .map(|c| c.parse().unwrap_or_default())
+        .collect();
+    name.write_raw(&names)?;
+    text(&name, "long_name", "receiver channel name")?;
+    hdf5_ds::attach_scales(&name, &[&channel])?;
     Ok([profile, channel, bin])
 }
 
@@ -428,8 +441,14 @@ fn truth_layout(
         for (name, value) in &v.attributes {
             hdf5_ds::write_attr(&ds, name, value)?;
         }
-        if matches!(v.dims, RegionDims::Bin | RegionDims::ColumnChannelBin) {
-            hdf5_ds::write_str_attr(&ds, "coordinates", "altitude")?;
+        let coordinates = match v.dims {
+            RegionDims::Bin => "altitude",
+            RegionDims::Channel => CHANNEL_NAME,
+            RegionDims::ColumnChannelBin => "altitude channel_name",
+            _ => "",
+        };
+        if !coordinates.is_empty() {
+            hdf5_ds::write_str_attr(&ds, "coordinates", coordinates)?;
         }
         hdf5_ds::attach_scales(&ds, &scales)?;
     }
@@ -442,7 +461,12 @@ fn truth_layout(
             hdf5_ds::write_attr(&ds, name, value)?;
         }
         if !coordinate(&v.name) {
-            hdf5_ds::write_str_attr(&ds, "coordinates", &t.profile_coordinates)?;
+            let label = match v.dims {
+                RegionDims::ProfileChannel => " channel_name",
+                _ => "",
+            };
+            let coordinates = format!("{}{label}", t.profile_coordinates);
+            hdf5_ds::write_str_attr(&ds, "coordinates", &coordinates)?;
         }
         hdf5_ds::attach_scales(&ds, &scales)?;
         values.push((ds, t.width(v.dims, channels)));
@@ -521,7 +545,7 @@ fn region_layout(
         "photon counts summed over the region's shots and native bins (onboard averaging)",
     )?;
     text(&counts, "units", "count")?;
-    let coordinates = format!("{} altitude", r.truth.profile_coordinates);
+    let coordinates = format!("{} altitude {CHANNEL_NAME}", r.truth.profile_coordinates);
     text(&counts, "coordinates", &coordinates)?;
     hdf5_ds::attach_scales(&counts, &[&profile, &channel, &bin])?;
     let (values, columns) = truth_layout(g, r, [&profile, &channel, &bin])?;

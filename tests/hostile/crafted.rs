@@ -64,8 +64,8 @@ pub fn cases() -> Vec<Case> {
             curtain(),
         ),
         c(
-            "curtain: format version 5",
-            Refused("format version 5"),
+            "curtain: format version 6",
+            Refused("format version 6"),
             curtain(),
         ),
         c(
@@ -101,8 +101,8 @@ pub fn cases() -> Vec<Case> {
         ),
         // --- shards read by `merge` ---
         c(
-            "merge: raw shard of format version 5",
-            Refused("format version 5"),
+            "merge: raw shard of format version 6",
+            Refused("format version 6"),
             merge(),
         ),
         c(
@@ -365,7 +365,7 @@ pub fn prepare(name: &str, dir: &Scratch) -> Option<bool> {
         "curtain: altitude of the wrong length" => {
             replace_f64(&open(dir, "raw.h5"), "altitude", &[1.0; 100])
         }
-        "curtain: format version 5" | "merge: raw shard of format version 5" => {
+        "curtain: format version 6" | "merge: raw shard of format version 6" => {
             let file = if name.starts_with("merge") {
                 "shard.h5"
             } else {
@@ -374,7 +374,7 @@ pub fn prepare(name: &str, dir: &Scratch) -> Option<bool> {
             open(dir, file)
                 .attr("lidarsim_format_version")
                 .unwrap()
-                .write_scalar(&5i32)
+                .write_scalar(&6i32)
                 .unwrap();
         }
         "curtain: float counts" => {

@@ -19,7 +19,6 @@ use super::raw::{
 use super::title::{Source, span_edges, title_line};
 use crate::error::Result;
 use crate::figures::plot::panel::{edges, widen};
-use crate::output::raw_file::read::read_text;
 
 /// One region group as the quicklook reads it.
 struct Region {
@@ -53,7 +52,9 @@ fn regions(path: &Path, f: &hdf5::File, xname: &str) -> Result<Vec<Region>> {
         // is drawn
         crate::onboard::merge::check_region(&group, path)?;
         let v = Vars { path, f: &group };
-        let channels = read_text(path, &group, "channel")?;
+        let prefix = format!("{name}/");
+        let (channels, _) =
+            crate::output::raw_file::integrity::channel_labels(path, &group, &prefix)?;
         let altitude_km: Vec<f64> = v.f64s("altitude")?.iter().map(|z| z / 1e3).collect();
         let n_profiles = v.ds("n_shots")?.shape().first().copied().unwrap_or(0);
         if n_profiles == 0 || altitude_km.is_empty() || altitude_km.iter().any(|z| !z.is_finite()) {

@@ -4,6 +4,9 @@
 //! product shards), `validate --file` (and so Python's `validate_file`), `quicklook`,
 //! `curtain` and `export-scc` (`docs/file-format.md`, "What a reader accepts").
 //!
+//! * the channels' names (`channel_name`, or `channel` before format 5) are not empty
+//!   and each given once, the channel numbers (format 5) strictly increasing
+//!   ([`channel_labels`]);
 //! * the channel's strings are words of their vocabulary ([`CHANNEL_WORDS`]), and a
 //!   `glue_partner` is another channel of the file or empty;
 //! * the calibration is a number of its sign ([`CALIBRATION`]): `lidar_constant` and
@@ -21,11 +24,12 @@
 
 use std::path::Path;
 
+use hdf5::types::TypeDescriptor;
 use hdf5::{Dataset, Group};
 use ndarray::{Ix1, Ix2, Ix3, s};
 
 use super::read::{RawHeader, is_float, read_text};
-use super::spec::{COMPONENT_NAMES, PROFILE_COLUMN_NAMES};
+use super::spec::{CHANNEL_DIM, CHANNEL_NAME, COMPONENT_NAMES, PROFILE_COLUMN_NAMES};
 use crate::error::describe_hdf5_error;
 use crate::error::{Error, Result};
 
@@ -169,6 +173,70 @@ pub fn check_column_rows(
         }
     }
     Ok(())
+}
+
+/// The channels' names of group `g` (a raw file's root, `prefix` empty, or a product's
+/// region, `prefix` its name and a `/`) and their numbers: `channel` whole numbers ≥ 0,
+/// strictly increasing, labelled by the strings of `channel_name` (format 5 raw files
+/// and this version's products), or the strings of `channel` (earlier files: no
+/// numbers). Refuses numbers without `channel_name`, a `channel_name` of another length
+/// or not strings, and a name empty or given twice.
+pub fn channel_labels(
+    path: &Path,
+    g: &Group,
+    prefix: &str,
+) -> Result<(Vec<String>, Option<Vec<i64>>)> {
+    let bad = |why: String| Error::output(path, why);
+    let d = g
+        .dataset(CHANNEL_DIM)
+        .map_err(|_| bad(format!("has no `{prefix}{CHANNEL_DIM}`")))?;
+    let integer = d
+        .dtype()
+        .and_then(|t| t.to_descriptor())
+        .is_ok_and(|t| matches!(t, TypeDescriptor::Integer(_) | TypeDescriptor::Unsigned(_)));
+    let (label, names, numbers) = if integer {
+        let full = format!("{prefix}{CHANNEL_DIM}");
+        let numbers = d.read_raw::<i64>().map_err(unreadable(path, &full))?;
+        let wrong =
+            (0..numbers.len()).find(|&i| numbers[i] < 0 || i > 0 && numbers[i] <= numbers[i - 1]);
+        if let Some(i) = wrong {
+            return Err(bad(format!(
+                "`{full}` value {i} is {}; the channel numbers are whole numbers ≥ 0, \
+                 strictly increasing",
+                numbers[i]
+            )));
+        }
+        if !g.link_exists(CHANNEL_NAME) {
+            return Err(bad(format!(
+                "has no `{prefix}{CHANNEL_NAME}`: its numbered channels have no names"
+            )));
+        }
+        let names = read_text(path, g, CHANNEL_NAME)?;
+        if names.len() != numbers.len() {
+            return Err(bad(format!(
+                "`{prefix}{CHANNEL_NAME}` holds {} names for the {} channels of `{full}`",
+                names.len(),
+                numbers.len()
+            )));
+        }
+        (CHANNEL_NAME, names, Some(numbers))
+    } else {
+        (CHANNEL_DIM, read_text(path, g, CHANNEL_DIM)?, None)
+    };
+    let mut seen = std::collections::HashSet::new();
+    for (i, name) in names.iter().enumerate() {
+        if name.is_empty() || !seen.insert(name) {
+            let why = if name.is_empty() {
+                "empty"
+            } else {
+                "given twice"
+            };
+            return Err(bad(format!(
+                "`{prefix}{label}` value {i} ({name:?}) is {why}; each channel has a name of its own"
+            )));
+        }
+    }
+    Ok((names, numbers))
 }
 
 /// Refuses a channel string of `g` (raw file's root) outside [`CHANNEL_WORDS`], and a

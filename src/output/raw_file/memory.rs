@@ -446,13 +446,22 @@ mod tests {
         let names: Vec<&str> = fixed.iter().map(|v| v.name.as_str()).collect();
         assert_eq!(
             names,
-            ["profile", "channel", "bin", "column", "k", "altitude", "t2"]
+            [
+                "profile",
+                "channel",
+                "bin",
+                "channel_name",
+                "column",
+                "k",
+                "altitude",
+                "t2"
+            ]
         );
-        let Array::F64(moved) = &fixed[6].data else {
+        let Array::F64(moved) = &fixed[7].data else {
             panic!()
         };
         assert_eq!(moved.as_ptr(), t2);
-        assert_eq!(fixed[6].shape, [1, 2, 3]);
+        assert_eq!(fixed[7].shape, [1, 2, 3]);
         assert_eq!(
             memory_bytes(&self::spec()),
             // counts and components; time, n_shots, latitude; pulse_energy (profile,

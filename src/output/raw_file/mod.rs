@@ -47,8 +47,8 @@ pub mod truth;
 pub mod writer;
 
 pub use spec::{
-    AttrValue, BIN_DIM, CHANNEL_DIM, COLUMN_DIM, COMPONENT_NAMES, CONVENTIONS, CountWidth, Dims,
-    FORMAT_VERSION, PROFILE_COLUMN_NAMES, PROFILE_DIM, ProfileRecord, ProfileSink, RESERVED_NAMES,
-    RawFileSpec, SLOT_DIM, TextVariable, Variable,
+    AttrValue, BIN_DIM, CHANNEL_DIM, CHANNEL_NAME, COLUMN_DIM, COMPONENT_NAMES, CONVENTIONS,
+    CountWidth, Dims, FORMAT_VERSION, PROFILE_COLUMN_NAMES, PROFILE_DIM, ProfileRecord,
+    ProfileSink, RESERVED_NAMES, RawFileSpec, SLOT_DIM, TextVariable, Variable,
 };
 pub use writer::RawFileWriter;

@@ -6,7 +6,7 @@
 //! variables, dimensions and CF attributes.
 
 use super::spec::{
-    AttrValue, BIN_DIM, CHANNEL_DIM, COLUMN_DIM, COMPONENT_NAMES, CountWidth, Dims,
+    AttrValue, BIN_DIM, CHANNEL_DIM, CHANNEL_NAME, COLUMN_DIM, COMPONENT_NAMES, CountWidth, Dims,
     PROFILE_COLUMN_NAMES, PROFILE_DIM, RawFileSpec, SLOT_DIM,
 };
 
@@ -161,17 +161,18 @@ pub fn schema(spec: &RawFileSpec) -> Vec<VarSchema<'_>> {
 
     let mut vars = vec![
         index(PROFILE_DIM, p, spec.first_profile, "profile index"),
+        index(CHANNEL_DIM, c, 0, "receiver channel number"),
+        index(BIN_DIM, b, 0, "range bin index"),
         VarSchema {
-            name: CHANNEL_DIM,
+            name: CHANNEL_NAME,
             dims: vec![CHANNEL_DIM],
             shape: vec![c],
             element: Element::Text,
             values: Values::Text(&spec.channels),
             storage: Storage::Contiguous,
-            attributes: text(&[("long_name", "receiver channel")]),
-            is_dimension: true,
+            attributes: text(&[("long_name", "receiver channel name")]),
+            is_dimension: false,
         },
-        index(BIN_DIM, b, 0, "range bin index"),
     ];
     vars.extend(spec.channel_text.iter().map(|t| VarSchema {
         name: &t.name,
@@ -345,7 +346,24 @@ pub fn schema(spec: &RawFileSpec) -> Vec<VarSchema<'_>> {
             is_dimension: false,
         });
     }
+    label_channels(&mut vars);
     vars
+}
+
+/// Lists the channels' names, `channel_name`, in the `coordinates` attribute of every
+/// variable with the channel dimension (CF §6.1: the names label the numbered channels).
+pub(super) fn label_channels(vars: &mut [VarSchema]) {
+    for v in vars.iter_mut() {
+        if v.name == CHANNEL_NAME || v.is_dimension || !v.dims.contains(&CHANNEL_DIM) {
+            continue;
+        }
+        match v.attributes.iter_mut().find(|(k, _)| k == "coordinates") {
+            Some((_, AttrValue::Str(c))) => c.push_str(&format!(" {CHANNEL_NAME}")),
+            _ => v
+                .attributes
+                .push(("coordinates".into(), AttrValue::Str(CHANNEL_NAME.into()))),
+        }
+    }
 }
 
 /// A small spec with every kind of variable, for the tests of the schema and of the
@@ -400,6 +418,7 @@ mod tests {
                 "profile",
                 "channel",
                 "bin",
+                "channel_name",
                 "column",
                 "k",
                 "profile_column",
@@ -443,9 +462,15 @@ mod tests {
                 .map(|(_, v)| v.clone())
         };
         let s = |t: &str| Some(AttrValue::Str(t.into()));
-        assert_eq!(coords("counts"), s("time altitude range latitude"));
+        assert_eq!(
+            coords("counts"),
+            s("time altitude range latitude channel_name")
+        );
         assert_eq!(coords("n_shots"), s("time latitude"));
-        assert_eq!(coords("t2"), s("altitude range"));
+        assert_eq!(coords("t2"), s("altitude range channel_name"));
+        assert_eq!(coords("pulse_energy"), s("time latitude channel_name"));
+        assert_eq!(coords("channel_name"), None);
+        assert_eq!(coords("channel"), None);
         assert_eq!(coords("latitude"), None);
         assert_eq!(coords("altitude"), None);
     }

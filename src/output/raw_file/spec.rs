@@ -5,13 +5,17 @@
 use crate::error::{Error, Result};
 
 /// `lidarsim_format_version` of the files this code writes.
-pub const FORMAT_VERSION: i32 = 4;
+pub const FORMAT_VERSION: i32 = 5;
 /// The CF version the files declare (CF-1.9 and later allow the unsigned counts).
 pub const CONVENTIONS: &str = "CF-1.10";
 /// Name of the profile dimension (and of its coordinate variable).
 pub const PROFILE_DIM: &str = "profile";
-/// Name of the channel dimension (and of its string coordinate variable).
+/// Name of the channel dimension (and of its coordinate variable: the channel numbers
+/// 0, 1, … from format 5, the names before).
 pub const CHANNEL_DIM: &str = "channel";
+/// Name of the channels' names (format 5): a string auxiliary coordinate (channel),
+/// listed in the `coordinates` attribute of every variable with the channel dimension.
+pub const CHANNEL_NAME: &str = "channel_name";
 /// Name of the range-bin dimension (and of its coordinate variable).
 pub const BIN_DIM: &str = "bin";
 /// Name of the dimension of the scene's distinct columns (and of its coordinate).
@@ -25,9 +29,10 @@ pub const PROFILE_COLUMN_NAMES: [&str; 2] = ["profile_column", "profile_column_w
 /// [`ProfileRecord::components`]: signal, background, dark.
 pub const COMPONENT_NAMES: [&str; 3] = ["signal_counts", "background_counts", "dark_counts"];
 /// Variable names the layout itself defines; a [`Variable`] may not use them.
-pub const RESERVED_NAMES: [&str; 14] = [
+pub const RESERVED_NAMES: [&str; 15] = [
     PROFILE_DIM,
     CHANNEL_DIM,
+    CHANNEL_NAME,
     BIN_DIM,
     COLUMN_DIM,
     SLOT_DIM,
@@ -198,7 +203,8 @@ pub struct RawFileSpec {
     /// `first_profile .. first_profile + n_profiles` (0 but in a shard file,
     /// docs/architecture.md's shards); [`ProfileRecord::index`] stays the row in the file.
     pub first_profile: usize,
-    /// Channel names (the `channel` coordinate), at least one.
+    /// Channel names (the `channel_name` coordinate; `channel` numbers them from 0), at
+    /// least one.
     pub channels: Vec<String>,
     /// Integer width of `counts` (and of the component variables).
     pub count_width: CountWidth,

@@ -1,11 +1,19 @@
 //! The variables a reader knows: each one's dimensions, value class and the values it
 //! must hold, by format version; the shapes any other dataset may have.
 
+use std::path::Path;
+
 use hdf5::Dataset;
 use hdf5::types::TypeDescriptor;
+use ndarray::{Ix1, s};
+
+/// Values of a per-profile variable read at once while checking them.
+pub const SCAN_BLOCK: usize = 1 << 16;
+use crate::error::{Error, Result};
 
 use super::super::spec::{
-    BIN_DIM, CHANNEL_DIM, COLUMN_DIM, COMPONENT_NAMES, PROFILE_COLUMN_NAMES, PROFILE_DIM, SLOT_DIM,
+    BIN_DIM, CHANNEL_DIM, CHANNEL_NAME, COLUMN_DIM, COMPONENT_NAMES, PROFILE_COLUMN_NAMES,
+    PROFILE_DIM, SLOT_DIM,
 };
 
 /// The type of a dataset's values, as far as the layout cares.
@@ -105,7 +113,7 @@ pub(super) const fn channel_text(name: &'static str) -> Known {
 }
 
 /// The variables of the layout [`check`] knows by name (docs/file-format.md).
-pub(super) const KNOWN: [Known; 27] = [
+pub(super) const KNOWN: [Known; 28] = [
     known(COLUMN_DIM, &[Dim::Col], Class::Signed, false, Values::Any),
     known(SLOT_DIM, &[Dim::K], Class::Signed, false, Values::Any),
     known(
@@ -122,6 +130,7 @@ pub(super) const KNOWN: [Known; 27] = [
         false,
         Values::Any,
     ),
+    channel_text(CHANNEL_NAME),
     channel_text("channel_kind"),
     channel_text("channel_species"),
     channel_text("polarization"),
@@ -158,6 +167,7 @@ pub(super) const KNOWN: [Known; 27] = [
         false,
         Values::Any,
     ),
+    // the names before format 5, the numbers from it (`check`)
     known(CHANNEL_DIM, &[Dim::C], Class::Text, true, Values::Any),
     known(PROFILE_DIM, &[Dim::P], Class::Signed, false, Values::Any),
     known(BIN_DIM, &[Dim::B], Class::Signed, false, Values::Any),
@@ -213,4 +223,70 @@ pub(super) fn dims_name(dims: &[Dim]) -> String {
         })
         .collect();
     format!("({})", names.join(", "))
+}
+
+/// Checks the values of variable `name` (dataset `d`), [`SCAN_BLOCK`] at a time.
+pub(super) fn scan(path: &Path, name: &str, values: Values, d: &Dataset) -> Result<()> {
+    let n = d.shape().first().copied().unwrap_or(0);
+    let unreadable = |e: hdf5::Error| {
+        Error::output(
+            path,
+            format!(
+                "cannot read `{}`: {}",
+                name,
+                crate::error::describe_hdf5_error(&e.to_string())
+            ),
+        )
+    };
+    for a in (0..n).step_by(SCAN_BLOCK) {
+        let b = (a + SCAN_BLOCK).min(n);
+        let bad_at = |i: usize, v: String, want: &str| {
+            Error::output(path, format!("`{}` value {} is {v}; {want}", name, a + i))
+        };
+        match values {
+            Values::Any => {}
+            Values::AtLeastOne => {
+                let v = d.read_slice::<u64, _, Ix1>(s![a..b]).map_err(unreadable)?;
+                if let Some(i) = v.iter().position(|&x| x < 1) {
+                    return Err(bad_at(
+                        i,
+                        v[i].to_string(),
+                        "every profile accumulates at least one shot",
+                    ));
+                }
+            }
+            Values::Finite | Values::NonNegative if d.ndim() == 2 => {
+                let v = d
+                    .read_slice::<f64, _, ndarray::Ix2>(s![a..b, ..])
+                    .map_err(unreadable)?;
+                let ok = |x: f64| x.is_finite() && (values == Values::Finite || x >= 0.0);
+                if let Some(((i, j), x)) = v.indexed_iter().find(|(_, x)| !ok(**x)) {
+                    return Err(Error::output(
+                        path,
+                        format!(
+                            "`{name}` value ({}, {j}) is {x}; it must be finite{}",
+                            a + i,
+                            if values == Values::Finite {
+                                ""
+                            } else {
+                                " and not negative"
+                            }
+                        ),
+                    ));
+                }
+            }
+            Values::Finite | Values::NonNegative => {
+                let v = d.read_slice::<f64, _, Ix1>(s![a..b]).map_err(unreadable)?;
+                let ok = |x: f64| x.is_finite() && (values == Values::Finite || x >= 0.0);
+                if let Some(i) = v.iter().position(|&x| !ok(x)) {
+                    let want = match values {
+                        Values::Finite => "it must be finite",
+                        _ => "it must be finite and not negative",
+                    };
+                    return Err(bad_at(i, v[i].to_string(), want));
+                }
+            }
+        }
+    }
+    Ok(())
 }

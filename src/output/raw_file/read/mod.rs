@@ -44,7 +44,7 @@ mod known;
 pub use crate::error::shape_text;
 
 use crate::resources::{human_bytes, require_memory};
-use known::{Class, Dim, KNOWN, Known, OTHER_SHAPES, Values, dims_name};
+use known::{Class, Dim, KNOWN, Known, OTHER_SHAPES, Values, dims_name, scan};
 
 /// The largest compression ratio of deflate (zlib): a run of 258 bytes in a 1-bit literal
 /// flag and a 1-bit distance at best, 1032:1 (RFC 1951; zlib's technical details). No
@@ -54,15 +54,15 @@ pub const MAX_DEFLATE_RATIO: u64 = 1032;
 /// Bytes a dataset may declare beyond [`MAX_DEFLATE_RATIO`] times its stored bytes
 /// (headers and small variables stored compactly).
 pub const STORAGE_SLACK_BYTES: u64 = 1 << 16;
-/// Values of a per-profile variable read at once while checking them.
-pub const SCAN_BLOCK: usize = 1 << 16;
+pub use known::SCAN_BLOCK;
 
 /// The header of a raw file that [`check`] accepted.
 #[derive(Debug, Clone)]
 pub struct RawHeader {
     /// Length of the `profile` dimension, at least 1.
     pub n_profiles: usize,
-    /// Channel names (the `channel` coordinate), at least one.
+    /// Channel names (`channel_name`, or the `channel` coordinate before format 5), at
+    /// least one.
     pub channels: Vec<String>,
     /// Length of the `bin` dimension, at least 1.
     pub n_bins: usize,
@@ -144,11 +144,15 @@ pub fn check(path: &Path, f: &hdf5::File) -> Result<RawHeader> {
         let (class, _) = Class::of(d);
         let want: Vec<&[Dim]> = match KNOWN.iter().find(|k| k.name == name) {
             Some(k) => {
-                if class != k.class {
+                let want = match k.name == CHANNEL_DIM && version >= 5 {
+                    true => Class::Signed, // format 5 numbers the channels
+                    false => k.class,
+                };
+                if class != want {
                     return Err(bad(format!(
                         "`{name}` holds {}, not {}",
                         class.name(),
-                        k.class.name()
+                        want.name()
                     )));
                 }
                 vec![dims_in(k, version)]
@@ -416,9 +420,23 @@ pub fn unreadable(path: &Path, name: &str, e: hdf5::Error) -> Error {
     )
 }
 
-/// The `channel` coordinate's names.
+/// The channels' names: `channel_name` beside the numbers `channel` = 0, 1, … (format
+/// 5), or the strings of `channel` (formats 2 to 4); checked by
+/// [`super::integrity::channel_labels`].
 fn read_channels(path: &Path, f: &hdf5::File) -> Result<Vec<String>> {
-    read_text(path, f, CHANNEL_DIM)
+    let (names, numbers) = super::integrity::channel_labels(path, f, "")?;
+    if let Some(n) = numbers
+        && let Some(i) = (0..n.len()).find(|&i| n[i] != i as i64)
+    {
+        return Err(Error::output(
+            path,
+            format!(
+                "`{CHANNEL_DIM}` value {i} is {}, not {i}: a raw file numbers its channels 0, 1, …",
+                n[i]
+            ),
+        ));
+    }
+    Ok(names)
 }
 
 /// A variable of variable-length strings (UTF-8, or ASCII as older tools write them),
@@ -442,72 +460,6 @@ pub fn read_text(path: &Path, f: &hdf5::Group, name: &str) -> Result<Vec<String>
     }
     let v = d.read_raw::<VarLenAscii>().map_err(|_| unreadable())?;
     Ok(v.iter().map(|s| s.as_str().to_string()).collect())
-}
-
-/// Checks the values of variable `name` (dataset `d`), [`SCAN_BLOCK`] at a time.
-fn scan(path: &Path, name: &str, values: Values, d: &Dataset) -> Result<()> {
-    let n = d.shape().first().copied().unwrap_or(0);
-    let unreadable = |e: hdf5::Error| {
-        Error::output(
-            path,
-            format!(
-                "cannot read `{}`: {}",
-                name,
-                crate::error::describe_hdf5_error(&e.to_string())
-            ),
-        )
-    };
-    for a in (0..n).step_by(SCAN_BLOCK) {
-        let b = (a + SCAN_BLOCK).min(n);
-        let bad_at = |i: usize, v: String, want: &str| {
-            Error::output(path, format!("`{}` value {} is {v}; {want}", name, a + i))
-        };
-        match values {
-            Values::Any => {}
-            Values::AtLeastOne => {
-                let v = d.read_slice::<u64, _, Ix1>(s![a..b]).map_err(unreadable)?;
-                if let Some(i) = v.iter().position(|&x| x < 1) {
-                    return Err(bad_at(
-                        i,
-                        v[i].to_string(),
-                        "every profile accumulates at least one shot",
-                    ));
-                }
-            }
-            Values::Finite | Values::NonNegative if d.ndim() == 2 => {
-                let v = d
-                    .read_slice::<f64, _, ndarray::Ix2>(s![a..b, ..])
-                    .map_err(unreadable)?;
-                let ok = |x: f64| x.is_finite() && (values == Values::Finite || x >= 0.0);
-                if let Some(((i, j), x)) = v.indexed_iter().find(|(_, x)| !ok(**x)) {
-                    return Err(Error::output(
-                        path,
-                        format!(
-                            "`{name}` value ({}, {j}) is {x}; it must be finite{}",
-                            a + i,
-                            if values == Values::Finite {
-                                ""
-                            } else {
-                                " and not negative"
-                            }
-                        ),
-                    ));
-                }
-            }
-            Values::Finite | Values::NonNegative => {
-                let v = d.read_slice::<f64, _, Ix1>(s![a..b]).map_err(unreadable)?;
-                let ok = |x: f64| x.is_finite() && (values == Values::Finite || x >= 0.0);
-                if let Some(i) = v.iter().position(|&x| !ok(x)) {
-                    let want = match values {
-                        Values::Finite => "it must be finite",
-                        _ => "it must be finite and not negative",
-                    };
-                    return Err(bad_at(i, v[i].to_string(), want));
-                }
-            }
-        }
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -1,6 +1,7 @@
 //! Tests of the raw file's header check.
 
 use super::*;
+use crate::output::raw_file::spec::CHANNEL_NAME;
 
 fn scratch(tag: &str) -> std::path::PathBuf {
     let d = std::env::temp_dir().join(format!("lidarsim-raw-read-{tag}-{}", std::process::id()));
@@ -11,11 +12,23 @@ fn scratch(tag: &str) -> std::path::PathBuf {
 
 /// A minimal raw file: P profiles, 1 channel, B bins; `edit` changes it before closing.
 fn minimal(path: &Path, p: usize, b: usize, edit: impl FnOnce(&hdf5::File)) {
+    minimal_of_version(path, FORMAT_VERSION, p, b, edit)
+}
+
+/// [`minimal`] in the layout of `version`: the channels numbered with `channel_name`
+/// from format 5, named by `channel` before.
+fn minimal_of_version(
+    path: &Path,
+    version: i32,
+    p: usize,
+    b: usize,
+    edit: impl FnOnce(&hdf5::File),
+) {
     let f = hdf5::File::create(path).unwrap();
     f.new_attr::<i32>()
         .create("lidarsim_format_version")
         .unwrap()
-        .write_scalar(&FORMAT_VERSION)
+        .write_scalar(&version)
         .unwrap();
     let u = |name: &str, shape: &[usize], v: &[u64]| {
         f.new_dataset::<u64>()
@@ -51,9 +64,21 @@ fn minimal(path: &Path, p: usize, b: usize, edit: impl FnOnce(&hdf5::File)) {
         &(0..b).map(|i| 30.0 * i as f64).collect::<Vec<_>>(),
     );
     let names = [VarLenUnicode::from_str("532_total").unwrap()];
+    let text_name = match version {
+        5.. => {
+            f.new_dataset::<i64>()
+                .shape(1)
+                .create(CHANNEL_DIM)
+                .unwrap()
+                .write_raw(&[0i64])
+                .unwrap();
+            CHANNEL_NAME
+        }
+        _ => CHANNEL_DIM,
+    };
     f.new_dataset::<VarLenUnicode>()
         .shape(1)
-        .create(CHANNEL_DIM)
+        .create(text_name)
         .unwrap()
         .write_raw(&names)
         .unwrap();
@@ -86,6 +111,42 @@ fn a_consistent_file_is_accepted_with_its_header() {
     assert_eq!((h.n_profiles, h.n_bins, h.count_bytes), (4, 5, 8));
     assert_eq!(h.channels, vec!["532_total".to_string()]);
     assert!(!h.along_track);
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn a_format_4_file_names_its_channels_by_the_coordinate() {
+    let d = scratch("v4");
+    let path = d.join("raw.h5");
+    minimal_of_version(&path, 4, 4, 5, |_| {});
+    let f = hdf5::File::open(&path).unwrap();
+    let h = check(&path, &f).unwrap();
+    assert_eq!(h.channels, vec!["532_total".to_string()]);
+    drop(f);
+    // format 5 with the names in `channel` is refused, naming it
+    minimal_of_version(&path, 5, 4, 5, |f| {
+        f.unlink(CHANNEL_DIM).unwrap();
+        f.new_dataset::<VarLenUnicode>()
+            .shape(1)
+            .create(CHANNEL_DIM)
+            .unwrap()
+            .write_raw(&[VarLenUnicode::from_str("532_total").unwrap()])
+            .unwrap();
+    });
+    let f = hdf5::File::open(&path).unwrap();
+    let e = check(&path, &f).unwrap_err().to_string();
+    assert!(
+        e.contains("`channel` holds strings, not signed integers"),
+        "{e}"
+    );
+    drop(f);
+    // numbers that do not count from 0
+    minimal_of_version(&path, 5, 4, 5, |f| {
+        f.dataset(CHANNEL_DIM).unwrap().write_raw(&[3i64]).unwrap();
+    });
+    let f = hdf5::File::open(&path).unwrap();
+    let e = check(&path, &f).unwrap_err().to_string();
+    assert!(e.contains("`channel` value 0 is 3, not 0"), "{e}");
     std::fs::remove_dir_all(&d).ok();
 }
 
@@ -125,10 +186,13 @@ fn inconsistent_or_crafted_headers_are_refused_naming_the_variable() {
     let e = refusal("version", |f| {
         f.attr("lidarsim_format_version")
             .unwrap()
-            .write_scalar(&5)
+            .write_scalar(&(FORMAT_VERSION + 1))
             .unwrap()
     });
-    assert!(e.contains("format version 5"), "{e}");
+    assert!(
+        e.contains(&format!("format version {}", FORMAT_VERSION + 1)),
+        "{e}"
+    );
     let e = refusal("float-counts", |f| {
         f.unlink("counts").unwrap();
         f.new_dataset::<f64>()
