@@ -61,9 +61,9 @@ fn every_species_reads_the_scripts_numbers_at_every_wavelength_and_rh_bin() {
     let mut checked = 0;
     for s in CAMS_SPECIES.iter().filter(|s| s.ifs_type.is_some()) {
         for &wl in &WAVELENGTH_M {
-            for r in 0..RH_LOWER.len() {
+            for (r, lo) in RH_LOWER.iter().enumerate() {
                 // an RH inside bin r: its middle
-                let rh = 0.5 * (RH_LOWER[r] + rh_upper(r));
+                let rh = 0.5 * (lo + rh_upper(r));
                 let (k, lr) = table.optics(s, rh, wl).unwrap();
                 let (k0, lr0) = match s.ifs_type.unwrap() {
                     IfsType::Hydrophilic(t) => philic(t, r, wl),
@@ -116,19 +116,9 @@ fn the_rh_bin_is_ecrads_lower_bound_rule_at_the_edges() {
     let table = AerosolOpticsTable::read(&fixture()).unwrap();
     let lower = table.rh_lower.clone();
     // at a bin's lower bound exactly: the bin below (ecRad's rh > lower(k+1) to step up)
-    for k in 1..lower.len() {
-        assert_eq!(
-            table.rh_bin(lower[k]),
-            k - 1,
-            "RH = lower bound {}",
-            lower[k]
-        );
-        assert_eq!(
-            table.rh_bin(lower[k].next_up()),
-            k,
-            "RH just above {}",
-            lower[k]
-        );
+    for (k, &edge) in lower.iter().enumerate().skip(1) {
+        assert_eq!(table.rh_bin(edge), k - 1, "RH = lower bound {}", edge);
+        assert_eq!(table.rh_bin(edge.next_up()), k, "RH just above {}", edge);
     }
     assert_eq!(table.rh_bin(0.0), 0);
     assert_eq!(table.rh_bin(-0.3), 0);
