@@ -276,7 +276,7 @@ impl AerosolOpticsTable {
             ));
         }
         if let Some(c) = codes.as_ref().map(|c| &c[k - 1])
-            && c != species.code
+            && !species.codes.contains(&c.as_str())
         {
             let code_var = var.replace("mass_ext_mono", "code");
             return Err(refuse(
@@ -287,7 +287,7 @@ impl AerosolOpticsTable {
                     t.ecrad_index(),
                     species.short_name,
                     species.description,
-                    species.code
+                    species.codes.join("` or `")
                 ),
             ));
         }

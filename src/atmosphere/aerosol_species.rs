@@ -48,9 +48,11 @@ pub struct CamsSpecies {
     /// Its type in ECMWF's aerosol optics table; None: no optics (a gas precursor or a
     /// type the IFS radiation does not map).
     pub ifs_type: Option<IfsType>,
-    /// The two-letter code ECMWF's table gives that type (`code_hydrophilic` /
-    /// `code_hydrophobic`), checked against the table read.
-    pub code: &'static str,
+    /// The two-letter codes ECMWF's tables give that type (`code_hydrophilic` /
+    /// `code_hydrophobic`), checked against the table read: nitrate is `NI` in
+    /// `aerosol_ifs_rrtm_49R1.nc` but `NF` (fine) and `NC` (coarse) in
+    /// `aerosol_ifs_rrtm_46R1_with_NI_AM.nc`, the types the same.
+    pub codes: &'static [&'static str],
     /// Its class for the default depolarization ([`particle_depolarization`]).
     pub depolarization_class: DepolarizationClass,
 }
@@ -62,14 +64,14 @@ const fn species(
     short_name: &'static str,
     description: &'static str,
     ifs_type: Option<IfsType>,
-    code: &'static str,
+    codes: &'static [&'static str],
     depolarization_class: DepolarizationClass,
 ) -> CamsSpecies {
     CamsSpecies {
         short_name,
         description,
         ifs_type,
-        code,
+        codes,
         depolarization_class,
     }
 }
@@ -90,110 +92,130 @@ const fn species(
 /// `aermr16` … `aermr18` (nitrate fine and coarse, ammonium) are in no ecRad namelist;
 /// they take the types ECMWF's 46R1-and-later tables describe for them
 /// (`description_hydrophilic` of `aerosol_ifs_rrtm_49R1.nc`: 8 "Fine mode Ammonium
-/// sulfate (for ammonia)", 9 "Fine mode Nitrate", 10 "Coarse mode Nitrate").
+/// sulfate (for ammonia)", 9 "Fine mode Nitrate", 10 "Coarse mode Nitrate"; the same
+/// in `aerosol_ifs_rrtm_46R1_with_NI_AM.nc`, the IFS's default table in
+/// `ifs/radiation_setup.F90`).
 pub const CAMS_SPECIES: [CamsSpecies; 18] = [
     species(
         "aermr01",
         "sea salt, 0.03-0.5 um",
         Some(Philic(1)),
-        "SS",
+        &["SS"],
         D::Marine,
     ),
     species(
         "aermr02",
         "sea salt, 0.5-5 um",
         Some(Philic(2)),
-        "SS",
+        &["SS"],
         D::Marine,
     ),
     species(
         "aermr03",
         "sea salt, 5-20 um",
         Some(Philic(3)),
-        "SS",
+        &["SS"],
         D::Marine,
     ),
     species(
         "aermr04",
         "dust, 0.03-0.55 um",
         Some(Phobic(7)),
-        "DD",
+        &["DD"],
         D::Dust,
     ),
     species(
         "aermr05",
         "dust, 0.55-0.9 um",
         Some(Phobic(8)),
-        "DD",
+        &["DD"],
         D::Dust,
     ),
-    species("aermr06", "dust, 0.9-20 um", Some(Phobic(9)), "DD", D::Dust),
+    species(
+        "aermr06",
+        "dust, 0.9-20 um",
+        Some(Phobic(9)),
+        &["DD"],
+        D::Dust,
+    ),
     species(
         "aermr07",
         "hydrophilic organic matter",
         Some(Philic(4)),
-        "OM",
+        &["OM"],
         D::Smoke,
     ),
     species(
         "aermr08",
         "hydrophobic organic matter",
         Some(Phobic(10)),
-        "OM",
+        &["OM"],
         D::Smoke,
     ),
     species(
         "aermr09",
         "hydrophilic black carbon",
         Some(Phobic(11)),
-        "BC",
+        &["BC"],
         D::Smoke,
     ),
     species(
         "aermr10",
         "hydrophobic black carbon",
         Some(Phobic(11)),
-        "BC",
+        &["BC"],
         D::Smoke,
     ),
-    species("aermr11", "sulphate", Some(Philic(5)), "SU", D::Spherical),
-    species("aermr12", "SO2 precursor (a gas)", None, "", D::Spherical),
+    species(
+        "aermr11",
+        "sulphate",
+        Some(Philic(5)),
+        &["SU"],
+        D::Spherical,
+    ),
+    species("aermr12", "SO2 precursor (a gas)", None, &[], D::Spherical),
     species(
         "aermr13",
         "aerosol type 13 (not mapped)",
         None,
-        "",
+        &[],
         D::Spherical,
     ),
     species(
         "aermr14",
         "aerosol type 14 (not mapped)",
         None,
-        "",
+        &[],
         D::Spherical,
     ),
     species(
         "aermr15",
         "aerosol type 15 (not mapped)",
         None,
-        "",
+        &[],
         D::Spherical,
     ),
     species(
         "aermr16",
         "nitrate, fine mode",
         Some(Philic(9)),
-        "NI",
+        &["NI", "NF"],
         D::Spherical,
     ),
     species(
         "aermr17",
         "nitrate, coarse mode",
         Some(Philic(10)),
-        "NI",
+        &["NI", "NC"],
         D::Spherical,
     ),
-    species("aermr18", "ammonium", Some(Philic(8)), "AM", D::Spherical),
+    species(
+        "aermr18",
+        "ammonium",
+        Some(Philic(8)),
+        &["AM"],
+        D::Spherical,
+    ),
 ];
 
 impl CamsSpecies {
