@@ -3,7 +3,9 @@
 //! as the piecewise-constant slabs on which the bin integral is exact. Here: the whole
 //! [`Atmosphere`] of a scenario built from its config, and a Raman channel's return.
 
+pub mod aerosol_optics_table;
 pub mod aerosol_profile;
+pub mod aerosol_species;
 pub mod bin_mean;
 pub mod cabannes_line;
 pub mod cloud_optics;
