@@ -28,7 +28,13 @@ fn shipped() -> (ScenarioConfig, ModelFieldsConfig, Vec<Sample>) {
         .config;
     let m = cfg.scene.as_ref().unwrap().model_fields.clone().unwrap();
     let orbit = Orbit::from_config(cfg.orbit.as_ref().unwrap(), 705e3).unwrap();
-    let samples = profile_samples(&cfg, &orbit, 15, 200).unwrap();
+    let samples = profile_samples(
+        &cfg,
+        &lidarsim::scene::track::AlongTrack::Orbit(orbit),
+        15,
+        200,
+    )
+    .unwrap();
     (cfg, m, samples.iter().map(|s| s.0).collect())
 }
 

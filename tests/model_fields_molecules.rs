@@ -14,7 +14,7 @@ mod common;
 
 use common::cli::{lidarsim, ok, scratch};
 use common::config_path;
-use lidarsim::scene::fields::{FieldColumn, profile_samples, read};
+use lidarsim::scene::fields::{FieldColumn, Sample, profile_samples, read};
 use lidarsim::scene::orbit::Orbit;
 
 const K_B: f64 = 1.380649e-23;
@@ -27,11 +27,16 @@ fn columns() -> Vec<FieldColumn> {
         .config;
     let m = cfg.scene.as_ref().unwrap().model_fields.clone().unwrap();
     let orbit = Orbit::from_config(cfg.orbit.as_ref().unwrap(), 705e3).unwrap();
-    let samples: Vec<_> = profile_samples(&cfg, &orbit, 15, PROFILES as u64)
-        .unwrap()
-        .iter()
-        .map(|s| s.0)
-        .collect();
+    let samples: Vec<_> = profile_samples(
+        &cfg,
+        &lidarsim::scene::track::AlongTrack::Orbit(orbit),
+        15,
+        PROFILES as u64,
+    )
+    .unwrap()
+    .iter()
+    .map(|s| s.0)
+    .collect();
     let files = [config_path("fields/era5_like_model_levels.nc")];
     read::columns(&m, &files, &samples).unwrap()
 }
@@ -138,6 +143,90 @@ fn the_file_s_pressure_and_temperature_are_each_profile_s_levels() {
     assert!(
         (p[sea] / us76 - 1.0).abs() > 1e-3,
         "the fields' pressure is US76's"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A ground lidar under the fields (issue 39 item 2, `configs/ground/ground_fields.toml`):
+/// each profile samples them at the station (`platform.latitude_deg`, `longitude_deg`)
+/// at its middle time, t₀ + (p + ½)·60 s, so the scene changes in time as the fields
+/// do. The file's pressure and temperature of each profile's columns are those of the
+/// column read at that place and time, by the rule above, within 1e-9; the same samples
+/// a minute late, or 0.1° off, give other numbers.
+#[test]
+fn a_ground_lidar_sees_the_fields_over_its_station_in_time() {
+    let dir = scratch("fields_ground");
+    let path = config_path("ground/ground_fields.toml");
+    let cfg = lidarsim::loaded::load(&path, &[]).unwrap().config;
+    let m = cfg.scene.as_ref().unwrap().model_fields.clone().unwrap();
+    let (lat, lon) = (39.51, -0.42);
+    assert_eq!(cfg.platform.latitude_deg, Some(lat));
+    assert_eq!(cfg.platform.longitude_deg, Some(lon));
+    let t0 = 1_705_276_800.0; // 2024-01-15T00:00:00Z
+    let profiles = 12;
+    let sample = |p: usize, late_s: f64, off_deg: f64| Sample {
+        time_s: t0 + (p as f64 + 0.5) * 60.0 + late_s,
+        latitude_deg: lat + off_deg,
+        longitude_deg: lon,
+    };
+    let files = [config_path("fields/era5_like_model_levels.nc")];
+    let read = |late_s: f64, off_deg: f64| {
+        let s: Vec<_> = (0..profiles).map(|p| sample(p, late_s, off_deg)).collect();
+        read::columns(&m, &files, &s).unwrap()
+    };
+    let (cols, late, off) = (read(0.0, 0.0), read(60.0, 0.0), read(0.0, 0.1));
+
+    let n = profiles.to_string();
+    let cfg_s = path.to_str().unwrap();
+    ok(lidarsim(
+        &dir,
+        &["simulate", cfg_s, "-o", "g.h5", "--profiles", &n],
+        &[],
+    ));
+    let f = hdf5::File::open(dir.join("g.h5")).unwrap();
+    let altitude = floats(&f, "altitude");
+    let bins = altitude.len();
+    let (p, t) = (floats(&f, "pressure"), floats(&f, "temperature"));
+    // the bins after the pulse (the pre-trigger bins below the station hold no air)
+    let range = floats(&f, "range");
+    let profile_column = f
+        .dataset("profile_column")
+        .unwrap()
+        .read_2d::<i64>()
+        .unwrap();
+    let (mut judged, mut late_differs, mut off_differs) = (0, 0, 0);
+    for (j, c) in cols.iter().enumerate() {
+        for &col in profile_column.row(j).iter().filter(|&&c| c >= 0) {
+            for (b, &z) in altitude.iter().enumerate().filter(|&(b, _)| range[b] > 0.0) {
+                let Some((p_rule, t_rule)) = by_the_rule(c, z) else {
+                    continue;
+                };
+                let (pf, tf) = (p[col as usize * bins + b], t[col as usize * bins + b]);
+                assert!(
+                    (pf / p_rule - 1.0).abs() < 1e-9,
+                    "profile {j} at {z} m: p {pf} vs {p_rule}"
+                );
+                assert!(
+                    (tf / t_rule - 1.0).abs() < 1e-9,
+                    "profile {j} at {z} m: T {tf} vs {t_rule}"
+                );
+                let differs = |o: &FieldColumn| {
+                    by_the_rule(o, z).is_some_and(|(po, _)| (pf / po - 1.0).abs() > 1e-7)
+                };
+                late_differs += usize::from(differs(&late[j]));
+                off_differs += usize::from(differs(&off[j]));
+                judged += 1;
+            }
+        }
+    }
+    assert!(judged > profiles * 300, "{judged} bins judged");
+    assert!(
+        late_differs > judged / 2,
+        "a minute late: {late_differs} of {judged} differ"
+    );
+    assert!(
+        off_differs > judged / 2,
+        "0.1 deg off: {off_differs} of {judged} differ"
     );
     std::fs::remove_dir_all(&dir).ok();
 }

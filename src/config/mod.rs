@@ -56,8 +56,8 @@ pub use multiple_scattering::{MultipleScatteringConfig, MultipleScatteringModel}
 pub use overrides::{apply_override, attribute_to_override};
 pub use scenario::ScenarioConfig;
 pub use scene::{
-    OrbitConfig, PlatformConfig, PlatformKind, SceneConfig, SegmentAerosol, SegmentConfig,
-    SurfaceConfig, SurfaceKind,
+    DEFAULT_ADVECTION_SPEED_M_PER_S, OrbitConfig, PlatformConfig, PlatformKind, SceneConfig,
+    SegmentAerosol, SegmentConfig, SurfaceConfig, SurfaceKind,
 };
 pub use simulation::{Method, SimulationConfig, TruthForm, seed_value};
 pub use warnings::{

@@ -70,10 +70,21 @@ pub struct SceneConfig {
     /// relative to the config file; instead of `segments`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub curtain: Option<PathBuf>,
-    /// A model's fields along the orbit (`src/scene/fields/`), instead of `segments`.
+    /// A model's fields along the orbit or over a ground station (`src/scene/fields/`),
+    /// instead of `segments`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub model_fields: Option<super::model_fields::ModelFieldsConfig>,
+    /// A ground lidar's scene: the speed at which the segments (and broken cells) pass
+    /// over the station, m s⁻¹ (a frozen scene carried by the wind), so that a segment
+    /// of `length_km` lasts `length_km·1000/speed` seconds. Space-borne: the ground
+    /// track's speed instead; the key is refused.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub advection_speed_m_per_s: Option<f64>,
 }
+
+/// The speed a ground lidar's scene passes over the station without
+/// `scene.advection_speed_m_per_s`, m s⁻¹ (ASSUMED: a mid-tropospheric wind).
+pub const DEFAULT_ADVECTION_SPEED_M_PER_S: f64 = 10.0;
 
 /// One stretch of the track with its own layers, aerosol and surface.
 #[derive(Debug, Clone, Deserialize, Serialize)]

@@ -35,6 +35,20 @@ use crate::scene::track::{AlongTrack, Column, MAX_COLUMNS, Track};
 /// adds its sampler's tables ([`sampling::table_bytes_bound`]).
 const COLUMN_BYTES_PER_BIN: f64 = 400.0;
 
+/// How fast the scene passes the lidar without an orbit, m s⁻¹: a ground lidar's
+/// `scene.advection_speed_m_per_s` (the wind carrying a frozen scene over the station),
+/// else the ground-track speed of a space-borne one (model.md §3).
+fn scene_speed_m_per_s(cfg: &ScenarioConfig, channel: &crate::scenario::Scenario) -> f64 {
+    match cfg.platform.kind {
+        crate::config::PlatformKind::Ground => cfg
+            .scene
+            .as_ref()
+            .and_then(|s| s.advection_speed_m_per_s)
+            .unwrap_or(crate::config::DEFAULT_ADVECTION_SPEED_M_PER_S),
+        _ => crate::geometry::ground_track_speed_m_per_s(channel.geometry.platform_altitude_m),
+    }
+}
+
 /// Seed offset of a solar background's stream.
 const SKY_STREAM: u64 = 0x5C7B_ACC6_0000_0001;
 
@@ -210,30 +224,25 @@ impl SceneModel {
             .map(|c| with_curtain(&c.loaded))
             .collect::<Result<_>>()?;
         let orbit = super::orbit::orbit_of(lidar)?;
-        // model fields: one segment per profile, sampled along the orbit
-        let configs = match orbit.as_ref() {
-            Some(o) => configs
-                .into_iter()
-                .zip(&lidar.channels)
-                .map(|(c, ch)| {
-                    crate::scene::fields::with_model_fields(
-                        c,
-                        &ch.loaded,
-                        o,
-                        (shots, profiles),
-                        seed,
-                    )
-                })
-                .collect::<Result<_>>()?,
-            None => configs,
-        };
         // with an orbit, the length of the track the file's latitudes and longitudes describe
         let along = match orbit {
             Some(o) => AlongTrack::Orbit(o),
-            None => AlongTrack::Speed(crate::geometry::ground_track_speed_m_per_s(
-                first.geometry.platform_altitude_m,
-            )),
+            None => AlongTrack::Speed(scene_speed_m_per_s(&first.loaded.config, first)),
         };
+        // model fields: one segment per profile, sampled along the orbit or over the station
+        let configs = configs
+            .into_iter()
+            .zip(&lidar.channels)
+            .map(|(c, ch)| {
+                crate::scene::fields::with_model_fields(
+                    c,
+                    &ch.loaded,
+                    &along,
+                    (shots, profiles),
+                    seed,
+                )
+            })
+            .collect::<Result<Vec<_>>>()?;
         let track = Track::new(&configs[0], seed, along, shots, profiles)?;
         let all = track.columns();
         if all.len() > MAX_COLUMNS {

@@ -23,12 +23,24 @@ impl ScenarioConfig {
                  one of them",
             ));
         }
-        if self.platform.kind == PlatformKind::Ground || self.orbit.is_none() {
-            return Err(c.fail(
-                "scene.model_fields",
-                "model fields are sampled along an orbit: they need a space-borne platform \
-                 with [orbit]",
-            ));
+        let station = self.platform.latitude_deg.is_some() && self.platform.longitude_deg.is_some();
+        match self.platform.kind {
+            PlatformKind::Ground if !station => {
+                return Err(c.fail(
+                    "scene.model_fields",
+                    "model fields over a ground lidar are sampled at its station: give \
+                     platform.latitude_deg and platform.longitude_deg",
+                ));
+            }
+            PlatformKind::Ground => {}
+            _ if self.orbit.is_none() => {
+                return Err(c.fail(
+                    "scene.model_fields",
+                    "model fields are sampled along an orbit: a space-borne platform needs \
+                     [orbit]",
+                ));
+            }
+            _ => {}
         }
         if m.files.is_empty() || m.files.len() > 16 {
             return Err(c.fail("scene.model_fields.files", "give 1 to 16 files"));
@@ -84,11 +96,19 @@ impl ScenarioConfig {
     /// The scene's segments: positive lengths; their layers, aerosol and surface as the
     /// `[atmosphere]` and `[surface]` ones.
     pub(super) fn validate_scene(&self, c: &Checker, scene: &SceneConfig) -> Result<()> {
-        if self.platform.kind == PlatformKind::Ground && !scene.segments.is_empty() {
-            return Err(c.fail(
-                "scene.segments",
-                "a scene along the track needs a space-borne platform",
-            ));
+        match (self.platform.kind, scene.advection_speed_m_per_s) {
+            (PlatformKind::Ground, Some(u)) => {
+                c.range("scene.advection_speed_m_per_s", u, 0.1, 200.0)?
+            }
+            (PlatformKind::Ground, None) => {}
+            (_, Some(_)) => {
+                return Err(c.fail(
+                    "scene.advection_speed_m_per_s",
+                    "is a ground lidar's: a space-borne scene passes at the ground track's \
+                     speed",
+                ));
+            }
+            (_, None) => {}
         }
         if scene.curtain.is_some() && !scene.segments.is_empty() {
             return Err(c.fail(
@@ -139,6 +159,12 @@ impl ScenarioConfig {
                 return Err(c.fail(&key("aerosol"), "must be \"none\" or an aerosol table"));
             }
             if let Some(surface) = &seg.surface {
+                if self.platform.kind == PlatformKind::Ground {
+                    return Err(c.fail(
+                        &key("surface"),
+                        "a ground-based lidar looks up and sees no surface",
+                    ));
+                }
                 self.validate_surface(c, surface)?;
             }
             if let Some(model) = &seg.molecular {

@@ -32,17 +32,19 @@ use crate::config::{
     ScenarioConfig, SegmentConfig, WaterVapourConfig,
 };
 use crate::error::{Error, Result};
-use crate::scene::orbit::Orbit;
+use crate::scene::track::AlongTrack;
 
 pub use column::FieldColumn;
 pub use read::Sample;
 
-/// Where profile `p` of `profiles` samples the fields, with the along-track span of its
-/// segment: from half a shot before its first shot to half a shot before the next
+/// Where profile `p` of `profiles` samples the fields (under the orbit at its middle
+/// time, or over a ground station: `platform.latitude_deg`/`longitude_deg` at every
+/// time), with the along-track span of its segment (a ground scene's: the advection
+/// speed times its duration): from half a shot before its first shot to half a shot before the next
 /// profile's (so no shot sits on a boundary); the first starts at 0.
 pub fn profile_samples(
     cfg: &ScenarioConfig,
-    orbit: &Orbit,
+    track: &AlongTrack,
     shots_per_profile: u64,
     profiles: u64,
 ) -> Result<Vec<(Sample, f64)>> {
@@ -57,21 +59,34 @@ pub fn profile_samples(
         if p == 0 {
             0.0
         } else {
-            orbit.along_track_m(p as f64 * profile_s - 0.5 * shot_s)
+            track.at(p as f64 * profile_s - 0.5 * shot_s)
         }
     };
-    Ok((0..profiles)
+    let station = (cfg.platform.latitude_deg, cfg.platform.longitude_deg);
+    let position = |t_s: f64| match (track, station) {
+        (AlongTrack::Orbit(o), _) => {
+            let g = o.position(t_s);
+            Ok((g.latitude_deg, g.longitude_deg))
+        }
+        (AlongTrack::Speed(_), (Some(lat), Some(lon))) => Ok((lat, lon)),
+        (AlongTrack::Speed(_), _) => Err(Error::Unsupported(
+            "model fields over a ground lidar need platform.latitude_deg and \
+             platform.longitude_deg"
+                .into(),
+        )),
+    };
+    (0..profiles)
         .map(|p| {
             let mid = (p as f64 + 0.5) * profile_s;
-            let g = orbit.position(mid);
+            let (latitude_deg, longitude_deg) = position(mid)?;
             let sample = Sample {
                 time_s: start_s + mid,
-                latitude_deg: g.latitude_deg,
-                longitude_deg: g.longitude_deg,
+                latitude_deg,
+                longitude_deg,
             };
-            (sample, (edge(p + 1) - edge(p)) / 1e3)
+            Ok((sample, (edge(p + 1) - edge(p)) / 1e3))
         })
-        .collect())
+        .collect()
 }
 
 /// The layers of one column: a water cloud layer per level with liquid, an ice cloud
@@ -127,18 +142,18 @@ fn layers_where(
     out
 }
 
-/// The segments of `cfg`'s model fields `m` (its `files`, resolved) along `orbit`,
+/// The segments of `cfg`'s model fields `m` (its `files`, resolved) along `track`,
 /// a profile's [`profile_subcolumns`] for each of `profiles` profiles of
 /// `shots_per_profile` shots, drawn from `seed` (the run's).
 pub fn segments(
     cfg: &ScenarioConfig,
     m: &ModelFieldsConfig,
     files: &[PathBuf],
-    orbit: &Orbit,
+    track: &AlongTrack,
     (shots_per_profile, profiles): (u64, u64),
     seed: u64,
 ) -> Result<Vec<SegmentConfig>> {
-    let samples = profile_samples(cfg, orbit, shots_per_profile, profiles)?;
+    let samples = profile_samples(cfg, track, shots_per_profile, profiles)?;
     let points: Vec<Sample> = samples.iter().map(|s| s.0).collect();
     let columns =
         read::columns(m, files, &points).map_err(|(path, why)| Error::output(path, why))?;
@@ -240,7 +255,7 @@ fn profile_subcolumns(
 pub fn with_model_fields(
     mut cfg: ScenarioConfig,
     loaded: &crate::loaded::LoadedConfig,
-    orbit: &Orbit,
+    track: &AlongTrack,
     (shots, profiles): (u64, u64),
     seed: u64,
 ) -> Result<ScenarioConfig> {
@@ -251,7 +266,7 @@ pub fn with_model_fields(
     for f in &files {
         crate::input_file::check("scene.model_fields.files", f)?;
     }
-    let segments = segments(&cfg, &m, &files, orbit, (shots, profiles), seed)?;
+    let segments = segments(&cfg, &m, &files, track, (shots, profiles), seed)?;
     if let Some(s) = cfg.scene.as_mut() {
         s.segments = segments;
     }
