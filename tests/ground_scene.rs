@@ -97,52 +97,38 @@ fn segments_pass_over_the_station_at_the_advection_speed() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `simulate CONFIG -o x.h5 --set S…` is refused in one line holding `words`.
+fn refused_with(dir: &std::path::Path, config: &str, sets: &[&str], words: &[&str]) {
+    let mut args = vec!["simulate", config, "-o", "x.h5"];
+    for s in sets {
+        args.extend(["--set", s]);
+    }
+    refused(dir, &args, words, "x.h5");
+}
+
 #[test]
 fn a_ground_scene_s_keys_are_checked() {
     let dir = scratch("ground_scene_keys");
     let ground = config_path("ground/ground_532_depol.toml");
     let ground = ground.to_str().unwrap();
-    refused(
+    refused_with(
         &dir,
-        &[
-            "simulate",
-            ground,
-            "-o",
-            "x.h5",
-            "--set",
-            SCENE,
-            "--set",
-            "scene.advection_speed_m_per_s=0",
-        ],
+        ground,
+        &[SCENE, "scene.advection_speed_m_per_s=0"],
         &["scene.advection_speed_m_per_s", "within [0.1, 200]"],
-        "x.h5",
     );
-    refused(
+    refused_with(
         &dir,
-        &[
-            "simulate",
-            ground,
-            "-o",
-            "x.h5",
-            "--set",
-            "scene={segments=[{length_km=1.0, surface={kind=\"land\", albedo=0.2}}]}",
-        ],
+        ground,
+        &["scene={segments=[{length_km=1.0, surface={kind=\"land\", albedo=0.2}}]}"],
         &["surface", "looks up and sees no surface"],
-        "x.h5",
     );
     let space = config_path("paper/scenario1.toml");
-    refused(
+    refused_with(
         &dir,
-        &[
-            "simulate",
-            space.to_str().unwrap(),
-            "-o",
-            "x.h5",
-            "--set",
-            "scene.advection_speed_m_per_s=10",
-        ],
+        space.to_str().unwrap(),
+        &["scene.advection_speed_m_per_s=10"],
         &["scene.advection_speed_m_per_s", "ground lidar's"],
-        "x.h5",
     );
     // model fields over a station that has no latitude and longitude
     let fields = std::fs::read_to_string(config_path("ground/ground_fields.toml")).unwrap();

@@ -63,6 +63,18 @@ fn by_the_rule(c: &FieldColumn, z: f64) -> Option<(f64, f64)> {
     Some((p, p / (K_B * number)))
 }
 
+/// The file's (p, T) of profile `j` at height `z` equal the rule's within 1e-9.
+fn assert_state((j, z): (usize, f64), (pf, tf): (f64, f64), (p_rule, t_rule): (f64, f64)) {
+    assert!(
+        (pf / p_rule - 1.0).abs() < 1e-9,
+        "profile {j} at {z} m: p {pf} vs {p_rule}"
+    );
+    assert!(
+        (tf / t_rule - 1.0).abs() < 1e-9,
+        "profile {j} at {z} m: T {tf} vs {t_rule}"
+    );
+}
+
 fn floats(f: &hdf5::File, name: &str) -> Vec<f64> {
     f.dataset(name).unwrap().read_raw::<f64>().unwrap()
 }
@@ -100,14 +112,7 @@ fn the_file_s_pressure_and_temperature_are_each_profile_s_levels() {
                 continue;
             };
             let (pf, tf) = (p[j * bins + b], t[j * bins + b]);
-            assert!(
-                (pf / p_rule - 1.0).abs() < 1e-9,
-                "profile {j} at {z} m: p {pf} vs {p_rule}"
-            );
-            assert!(
-                (tf / t_rule - 1.0).abs() < 1e-9,
-                "profile {j} at {z} m: T {tf} vs {t_rule}"
-            );
+            assert_state((j, z), (pf, tf), (p_rule, t_rule));
             let r_rule = mixing_ratio_by_the_rule(c, z).unwrap();
             let rf = wv[j * bins + b];
             assert!(
@@ -202,14 +207,7 @@ fn a_ground_lidar_sees_the_fields_over_its_station_in_time() {
                     continue;
                 };
                 let (pf, tf) = (p[col as usize * bins + b], t[col as usize * bins + b]);
-                assert!(
-                    (pf / p_rule - 1.0).abs() < 1e-9,
-                    "profile {j} at {z} m: p {pf} vs {p_rule}"
-                );
-                assert!(
-                    (tf / t_rule - 1.0).abs() < 1e-9,
-                    "profile {j} at {z} m: T {tf} vs {t_rule}"
-                );
+                assert_state((j, z), (pf, tf), (p_rule, t_rule));
                 let differs = |o: &FieldColumn| {
                     by_the_rule(o, z).is_some_and(|(po, _)| (pf / po - 1.0).abs() > 1e-7)
                 };
