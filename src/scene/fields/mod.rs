@@ -11,8 +11,10 @@
 //! sub-segments, the [`subcolumns`] of its cloud fraction by maximum-random overlap,
 //! each cloudy level holding the in-cloud water q/C, the profile's shots spread evenly
 //! over them (identical subcolumns merged); with 1, the grid-box mean water over the
-//! whole box. The segments are the same scene as a curtain's: the truth, shards,
-//! onboard and validate see columns.
+//! whole box. With `aerosol_optics` (ECMWF's table), each level's CAMS species make an
+//! aerosol layer in every subcolumn ([`aerosol_layers`], docs/model.md §4l), replacing
+//! the config's background aerosol. The segments are the same scene as a curtain's: the
+//! truth, shards, onboard and validate see columns.
 
 pub mod column;
 pub mod grid;
