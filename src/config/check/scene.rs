@@ -85,7 +85,7 @@ impl ScenarioConfig {
             }
             for n in names {
                 let known = crate::atmosphere::aerosol_species::CamsSpecies::from_short_name(n);
-                if !known.is_some_and(|s| s.ifs_type.is_some()) {
+                if known.is_none_or(|s| s.ifs_type.is_none()) {
                     return Err(c.fail(
                         "scene.model_fields.aerosol_species",
                         format!(

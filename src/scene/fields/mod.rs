@@ -210,14 +210,14 @@ pub fn segments(
 fn aerosol_wavelength_m(cfg: &ScenarioConfig) -> Result<f64> {
     let nm = cfg.instrument.wavelength_nm;
     for (i, ch) in cfg.instrument.channels.iter().enumerate() {
-        if let Some(w) = ch.get("wavelength_nm").and_then(|v| v.as_float()) {
-            if (w - nm).abs() > 1e-6 * nm {
-                return Err(Error::Unsupported(format!(
-                    "instrument.channels[{i}].wavelength_nm = {w}: the aerosol of \
-                     scene.model_fields.aerosol_optics is made at one wavelength, \
-                     instrument.wavelength_nm = {nm}; give every channel that one"
-                )));
-            }
+        if let Some(w) = ch.get("wavelength_nm").and_then(|v| v.as_float())
+            && (w - nm).abs() > 1e-6 * nm
+        {
+            return Err(Error::Unsupported(format!(
+                "instrument.channels[{i}].wavelength_nm = {w}: the aerosol of \
+                 scene.model_fields.aerosol_optics is made at one wavelength, \
+                 instrument.wavelength_nm = {nm}; give every channel that one"
+            )));
         }
     }
     Ok(nm * 1e-9)
