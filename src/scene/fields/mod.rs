@@ -160,10 +160,12 @@ pub fn segments(
     let columns =
         read::columns(m, files, &points).map_err(|(path, why)| Error::output(path, why))?;
     let aerosol = match &m.aerosol_optics {
-        Some(path) => Some((
-            crate::atmosphere::aerosol_optics_table::AerosolOpticsTable::read(path)?,
-            aerosol_wavelength_m(cfg)?,
-        )),
+        Some(path) => {
+            let table = crate::atmosphere::aerosol_optics_table::AerosolOpticsTable::read(path)?;
+            let wavelength_m = aerosol_wavelength_m(cfg)?;
+            table.wavelength_index(wavelength_m)?;
+            Some((table, wavelength_m))
+        }
         None => None,
     };
     let mut out = Vec::new();
@@ -204,23 +206,11 @@ pub fn segments(
     Ok(out)
 }
 
-/// The wavelength of the fields' aerosol, m: the instrument's; a channel with a laser
-/// of its own (`wavelength_nm`) at another is refused (the layers carry one
-/// wavelength's optics).
+/// The wavelength of the fields' aerosol, m: the config's laser's (each channel's
+/// config carries its own `instrument.wavelength_nm`, so each channel's model has the
+/// aerosol at its own wavelength).
 fn aerosol_wavelength_m(cfg: &ScenarioConfig) -> Result<f64> {
-    let nm = cfg.instrument.wavelength_nm;
-    for (i, ch) in cfg.instrument.channels.iter().enumerate() {
-        if let Some(w) = ch.get("wavelength_nm").and_then(|v| v.as_float())
-            && (w - nm).abs() > 1e-6 * nm
-        {
-            return Err(Error::Unsupported(format!(
-                "instrument.channels[{i}].wavelength_nm = {w}: the aerosol of \
-                 scene.model_fields.aerosol_optics is made at one wavelength, \
-                 instrument.wavelength_nm = {nm}; give every channel that one"
-            )));
-        }
-    }
-    Ok(nm * 1e-9)
+    Ok(cfg.instrument.wavelength_nm * 1e-9)
 }
 
 /// The aerosol layers of a column from its CAMS species (docs/model.md §4l): at each
