@@ -37,6 +37,7 @@ fn every_config_key_is_documented() {
         "instruments/caliop_orbit.toml",
         "instruments/caliop_curtain.toml",
         "instruments/caliop_fields.toml",
+        "instruments/caliop_fields_aerosol.toml",
     ] {
         let lidar = common::lidar(
             cfg,

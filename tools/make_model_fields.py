@@ -11,6 +11,10 @@ stratocumulus-topped boundary layer south of it, over the western Mediterranean
   era5_like_pressure_levels.nc   netCDF-3 classic: 20 pressure levels, the same
                                  atmosphere with z (geopotential) per level; t packed as
                                  int16 with scale_factor / add_offset as CDS files are
+  cams_like_model_levels.nc      netCDF-4: CAMS-like aerosol mass mixing ratios on the
+                                 model-level file's grid, levels and times (aermr01-03
+                                 sea salt below 1 km, aermr04-06 a dust plume at 2-5 km
+                                 south of 36 N, aermr11 sulphate everywhere)
 
 The numbers are made up to look like a mid-latitude winter night, not taken from ERA5.
 Latitudes run north to south and levels top down, as in ERA5 files.
@@ -179,9 +183,58 @@ def write_pressure_levels(path):
     nc.close()
 
 
+# CAMS-like aerosol (kg kg**-1): species, share of its group, and the group's shape
+SEA_SALT = {"aermr01": 0.1, "aermr02": 0.4, "aermr03": 0.5}
+DUST = {"aermr04": 0.1, "aermr05": 0.3, "aermr06": 0.6}
+LONG = {
+    "aermr01": "Sea Salt Aerosol (0.03 - 0.5 um) Mixing Ratio",
+    "aermr02": "Sea Salt Aerosol (0.5 - 5 um) Mixing Ratio",
+    "aermr03": "Sea Salt Aerosol (5 - 20 um) Mixing Ratio",
+    "aermr04": "Dust Aerosol (0.03 - 0.55 um) Mixing Ratio",
+    "aermr05": "Dust Aerosol (0.55 - 0.9 um) Mixing Ratio",
+    "aermr06": "Dust Aerosol (0.9 - 20 um) Mixing Ratio",
+    "aermr11": "Sulphate Aerosol Mixing Ratio",
+}
+
+
+def aerosol(p, ps, hill, lat, lon):
+    """The species' mass mixing ratios at pressure p (Pa) over (lat, lon)."""
+    la, lo = np.meshgrid(lat, lon, indexing="ij")
+    z = hill - 7400.0 * np.log(p / ps)
+    sea = hill < 50.0
+    salt = np.where(sea & (z < 1000.0), 3e-8, 0.0)
+    plume = np.where((la < 36.0) & (z > 2000.0) & (z < 5000.0), 1.5e-7 * np.sin(np.pi * (z - 2000.0) / 3000.0) ** 2, 0.0) * np.where(sea, 1.0, 0.0)
+    out = {k: w * salt for k, w in SEA_SALT.items()}
+    out.update({k: w * plume for k, w in DUST.items()})
+    out["aermr11"] = 1e-9 * np.exp(-np.maximum(z, 0.0) / 3000.0) + 0.0 * la
+    return out
+
+
+def write_cams_levels(path):
+    a, b = model_levels()
+    nc = netCDF4.Dataset(path, "w", format="NETCDF4")
+    nc.Conventions = "CF-1.6"
+    nc.history = "made by tools/make_model_fields.py"
+    nc.title = "CAMS-like aerosol on the ERA5-like model levels (made up; tools/make_model_fields.py)"
+    axes(nc, len(a), np.arange(1, len(a) + 1), {"units": "1", "long_name": "model_level_number"})
+    shape = (len(HOURS), len(a), len(LAT), len(LON))
+    data = {k: np.zeros(shape) for k in LONG}
+    for i, _ in enumerate(HOURS):
+        ps, hill = surface(float(i), LAT, LON)
+        for k in range(len(a)):
+            for name, f in aerosol(a[k] + b[k] * ps, ps, hill, LAT, LON).items():
+                data[name][i, k] = f
+    for name, long in LONG.items():
+        v = nc.createVariable(name, "f4", ("time", "level", "latitude", "longitude"), zlib=True, complevel=9, shuffle=True)
+        v.units, v.long_name = "kg kg**-1", long
+        v[:] = data[name]
+    nc.close()
+
+
 if __name__ == "__main__":
     OUT.mkdir(parents=True, exist_ok=True)
     write_model_levels(OUT / "era5_like_model_levels.nc")
     write_pressure_levels(OUT / "era5_like_pressure_levels.nc")
-    for f in sorted(OUT.glob("era5_like_*.nc")):
+    write_cams_levels(OUT / "cams_like_model_levels.nc")
+    for f in sorted(OUT.glob("*_like_*_levels.nc")):
         print(f, f.stat().st_size, "bytes")

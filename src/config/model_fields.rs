@@ -62,6 +62,16 @@ pub struct ModelFieldsConfig {
     /// humidity, or the config's `atmosphere.molecular.model` and water vapour.
     #[serde(default)]
     pub molecules: FieldsMolecules,
+    /// ECMWF's aerosol optics table (`aerosol_ifs_rrtm_*.nc`), relative to the config:
+    /// with it, each level's CAMS aerosol species (`aermr01` … `aermr18`) make its
+    /// aerosol in place of the config's `[atmosphere.aerosol]`; absent, no aerosol
+    /// comes from the fields.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub aerosol_optics: Option<PathBuf>,
+    /// The species variables read (`["aermr04", ...]`); absent = every CAMS species
+    /// the files hold.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub aerosol_species: Option<Vec<String>>,
 }
 
 /// The molecules of a model-field scene (`scene.model_fields.molecules`).

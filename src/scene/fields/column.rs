@@ -42,6 +42,9 @@ pub struct Level {
     pub liquid_radius_um: Option<f64>,
     /// The model's ice effective radius, µm.
     pub ice_radius_um: Option<f64>,
+    /// The CAMS aerosol species' mass mixing ratios, kg kg⁻¹, by species
+    /// (`aermr01` at 0 … `aermr18` at 17; 0 where not read).
+    pub aerosol_mmr: [f64; 18],
 }
 
 /// A profile's column: levels bottom up and the heights of their layers' boundaries.
@@ -140,6 +143,7 @@ mod tests {
             height_m: f64::NAN,
             liquid_radius_um: None,
             ice_radius_um: None,
+            aerosol_mmr: [0.0; 18],
         }
     }
 

@@ -11,8 +11,10 @@
 //! sub-segments, the [`subcolumns`] of its cloud fraction by maximum-random overlap,
 //! each cloudy level holding the in-cloud water q/C, the profile's shots spread evenly
 //! over them (identical subcolumns merged); with 1, the grid-box mean water over the
-//! whole box. The segments are the same scene as a curtain's: the truth, shards,
-//! onboard and validate see columns.
+//! whole box. With `aerosol_optics` (ECMWF's table), each level's CAMS species make an
+//! aerosol layer in every subcolumn ([`aerosol_layers`], docs/model.md §4l), replacing
+//! the config's background aerosol. The segments are the same scene as a curtain's: the
+//! truth, shards, onboard and validate see columns.
 
 pub mod column;
 pub mod grid;
@@ -29,7 +31,7 @@ use crate::atmosphere::cloud_optics::{
 
 use crate::config::{
     CloudPhase, FieldsMolecules, LayerConfig, LayerKind, ModelFieldsConfig, MolecularModel,
-    ScenarioConfig, SegmentConfig, WaterVapourConfig,
+    ScenarioConfig, SegmentAerosol, SegmentConfig, WaterVapourConfig,
 };
 use crate::error::{Error, Result};
 use crate::scene::track::AlongTrack;
@@ -157,8 +159,24 @@ pub fn segments(
     let points: Vec<Sample> = samples.iter().map(|s| s.0).collect();
     let columns =
         read::columns(m, files, &points).map_err(|(path, why)| Error::output(path, why))?;
+    let aerosol = match &m.aerosol_optics {
+        Some(path) => {
+            let table = crate::atmosphere::aerosol_optics_table::AerosolOpticsTable::read(path)?;
+            let wavelength_m = aerosol_wavelength_m(cfg)?;
+            table.wavelength_index(wavelength_m)?;
+            Some((table, wavelength_m))
+        }
+        None => None,
+    };
     let mut out = Vec::new();
     for (p, (c, (_, length_km))) in columns.iter().zip(&samples).enumerate() {
+        let aerosol_layers = match &aerosol {
+            Some((table, wavelength_m)) => Some(
+                aerosol_layers(table, c, *wavelength_m)
+                    .map_err(|e| Error::Unsupported(format!("profile {p}: {e}")))?,
+            ),
+            None => None,
+        };
         // the config's surface at the model's height
         let surface = cfg.surface.as_ref().zip(c.surface_height_m).map(|(s, z)| {
             crate::config::SurfaceConfig {
@@ -170,10 +188,13 @@ pub fn segments(
             FieldsMolecules::Fields => (Some(molecules(c)), Some(water_vapour(c))),
             FieldsMolecules::Config => (None, None),
         };
-        let segment = |length_km: f64, layers: Vec<LayerConfig>| SegmentConfig {
+        let segment = |length_km: f64, mut layers: Vec<LayerConfig>| SegmentConfig {
             length_km,
+            aerosol: aerosol_layers.as_ref().map(|a| {
+                layers.extend(a.iter().cloned());
+                SegmentAerosol::Named("none".into())
+            }),
             layers: Some(layers),
-            aerosol: None,
             surface: surface.clone(),
             water_vapour: water_vapour.clone(),
             molecular: molecular.clone(),
@@ -181,6 +202,76 @@ pub fn segments(
         for (share, layers) in profile_subcolumns(m, c, seed, p as u64, shots_per_profile) {
             out.push(segment(length_km * share, layers));
         }
+    }
+    Ok(out)
+}
+
+/// The wavelength of the fields' aerosol, m: the config's laser's (each channel's
+/// config carries its own `instrument.wavelength_nm`, so each channel's model has the
+/// aerosol at its own wavelength).
+fn aerosol_wavelength_m(cfg: &ScenarioConfig) -> Result<f64> {
+    Ok(cfg.instrument.wavelength_nm * 1e-9)
+}
+
+/// The aerosol layers of a column from its CAMS species (docs/model.md §4l): at each
+/// level with aerosol, `ρ_air = p/(R_d·T_v)`, the RH over water from q, T, p, and per
+/// species `α_s = ρ_air·mmr_s·k_ext,s(RH, λ)`, `β_s = α_s/S_s` from `table`; the level's
+/// layer has `α = Σα_s`, lidar ratio `α/Σβ_s` and the backscatter-weighted mean of the
+/// species' default depolarizations (an approximation: depolarization ratios do not
+/// mix linearly, the exact mixture's being `Σβ_s⊥/Σβ_s∥`).
+pub fn aerosol_layers(
+    table: &crate::atmosphere::aerosol_optics_table::AerosolOpticsTable,
+    c: &FieldColumn,
+    wavelength_m: f64,
+) -> Result<Vec<LayerConfig>> {
+    use crate::atmosphere::aerosol_species::{
+        CAMS_SPECIES, particle_depolarization, relative_humidity_over_water,
+    };
+    let mut out = Vec::new();
+    for (k, l) in c.levels.iter().enumerate() {
+        if l.aerosol_mmr.iter().all(|x| *x <= 0.0) {
+            continue;
+        }
+        let rho = air_density(l.p_pa, l.t_k, l.q);
+        let rh = relative_humidity_over_water(l.q, l.t_k, l.p_pa);
+        let (mut alpha, mut beta, mut beta_delta) = (0.0, 0.0, 0.0);
+        for (s, mmr) in CAMS_SPECIES.iter().zip(l.aerosol_mmr) {
+            if mmr <= 0.0 {
+                continue;
+            }
+            let (k_ext, lidar_ratio) = table.optics(s, rh, wavelength_m)?;
+            let delta = particle_depolarization(s, wavelength_m).ok_or_else(|| {
+                Error::Unsupported(format!(
+                    "{}: no default depolarization at {} nm (only 355, 532, 1064 nm)",
+                    s.short_name,
+                    wavelength_m * 1e9
+                ))
+            })?;
+            let a = rho * mmr * k_ext;
+            alpha += a;
+            beta += a / lidar_ratio;
+            beta_delta += a / lidar_ratio * delta;
+        }
+        if alpha <= 0.0 || beta <= 0.0 {
+            continue;
+        }
+        out.push(LayerConfig {
+            kind: LayerKind::Aerosol,
+            base_km: c.interfaces_m[k] / 1e3,
+            top_km: c.interfaces_m[k + 1] / 1e3,
+            extinction_per_km: alpha * 1e3,
+            lidar_ratio_sr: alpha / beta,
+            depolarization: beta_delta / beta,
+            multiple_scattering: 1.0,
+            phase: None,
+            effective_radius_um: None,
+            asymmetry_factor: None,
+            angstrom_exponent: None,
+            reference_wavelength_nm: None,
+            lidar_ratio_sr_by_wavelength: Default::default(),
+            cloud_fraction: None,
+            cell_length_km: None,
+        });
     }
     Ok(out)
 }
@@ -265,6 +356,12 @@ pub fn with_model_fields(
     let files: Vec<_> = m.files.iter().map(|f| loaded.resolve_path(f)).collect();
     for f in &files {
         crate::input_file::check("scene.model_fields.files", f)?;
+    }
+    let mut m = m;
+    if let Some(t) = &m.aerosol_optics {
+        let t = loaded.resolve_path(t);
+        crate::input_file::check("scene.model_fields.aerosol_optics", &t)?;
+        m.aerosol_optics = Some(t);
     }
     let segments = segments(&cfg, &m, &files, track, (shots, profiles), seed)?;
     if let Some(s) = cfg.scene.as_mut() {

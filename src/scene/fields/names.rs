@@ -85,7 +85,7 @@ pub fn quantity(role: &str) -> Option<Quantity> {
     Some(match role {
         "temperature" => Q::Temperature,
         "surface_pressure" | "pressure" | "hybrid_a" => Q::Pressure,
-        "specific_humidity" | "liquid" | "ice" => Q::MixingRatio,
+        "specific_humidity" | "liquid" | "ice" | "aerosol" => Q::MixingRatio,
         "cloud_fraction" => Q::Fraction,
         "geopotential" | "surface_geopotential" => Q::Geopotential,
         "height" => Q::Length,

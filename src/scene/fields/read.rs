@@ -265,6 +265,45 @@ pub fn columns(
             None => None,
         });
     }
+    // the CAMS aerosol species (with an optics table): the requested, else all found
+    let mut species = Vec::new();
+    if cfg.aerosol_optics.is_some() {
+        let names: Vec<String> = match &cfg.aerosol_species {
+            Some(n) => n.clone(),
+            None => crate::atmosphere::aerosol_species::CAMS_SPECIES
+                .iter()
+                .filter(|s| s.ifs_type.is_some() && files.find(s.short_name).is_some())
+                .map(|s| s.short_name.to_string())
+                .collect(),
+        };
+        for name in names {
+            let index = crate::atmosphere::aerosol_species::CAMS_SPECIES
+                .iter()
+                .position(|s| s.short_name == name)
+                .ok_or_else(|| {
+                    (
+                        first(),
+                        format!(
+                            "`{name}` (scene.model_fields.aerosol_species): not a CAMS species"
+                        ),
+                    )
+                })?;
+            let v = files.find(&name).ok_or_else(|| {
+                (
+                    first(),
+                    format!(
+                        "`{name}` (scene.model_fields.aerosol_species): no such variable in the \
+                         files ({})",
+                        (0..paths.len())
+                            .map(|i| files.path(i).display().to_string())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                )
+            })?;
+            species.push((index, read(&v, "aerosol", true)?));
+        }
+    }
     let surface = |role: &str| -> Result<Option<Vec<f64>>, Fail> {
         match find(&files, cfg, role)? {
             Some(v) if !(v.shape.len() == 4 && v.shape[1] == nl && nl > 1) => {
@@ -354,6 +393,13 @@ pub fn columns(
                 height_m,
                 liquid_radius_um: value(8, k),
                 ice_radius_um: value(9, k),
+                aerosol_mmr: {
+                    let mut a = [0.0; 18];
+                    for (i, f) in &species {
+                        a[*i] = mix(f, k).max(0.0);
+                    }
+                    a
+                },
             };
             check_level(&level).map_err(|(i, why)| {
                 let v = &per_level[i].as_ref().map_or(&t_var, |(_, v)| v);
