@@ -182,9 +182,17 @@ mod tests {
         .unwrap();
         let named: Vec<&str> = loaded.config.named_files().iter().map(|f| f.0).collect();
         assert_eq!(named, ["atmosphere.molecular.model.file", "scene.curtain"]);
+        // the single-path keys of a model-field config (its `files` are a list)
+        let fields = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("configs/instruments/caliop_fields_aerosol.toml");
+        let fields = load(&fields, &[]).unwrap();
+        let fields: Vec<&str> = fields.config.named_files().iter().map(|f| f.0).collect();
+        assert!(fields.contains(&"scene.model_fields.aerosol_optics"));
+        let singles = named.len() + 1;
+        // and `LoadedConfig::path`, the config itself
         assert_eq!(
             path_fields,
-            named.len() + 1,
+            singles + 1,
             "a path key missing from named_files"
         );
         let read = loaded.files_read();

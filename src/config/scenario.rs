@@ -50,7 +50,8 @@ pub struct ScenarioConfig {
 
 impl ScenarioConfig {
     /// Every file the config names, with its key, as written (relative to the config
-    /// file): the molecular profile file, the scene's curtain and model fields. A key that names a
+    /// file): the molecular profile file, the scene's curtain, model fields and aerosol
+    /// optics table. A key that names a
     /// file belongs here, so that the file is an input no output may replace
     /// (`LoadedConfig::files_read`); its reader opens it through `src/input_file.rs`.
     pub fn named_files(&self) -> Vec<(&'static str, &Path)> {
@@ -69,6 +70,9 @@ impl ScenarioConfig {
         if let Some(m) = self.scene.as_ref().and_then(|s| s.model_fields.as_ref()) {
             for f in &m.files {
                 files.push(("scene.model_fields.files", f.as_path()));
+            }
+            if let Some(t) = &m.aerosol_optics {
+                files.push(("scene.model_fields.aerosol_optics", t.as_path()));
             }
         }
         files
