@@ -151,7 +151,7 @@ fn the_product_and_data_rate_follow_each_channels_layout() {
     // the groups and their channels
     let f = hdf5::File::open(&product).unwrap();
     let names = |k: usize| -> Vec<String> {
-        f.dataset(&format!("region_{k}/channel"))
+        f.dataset(&format!("region_{k}/channel_name"))
             .unwrap()
             .read_raw::<hdf5::types::VarLenUnicode>()
             .unwrap()

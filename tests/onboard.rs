@@ -400,7 +400,7 @@ fn the_product_describes_its_variables() {
                 "{} has no long_name",
                 d.name()
             );
-            if !d.name().ends_with("/channel") {
+            if !d.name().ends_with("/channel_name") {
                 assert!(text(&d, "units").is_some(), "{} has no units", d.name());
             }
         }

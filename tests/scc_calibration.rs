@@ -40,7 +40,7 @@ fn calibration_run(dir: &Path, which: &str, out: &str, extra: &[&str]) {
 fn counts(path: &Path) -> (Vec<String>, Vec<usize>, Vec<u64>) {
     let f = hdf5::File::open(path).unwrap();
     let ds = f.dataset("counts").unwrap();
-    let names = common::h5::strings(&f, "channel");
+    let names = common::h5::strings(&f, "channel_name");
     (names, ds.shape(), ds.read_raw::<u64>().unwrap())
 }
 
