@@ -106,6 +106,7 @@ const OWNERS: OwnerChecks = OwnerChecks {
     ozone: crate::atmosphere::ozone::validate,
     water_vapour: crate::atmosphere::water_vapour::validate,
     molecular: crate::atmosphere::profile_file::validate_tables,
+    aerosol_species: crate::atmosphere::aerosol_species::validate,
     orbit: crate::scene::orbit::validate,
     simulation: |config, c| validate_tolerance(&config.simulation, c),
     multiple_scattering: crate::atmosphere::multiple_scattering::validate,

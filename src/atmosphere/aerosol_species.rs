@@ -1,6 +1,6 @@
 //! The aerosol species of CAMS (`aermr01` … `aermr18`, the mass mixing ratios in ERA5 /
 //! CAMS files), the IFS optical type each is given in ECMWF's aerosol optics tables
-//! ([`super::aerosol_optics_table`]), the relative humidity that picks a hydrophilic
+//! (`src/atmosphere/aerosol_optics_table.rs`), the relative humidity that picks a hydrophilic
 //! type's bin, and each species' particle linear depolarization ratio, a lidar default
 //! the tables do not give (docs/model.md §4l).
 
@@ -246,7 +246,7 @@ pub fn saturation_vapour_pressure_over_water_pa(temperature_k: f64) -> f64 {
 /// (from `q = ε e/(p − (1 − ε) e)`, ε = [`EPSILON`]) over
 /// [`saturation_vapour_pressure_over_water_pa`], clipped to `[0, 1]` (a supersaturated or
 /// negative value, as models' q can be, takes the last or first bin anyway: see
-/// [`super::aerosol_optics_table::AerosolOpticsTable::rh_bin`]). NaN if an input is not
+/// `AerosolOpticsTable::rh_bin` in `src/atmosphere/aerosol_optics_table.rs`). NaN if an input is not
 /// finite.
 pub fn relative_humidity_over_water(
     specific_humidity_kg_per_kg: f64,
@@ -314,4 +314,30 @@ mod tests {
     fn saturation_at_the_triple_point_is_a1() {
         assert_eq!(saturation_vapour_pressure_over_water_pa(273.16), 611.21);
     }
+}
+
+/// Checks `scene.model_fields.aerosol_species`: each name a CAMS species with optics (the
+/// config's owner check, `src/loaded.rs`).
+pub fn validate(
+    config: &crate::config::ScenarioConfig,
+    c: &crate::config::Checker,
+) -> crate::error::Result<()> {
+    let names = config
+        .scene
+        .as_ref()
+        .and_then(|s| s.model_fields.as_ref())
+        .and_then(|m| m.aerosol_species.as_ref());
+    for n in names.into_iter().flatten() {
+        let known = CamsSpecies::from_short_name(n);
+        if known.is_none_or(|s| s.ifs_type.is_none()) {
+            return Err(c.fail(
+                "scene.model_fields.aerosol_species",
+                format!(
+                    "`{n}` is not a CAMS species with optics (aermr01 … aermr11, \
+                     aermr16 … aermr18 as ECMWF's tables map them)"
+                ),
+            ));
+        }
+    }
+    Ok(())
 }

@@ -109,7 +109,7 @@ pub struct SegmentConfig {
     /// The molecules of this stretch (replacing `atmosphere.molecular.model`): `"us76"`,
     /// a profile file or a table; absent = that one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub molecular: Option<crate::config::MolecularModel>,
+    pub molecular: Option<super::atmosphere::MolecularModel>,
 }
 
 /// A segment's aerosol: `"none"` or a whole `[atmosphere.aerosol]` table.

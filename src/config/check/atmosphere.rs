@@ -34,6 +34,7 @@ impl ScenarioConfig {
         (owners.ozone)(self, c)?;
         (owners.water_vapour)(self, c)?;
         (owners.molecular)(self, c)?;
+        (owners.aerosol_species)(self, c)?;
         if let Some(a) = &self.atmosphere.aerosol {
             c.positive("atmosphere.aerosol.visibility_km", a.visibility_km, 1e4)?;
             c.range(

@@ -81,6 +81,8 @@ pub struct OwnerChecks {
     /// The molecular profiles given as tables: `atmosphere.molecular.model` and the
     /// segments' `molecular` (a profile file's rows).
     pub molecular: OwnerCheck,
+    /// `scene.model_fields.aerosol_species` (the CAMS species with optics).
+    pub aerosol_species: OwnerCheck,
     /// `[orbit]` (an orbit that exists).
     pub orbit: OwnerCheck,
     /// `[simulation]` (the sampler's tolerance).

@@ -75,26 +75,13 @@ impl ScenarioConfig {
             1.0,
             3.0,
         )?;
-        if let Some(names) = &m.aerosol_species {
-            if m.aerosol_optics.is_none() {
-                return Err(c.fail(
-                    "scene.model_fields.aerosol_species",
-                    "needs scene.model_fields.aerosol_optics (the table that gives the \
-                     species their optics)",
-                ));
-            }
-            for n in names {
-                let known = crate::atmosphere::aerosol_species::CamsSpecies::from_short_name(n);
-                if known.is_none_or(|s| s.ifs_type.is_none()) {
-                    return Err(c.fail(
-                        "scene.model_fields.aerosol_species",
-                        format!(
-                            "`{n}` is not a CAMS species with optics (aermr01 … aermr11, \
-                             aermr16 … aermr18 as ECMWF's tables map them)"
-                        ),
-                    ));
-                }
-            }
+        // (the names themselves: the species table's owner, `owners.aerosol_species`)
+        if m.aerosol_species.is_some() && m.aerosol_optics.is_none() {
+            return Err(c.fail(
+                "scene.model_fields.aerosol_species",
+                "needs scene.model_fields.aerosol_optics (the table that gives the species \
+                 their optics)",
+            ));
         }
         Ok(())
     }
