@@ -294,28 +294,6 @@ pub fn particle_depolarization(species: &CamsSpecies, wavelength_m: f64) -> Opti
     Some(by_wavelength[k])
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn short_names_run_in_order_and_types_are_in_the_49r1_map() {
-        for (k, s) in CAMS_SPECIES.iter().enumerate() {
-            assert_eq!(s.short_name, format!("aermr{:02}", k + 1));
-        }
-        let map: Vec<i64> = CAMS_SPECIES[..11]
-            .iter()
-            .map(|s| s.ifs_type.unwrap().ecrad_index())
-            .collect();
-        assert_eq!(map, [-1, -2, -3, 7, 8, 9, -4, 10, 11, 11, -5]);
-    }
-
-    #[test]
-    fn saturation_at_the_triple_point_is_a1() {
-        assert_eq!(saturation_vapour_pressure_over_water_pa(273.16), 611.21);
-    }
-}
-
 /// Checks `scene.model_fields.aerosol_species`: each name a CAMS species with optics (the
 /// config's owner check, `src/loaded.rs`).
 pub fn validate(
@@ -340,4 +318,26 @@ pub fn validate(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn short_names_run_in_order_and_types_are_in_the_49r1_map() {
+        for (k, s) in CAMS_SPECIES.iter().enumerate() {
+            assert_eq!(s.short_name, format!("aermr{:02}", k + 1));
+        }
+        let map: Vec<i64> = CAMS_SPECIES[..11]
+            .iter()
+            .map(|s| s.ifs_type.unwrap().ecrad_index())
+            .collect();
+        assert_eq!(map, [-1, -2, -3, 7, 8, 9, -4, 10, 11, 11, -5]);
+    }
+
+    #[test]
+    fn saturation_at_the_triple_point_is_a1() {
+        assert_eq!(saturation_vapour_pressure_over_water_pa(273.16), 611.21);
+    }
 }
