@@ -70,6 +70,7 @@ fn main() {
         time_units: "seconds since 2000-01-01 00:00:00".into(),
         channel_text: vec![],
         n_columns: 0,
+        streamed_columns: false,
         column_slots: 0,
         variables: truth
             .iter()

@@ -63,6 +63,7 @@ fn spec(
         time_units: "seconds since 2000-01-01 00:00:00".into(),
         channel_text: vec![],
         n_columns: 0,
+        streamed_columns: false,
         column_slots: 0,
         variables: vec![
             pcb("truth_a"),

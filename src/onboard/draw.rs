@@ -20,6 +20,8 @@ pub(super) struct Draw {
     seed: u64,
     energy: simulate::RunEnergy,
     scene: Option<simulate::scene::SceneModel>,
+    /// Every column of the changing scene, built (none in a static scene).
+    built: Vec<std::sync::Arc<simulate::scene::BuiltColumn>>,
     samplers: Vec<Vec<(simulate::StreamSampler, u64)>>,
     pub(super) channels: usize,
     pub(super) n_bins: usize,
@@ -37,6 +39,14 @@ impl Draw {
         let energy = simulate::run_energy(lidar, seed, duration)?;
         let profiles = native.shots as usize;
         let scene = simulate::changing_scene(lidar, seed, profiles, &mut method, false, &energy)?;
+        // any shot in any order: every column built
+        let built = match &scene {
+            Some(sc) => {
+                sc.build_all(lidar)?;
+                sc.all_columns()
+            }
+            None => vec![],
+        };
         let samplers = lidar
             .channels
             .iter()
@@ -51,6 +61,7 @@ impl Draw {
             seed,
             energy,
             scene,
+            built,
             samplers,
             channels: lidar.channels.len(),
             n_bins: lidar.first().geometry.n_bins,
@@ -65,7 +76,7 @@ impl Draw {
     /// The scene's columns, each with every channel's model (one in a static scene).
     pub(super) fn columns<'a>(&'a self, native: &'a NativeRun) -> Vec<&'a [ExpectedProfile]> {
         match &self.scene {
-            Some(s) => s.expected.iter().map(Vec::as_slice).collect(),
+            Some(_) => self.built.iter().map(|c| c.expected.as_slice()).collect(),
             None => vec![&native.expected],
         }
     }
@@ -82,7 +93,7 @@ impl Draw {
                 let truth = ShotTruth {
                     column,
                     background: draw.mean_backgrounds().to_vec(),
-                    dark: s.expected[column].iter().map(|e| e.dark).collect(),
+                    dark: self.built[column].expected.iter().map(|e| e.dark).collect(),
                     energy: drawn.energy_sum(),
                 };
                 (drawn.counts, truth)
@@ -104,7 +115,7 @@ impl Draw {
     /// scene.
     fn truth(&self, p: u64) -> Option<&[ExpectedProfile]> {
         let s = self.scene.as_ref()?;
-        Some(&s.expected[s.column_of_shot(p)])
+        Some(&self.built[s.column_of_shot(p)].expected)
     }
 }
 

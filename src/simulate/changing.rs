@@ -145,7 +145,8 @@ pub fn scene_profile_values(
     } = draw;
     let shots = runs.iter().map(|r| r.1).sum::<u64>() as f64;
     let mut truth = sc.truth(runs);
-    let dark = |k: usize| sc.expected[runs[0].0][k].dark;
+    let first = sc.column(runs[0].0);
+    let dark = |k: usize| first.expected[k].dark;
     if sc.is_solar() {
         // an ideal detector records what arrives; a dead-time one its stationary rate per
         // bin (the transient at a sharp edge, O(τ/Δt), is not in this truth)
@@ -195,16 +196,18 @@ pub fn file_rows(
     dark: &[f64],
     shots: u64,
 ) -> Vec<Vec<f64>> {
-    let n_bins = sc.expected[0][0].n_bins();
     let channels = dark.len();
+    let n_bins = sc.column(draw.runs[0].0).expected[0].n_bins();
     let background = &draw.mean_backgrounds;
     let mix = |f: fn(&crate::scenario::ExpectedProfile) -> &[f64]| {
         let mut out = vec![0.0; channels * n_bins];
         for (k, row) in out.chunks_mut(n_bins).enumerate() {
-            let slots = columns.0.iter().zip(&columns.1).map(|(&c, &w)| {
-                let e = &sc.expected[per_profile::slot_column(c)][k];
-                (w, f(e))
-            });
+            // an unused slot (−1, weight 0) adds nothing: its column need not be built
+            let built: Vec<_> = (columns.0.iter().zip(&columns.1))
+                .filter(|&(&c, _)| c >= 0)
+                .map(|(&c, &w)| (w, sc.column(per_profile::slot_column(c))))
+                .collect();
+            let slots = built.iter().map(|(w, b)| (*w, f(&b.expected[k])));
             per_profile::mix_into(row, slots);
         }
         out

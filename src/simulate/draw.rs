@@ -1,17 +1,19 @@
 //! The drawing loop of a planned run: profiles drawn in parallel batches and handed to a
 //! sink (the raw file, or memory) in order; its progress bar.
 
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
 use super::changing::{SceneDraw, draw_scene_counts, file_rows};
+use super::columns::BuiltColumn;
 use super::drawn::{DrawnProfile, STATIC_COLUMN, draw_profile};
 use super::orbit::orbit_of;
 use super::plan::{RunOptions, RunPlan};
 use super::sampler::{StreamSampler, channel_seed, stream_samplers};
 use crate::error::{Error, Result};
-use crate::output::raw_file::{ProfileRecord, ProfileSink};
+use crate::output::raw_file::{ProfileRecord, ProfileSink, content};
 use crate::scenario::Lidar;
 
 /// Whether the caller asked the run to stop ([`RunOptions::cancel`]).
@@ -67,9 +69,7 @@ pub(super) fn draw_into<S: ProfileSink>(
         .map(|c| c.loaded.config.instrument.pulse_energy_j)
         .collect();
     let progress = progress_bar(opts.progress, rows.len());
-    let streams = channels.len() * channels[0].len();
-    // batch size: bounded memory (at most 32 MiB of counts) and a lively progress bar
-    let batch = super::sizes::batch_profiles(n_bins, streams);
+    let batch = batch_of(n_bins, &channels);
     let mut total_counts = 0u64;
     let mut drawing = Duration::ZERO;
     // Batch k is drawn while batch k − 1 is handed to the writer (whose chunk compression
@@ -115,9 +115,20 @@ pub(super) fn draw_into<S: ProfileSink>(
         let drawn: Vec<DrawnProfile> = drawn.into_iter().map(|(d, _)| d).collect();
         Some((first_profile, drawn, took, counted))
     };
-    let mut write_batch = |(first_profile, drawn, took, counted): Batch| {
+    let column_rows =
+        |c: &BuiltColumn| content::column_rows(lidar, expected, &c.expected, shots, layout);
+    let mut write_batch = |(first_profile, drawn, took, counted): Batch,
+                           new_columns: Vec<(usize, Arc<BuiltColumn>)>,
+                           sink: &mut S| {
         drawing += took;
         total_counts += counted;
+        // one column's rows at a time (they are ~30 values a bin and channel)
+        for (c, column) in new_columns {
+            let rows = column_rows(&column);
+            drop(column);
+            let rows: Vec<&[f64]> = rows.iter().map(Vec::as_slice).collect();
+            sink.write_column(c, &rows)?;
+        }
         for (k, d) in drawn.iter().enumerate() {
             let index = first_profile + k;
             let place = orbit.as_ref().map(|o| {
@@ -153,21 +164,66 @@ pub(super) fn draw_into<S: ProfileSink>(
     };
     let mut pending = None;
     for first_profile in rows.clone().step_by(batch) {
+        // the columns this batch sees, built before it is drawn (their truth written
+        // with it)
+        let last = (first_profile + batch).min(rows.end) as u64;
+        let new_columns = match scene {
+            Some(sc) => sc.prepare(lidar, first_profile as u64..last)?,
+            None => vec![],
+        };
         let (drawn, written) = rayon::join(
             || draw_batch(first_profile),
-            || pending.take().map_or(Ok(()), &mut write_batch),
+            || {
+                pending
+                    .take()
+                    .map_or(Ok(()), |(b, cols)| write_batch(b, cols, &mut *sink))
+            },
         );
         written?;
         match drawn {
-            Some(drawn) if !cancelled(opts) => pending = Some(drawn),
+            Some(drawn) if !cancelled(opts) => pending = Some((drawn, new_columns)),
             _ => return Err(Error::Interrupted),
         }
     }
-    if let Some(last) = pending {
-        write_batch(last)?;
+    if let Some((last, cols)) = pending {
+        write_batch(last, cols, &mut *sink)?;
+    }
+    // the whole run's file holds the columns no profile sees too (a shard's leaves them
+    // to its merge)
+    if let Some(sc) = scene.as_ref().filter(|_| rows == (0..planned.profiles)) {
+        sc.for_unseen(lidar, |i, c| {
+            let rows = column_rows(c);
+            let rows: Vec<&[f64]> = rows.iter().map(Vec::as_slice).collect();
+            sink.write_column(i, &rows)
+        })?;
     }
     progress.finish_and_clear();
     Ok((total_counts, drawing))
+}
+
+/// Profiles drawn in one batch by samplers `channels` of `n_bins` bins: bounded memory
+/// (at most 32 MiB of counts) and a lively progress bar. A changing scene's columns are
+/// built batch by batch, and `merge` writes them at the same points, so the batches
+/// depend on the run alone (never on the shard or the thread count).
+fn batch_of(n_bins: usize, channels: &[Vec<(StreamSampler, u64)>]) -> usize {
+    let streams = channels.len() * channels[0].len();
+    super::sizes::batch_profiles(n_bins, streams)
+}
+
+/// The batches of a planned run ([`batch_of`]) whose profiles are `profiles`.
+pub(super) fn run_batch(lidar: &Lidar, planned: &RunPlan) -> usize {
+    let channels: Vec<Vec<(StreamSampler, u64)>> = lidar
+        .channels
+        .iter()
+        .zip(&planned.expected)
+        .enumerate()
+        .map(|(k, (c, e))| {
+            let seed = channel_seed(planned.seed, lidar.photon_source(k));
+            let (method, energy) = (planned.method, planned.energy);
+            stream_samplers(e, method, energy, planned.components, seed, &c.instrument)
+        })
+        .collect();
+    batch_of(lidar.first().geometry.n_bins, &channels)
 }
 
 /// A drawn batch: its first profile, its profiles, the time their counts took to draw,

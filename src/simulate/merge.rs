@@ -199,8 +199,14 @@ impl Merge {
         require_disk_for_merge(&self.out, self.files.iter().map(|f| f.path.as_path()))?;
         let spec = &self.plan.spec;
         let mut writer = RawFileWriter::create(outputs.temp_path(id)?, &self.out, spec)?;
-        for &i in &self.order {
-            copy_rows(&self.files[i], spec, &mut writer)?;
+        match &self.plan.scene {
+            None => {
+                for &i in &self.order {
+                    let f = &self.files[i];
+                    copy_rows(f, spec, &mut writer, 0..f.rows)?;
+                }
+            }
+            Some(_) => self.write_scene(spec, &mut writer)?,
         }
         writer.finish()?;
         outputs.commit()?;
@@ -212,6 +218,51 @@ impl Merge {
             file: "file",
             elapsed: self.start.elapsed(),
         })
+    }
+}
+
+impl Merge {
+    /// A changing scene's file: batch by batch as `simulate` writes it (the same batches,
+    /// [`super::draw::run_batch`]), the columns the batch's profiles see first (their
+    /// truth built again, as the run built it), then its profiles from the shards; at
+    /// the end the columns no profile sees. The same writes in the same order: the same
+    /// bytes as the whole run's file.
+    fn write_scene(&self, spec: &RawFileSpec, writer: &mut RawFileWriter) -> Result<()> {
+        let Some(sc) = &self.plan.scene else {
+            return Ok(());
+        };
+        let (lidar, plan) = (&self.lidar, &self.plan);
+        let layout = crate::output::raw_file::content::TruthLayout::of(lidar, true, plan.truth);
+        let shots = lidar.first().shots_per_profile();
+        let rows_of = |c: &super::columns::BuiltColumn| {
+            crate::output::raw_file::content::column_rows(
+                lidar,
+                &plan.expected,
+                &c.expected,
+                shots,
+                layout,
+            )
+        };
+        let put = |writer: &mut RawFileWriter, i: usize, c: &super::columns::BuiltColumn| {
+            let rows = rows_of(c);
+            let rows: Vec<&[f64]> = rows.iter().map(Vec::as_slice).collect();
+            writer.write_column(i, &rows)
+        };
+        let batch = super::draw::run_batch(lidar, plan);
+        for a in (0..plan.profiles).step_by(batch) {
+            let b = (a + batch).min(plan.profiles);
+            for (i, c) in sc.prepare(lidar, a as u64..b as u64)? {
+                put(writer, i, &c)?;
+            }
+            for &k in &self.order {
+                let f = &self.files[k];
+                let (lo, hi) = (a.max(f.first_profile), b.min(f.first_profile + f.rows));
+                if lo < hi {
+                    copy_rows(f, spec, writer, lo - f.first_profile..hi - f.first_profile)?;
+                }
+            }
+        }
+        sc.for_unseen(lidar, |i, c| put(writer, i, c))
     }
 }
 
@@ -276,8 +327,14 @@ impl RowSources {
     }
 }
 
-/// Streams the rows of shard `f` into `writer`, block by block, at their rows of the run.
-fn copy_rows(f: &ShardFile, spec: &RawFileSpec, writer: &mut RawFileWriter) -> Result<()> {
+/// Streams rows `rows` of shard `f` into `writer`, block by block, at their rows of the
+/// run.
+fn copy_rows(
+    f: &ShardFile,
+    spec: &RawFileSpec,
+    writer: &mut RawFileWriter,
+    rows: std::ops::Range<usize>,
+) -> Result<()> {
     let src = RowSources::of(f, spec)?;
     let shape = RecordShape::of(spec);
     let n = spec.counts_per_profile();
@@ -289,8 +346,8 @@ fn copy_rows(f: &ShardFile, spec: &RawFileSpec, writer: &mut RawFileWriter) -> R
             format!("cannot read: {}", describe_hdf5_error(&e.to_string())),
         )
     };
-    for a in (0..f.rows).step_by(block) {
-        let b = (a + block).min(f.rows);
+    for a in rows.clone().step_by(block) {
+        let b = (a + block).min(rows.end);
         let rows3 = |d: &Dataset| d.read_slice::<u64, _, Ix3>(s![a..b, .., ..]);
         let rows3f = |d: &Dataset| d.read_slice::<f64, _, Ix3>(s![a..b, .., ..]);
         let rows1 = |d: &Dataset| d.read_slice::<f64, _, Ix1>(s![a..b]);

@@ -19,6 +19,7 @@
 use std::time::Instant;
 
 mod changing;
+mod columns;
 mod draw;
 mod drawn;
 mod energy;

@@ -190,7 +190,7 @@ pub fn plan(lidar: &Lidar, opts: &RunOptions, resolved: Option<ResolvedMethod>) 
         let approximable = method == ResolvedMethod::Aggregate && energy.law.is_constant();
         method = fastest_within_totals(t, &totals, shots, approximable);
     }
-    let scene = changing_scene(lidar, seed, profiles, &mut method, components, &energy)?;
+    let mut scene = changing_scene(lidar, seed, profiles, &mut method, components, &energy)?;
     let spec = raw_file_spec(
         lidar,
         &expected,
@@ -200,6 +200,9 @@ pub fn plan(lidar: &Lidar, opts: &RunOptions, resolved: Option<ResolvedMethod>) 
         opts,
         scene.as_ref(),
     )?;
+    if let Some(sc) = scene.as_mut() {
+        sc.set_count_width(spec.count_width);
+    }
     Ok(RunPlan {
         seed,
         profiles,
@@ -252,19 +255,16 @@ fn raw_file_spec(
         command_line: &opts.command_line,
         config: values.stored_config(&first.loaded.resolved_toml)?,
     };
-    // the brightest bin at the brightest pulse of the run sizes the counters (every
-    // column of a changing scene, in full sunlight)
-    let columns: Vec<&ExpectedProfile> = match scene {
-        Some(sc) => sc.expected.iter().flatten().collect(),
-        None => expected.iter().collect(),
-    };
-    let brightest_sky = scene.map_or(0.0, |sc| sc.brightest_background());
-    let max_mean = columns
-        .into_iter()
+    // the brightest bin at the brightest pulse of the run sizes the counters; a changing
+    // scene's columns are built as its profiles need them, so its counters are at least
+    // 32-bit and each column is checked against them when built
+    // ([`scene::SceneModel::set_count_width`])
+    let max_mean = expected
+        .iter()
         .flat_map(|e| {
             e.signal
                 .iter()
-                .map(move |s| energy.envelope * s + e.background + brightest_sky + e.dark)
+                .map(move |s| energy.envelope * s + e.background + e.dark)
         })
         .fold(0.0f64, f64::max)
         * shots as f64;
@@ -276,22 +276,29 @@ fn raw_file_spec(
         .map(|a| a.full_scale_code() as f64 * shots as f64)
         .fold(0.0f64, f64::max);
     let max_mean = max_mean.max(analog_max);
-    let column_models: Vec<&[ExpectedProfile]> = match scene {
-        Some(sc) => sc.expected.iter().map(Vec::as_slice).collect(),
-        None => vec![expected],
+    let mut count_width = CountWidth::for_max_count(max_mean)?;
+    if scene.is_some() && count_width == CountWidth::U16 {
+        count_width = CountWidth::U32;
+    }
+    // a changing scene's column truth comes column by column as the run builds them
+    let static_columns = [expected];
+    let column_models: &[&[ExpectedProfile]] = match scene {
+        Some(_) => &[],
+        None => &static_columns,
     };
     Ok(RawFileSpec {
         n_bins: first.geometry.n_bins,
         n_profiles: profiles,
         first_profile: 0,
         channel_text: crate::output::raw_file::truth::channel_text(lidar),
-        n_columns: column_models.len(),
+        n_columns: scene.map_or(1, |sc| sc.n_columns()),
+        streamed_columns: scene.is_some(),
         column_slots: scene.map_or(1, |sc| sc.column_slots),
         channels: lidar.channel_names(),
-        count_width: CountWidth::for_max_count(max_mean)?,
+        count_width,
         components,
         time_units: content::time_units(&first.loaded.config.acquisition.start_time)?,
-        variables: content::variables(lidar, expected, &column_models, shots, layout)
+        variables: content::variables(lidar, expected, column_models, shots, layout)
             .into_iter()
             .chain(
                 orbit_of(lidar)?

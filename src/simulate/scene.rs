@@ -1,5 +1,6 @@
 //! Drawing a scene that changes along the track (`crate::scene::track`): each column's
-//! model and samplers are built once; a profile is drawn run by run, each run of
+//! model and samplers are built once, when the first profile that sees it is drawn, and
+//! dropped after the last (`columns.rs`); a profile is drawn run by run, each run of
 //! consecutive shots that see one column with that column's sampler.
 //!
 //! * `aggregate`: one Poisson draw per bin of mean `Σ_runs F_run·λ_sig,col + M·λ_rest`
@@ -14,10 +15,13 @@
 //! the expected signal, recorded counts and attenuated backscatter.
 
 use std::collections::HashMap;
+use std::sync::{Arc, RwLock};
 
+pub use super::columns::BuiltColumn;
 use super::energy::RunEnergy;
 use super::method::ResolvedMethod;
 use super::sampler::StreamSampler;
+use super::sizes::MAX_BATCH_PROFILES;
 use crate::config::{BackgroundModel, ScenarioConfig};
 use crate::detector::DeadTime;
 use crate::detector::dead_time::{ARRIVAL_STREAM, Scratch};
@@ -25,7 +29,7 @@ use crate::error::{Error, Result};
 use crate::loaded::LoadedConfig;
 use crate::receiver::ChannelConfig;
 use crate::sampling::{self, CountSink, SHOT_BLOCK, ShotCounts, ShotSampler};
-use crate::scenario::{ExpectedProfile, Lidar, Scenario};
+use crate::scenario::{Lidar, Scenario};
 use crate::scene::orbit::Orbit;
 use crate::scene::sun;
 use crate::scene::track::{AlongTrack, Column, MAX_COLUMNS, Track};
@@ -122,28 +126,35 @@ fn run_seed(seed: u64, j: usize) -> u64 {
     seed ^ (j as u64).wrapping_mul(0xA076_1D64_78BD_642F)
 }
 
-/// A changing scene ready to draw: the track, and per column its model and samplers.
+/// A changing scene ready to draw: the track, its columns (built as the profiles need
+/// them, `columns.rs`), the sun.
 pub struct SceneModel {
     /// Where each shot is and which column it sees.
     pub track: Track,
     columns: HashMap<Column, usize>,
-    /// Per column, per channel: the expectations.
-    pub expected: Vec<Vec<ExpectedProfile>>,
-    /// Per column, per channel: the shot samplers (`shot` only).
-    samplers: Vec<Vec<StreamSampler>>,
-    shots: u64,
+    /// Every column of the scene, in the file's order.
+    pub(super) all: Vec<Column>,
+    /// Per column: the last profile of the run that sees it (`None`: none does).
+    pub(super) last_use: Vec<Option<u64>>,
+    /// Per channel: the config the columns are cut from (curtain and fields made segments).
+    pub(super) configs: Vec<ScenarioConfig>,
+    /// Per column: its model and samplers while some profile still needs them.
+    pub(super) built: RwLock<Vec<Option<Arc<BuiltColumn>>>>,
+    pub(super) method: ResolvedMethod,
+    pub(super) energy: RunEnergy,
+    pub(super) shots: u64,
     /// The sun, for a solar background.
-    sunlight: Option<Sunlight>,
-    /// Per column, per channel: the albedo below (surface or thick cloud top) and the
-    /// sunlight's path to it and back, for the solar background (empty without it).
-    reflectors: Vec<Vec<(f64, sun::SunlightPath)>>,
+    pub(super) sunlight: Option<Sunlight>,
     /// Per channel: the instrument's background counts per unit radiance, and the solar
     /// irradiance at its wavelength at 1 AU (photons s⁻¹ m⁻² nm⁻¹).
-    channel_sun: Vec<(f64, f64)>,
+    pub(super) channel_sun: Vec<(f64, f64)>,
     /// Per channel: the detector's dead time, if any.
     pub dead: Vec<Option<DeadTime>>,
     /// The most distinct columns one profile can see (the raw file's `k` slots).
     pub column_slots: usize,
+    /// The largest count the file's counters hold ([`SceneModel::set_count_width`]):
+    /// a column whose brightest bin could outgrow it is refused when it is built.
+    pub(super) max_count: f64,
 }
 
 /// What the solar background needs: where the sun is for each profile.
@@ -206,8 +217,9 @@ pub struct ProfileTruth {
 }
 
 impl SceneModel {
-    /// Builds every column of `lidar`'s scene for a run of `profiles` profiles drawn by
-    /// `method` from `seed`.
+    /// The scene of `lidar` for a run of `profiles` profiles drawn by `method` from
+    /// `seed`: its track and columns, none built yet ([`SceneModel::prepare`],
+    /// [`SceneModel::build_all`]).
     pub fn new(
         lidar: &Lidar,
         seed: u64,
@@ -251,78 +263,37 @@ impl SceneModel {
                 all.len()
             )));
         }
-        let samplers = all.len() * lidar.channels.len();
-        let kept_bytes = (samplers * first.geometry.n_bins) as f64 * COLUMN_BYTES_PER_BIN
-            + if method == ResolvedMethod::Shot {
-                samplers as f64 * sampling::table_bytes_bound(first.geometry.n_bins)
-            } else {
-                0.0
-            };
-        crate::resources::require_memory(
-            &format!(
-                "the scene's {} columns of {} bins",
-                all.len(),
-                first.geometry.n_bins
-            ),
-            kept_bytes,
-        )?;
-        let mut expected = Vec::with_capacity(all.len());
-        let mut samplers = Vec::with_capacity(all.len());
-        let mut reflectors = Vec::with_capacity(all.len());
-        let solar = lidar.first().loaded.config.background.model == BackgroundModel::Solar;
-        for &col in &all {
-            let channels = lidar
-                .channels
-                .iter()
-                .zip(&configs)
-                .map(|(c, cfg)| column_scenario(&track, c, cfg, col))
-                .collect::<Result<Vec<Scenario>>>()?;
-            if solar {
-                // the sky above each column's reflector, built once (none without the sun)
-                let below = crate::surface::reflector_below(&track.column_config(&configs[0], col));
-                reflectors.push(
-                    channels
-                        .iter()
-                        .map(|c| {
-                            let cfg = &c.loaded.config;
-                            let path = sun::SunlightPath::of(cfg, &c.atmosphere, below.altitude_m);
-                            (below.albedo, path)
-                        })
-                        .collect(),
-                );
-            }
-            let e: Vec<ExpectedProfile> = channels
-                .iter()
-                .map(Scenario::expected)
-                .collect::<Result<_>>()?;
-            if method == ResolvedMethod::Shot {
-                samplers.push(
-                    channels
-                        .iter()
-                        .zip(&e)
-                        .map(|(c, e)| {
-                            // a solar background is placed per run ([`add_background`])
-                            let sky = if solar { 0.0 } else { e.background };
-                            let rest = vec![sky + e.dark; e.n_bins()];
-                            StreamSampler::with_energy(
-                                ResolvedMethod::Shot,
-                                &e.signal,
-                                &rest,
-                                energy,
-                            )
-                            .through_detector(c.instrument.dead_time)
-                        })
-                        .collect(),
-                );
-            }
-            expected.push(e);
-        }
-        let columns = all.iter().enumerate().map(|(i, c)| (*c, i)).collect();
+        let columns: HashMap<Column, usize> =
+            all.iter().enumerate().map(|(i, c)| (*c, i)).collect();
         let column_slots = track.columns_per_profile_bound(profiles, all.len());
         // the raw file's writer holds a block of profiles' columns and weights
         crate::resources::require_memory(
             &format!("the raw file's profile columns ({column_slots} slots a profile)"),
             (crate::output::raw_file::writer::COLUMN_BLOCK * column_slots * 12) as f64,
+        )?;
+        let mut last_use = vec![None; all.len()];
+        for p in 0..profiles {
+            for (c, _) in track.runs(p) {
+                last_use[columns[&c]] = Some(p);
+            }
+        }
+        // the columns kept at once: a batch's (`prepare`), and those seen again later
+        let kept = all
+            .len()
+            .min(MAX_BATCH_PROFILES * column_slots + column_slots);
+        let streams = kept * lidar.channels.len();
+        let kept_bytes = (streams * first.geometry.n_bins) as f64 * COLUMN_BYTES_PER_BIN
+            + if method == ResolvedMethod::Shot {
+                streams as f64 * sampling::table_bytes_bound(first.geometry.n_bins)
+            } else {
+                0.0
+            };
+        crate::resources::require_memory(
+            &format!(
+                "the scene's columns of {} bins ({kept} at a time)",
+                first.geometry.n_bins
+            ),
+            kept_bytes,
         )?;
         let channel_sun = lidar
             .channels
@@ -336,13 +307,16 @@ impl SceneModel {
             })
             .collect();
         Ok(SceneModel {
+            built: RwLock::new(vec![None; all.len()]),
             track,
             columns,
-            expected,
-            samplers,
+            all,
+            last_use,
+            configs,
+            method,
+            energy,
             shots,
             sunlight: Sunlight::of(lidar)?,
-            reflectors,
             channel_sun,
             dead: lidar
                 .channels
@@ -350,27 +324,19 @@ impl SceneModel {
                 .map(|c| c.instrument.dead_time)
                 .collect(),
             column_slots,
+            max_count: f64::INFINITY,
         })
     }
 
-    /// An upper bound of the solar background counts per shot per bin of any channel:
-    /// the brightest albedo under an overhead sun at perihelion, with no atmosphere or
-    /// the stated transmission, plus the path radiance's bound (0 without the sun).
-    pub fn brightest_background(&self) -> f64 {
-        if self.sunlight.is_none() {
-            return 0.0;
-        }
-        let brightest = |ch: usize| {
-            self.reflectors
-                .iter()
-                .map(|r| r[ch].1.brightest(r[ch].0, 1.04))
-                .fold(0.0, f64::max)
-        };
-        self.channel_sun
-            .iter()
-            .enumerate()
-            .map(|(ch, &(factor, irradiance))| factor * irradiance * brightest(ch))
-            .fold(0.0, f64::max)
+    /// Columns of the scene.
+    pub fn n_columns(&self) -> usize {
+        self.all.len()
+    }
+
+    /// Sets the largest count the file's counters hold: a column is refused when built
+    /// if its brightest bin could outgrow it ([`CountWidth::for_max_count`]'s margin).
+    pub fn set_count_width(&mut self, width: crate::output::raw_file::CountWidth) {
+        self.max_count = width.max_value() as f64;
     }
 
     /// Whether the background comes from the sun.
@@ -392,7 +358,7 @@ impl SceneModel {
         match &self.sunlight {
             None => runs
                 .iter()
-                .map(|&(col, _)| self.expected[col][channel].background)
+                .map(|&(col, _)| self.column(col).expected[channel].background)
                 .collect(),
             Some(sunlight) => {
                 let (zenith, au) = sunlight.sun_at(p);
@@ -400,7 +366,8 @@ impl SceneModel {
                 let floor = sunlight.floor;
                 runs.iter()
                     .map(|&(col, _)| {
-                        let (albedo, path) = &self.reflectors[col][channel];
+                        let column = self.column(col);
+                        let (albedo, path) = &column.reflectors[channel];
                         let l = path
                             .radiance(*albedo, irradiance / (au * au), zenith)
                             .total();
@@ -441,9 +408,9 @@ impl SceneModel {
         backgrounds: &[f64],
         acc: &mut [u64],
     ) {
-        if self.samplers.is_empty() {
+        if self.method != ResolvedMethod::Shot {
             let m = self.shots as f64;
-            let dark = self.expected[runs[0].0][channel].dark;
+            let dark = self.column(runs[0].0).expected[channel].dark;
             let rest = dark
                 + runs
                     .iter()
@@ -452,7 +419,8 @@ impl SceneModel {
                     .sum::<f64>();
             let mut lambda = vec![rest; acc.len()];
             for (&(col, _), f) in runs.iter().zip(energies.run_sums(runs)) {
-                let signal = &self.expected[col][channel].signal;
+                let column = self.column(col);
+                let signal = &column.expected[channel].signal;
                 lambda
                     .iter_mut()
                     .zip(signal)
@@ -465,7 +433,8 @@ impl SceneModel {
                 let sky = self.sunlight.as_ref().map(|_| backgrounds[j]);
                 let factors = energies.run(first, n);
                 first += n as usize;
-                let sampler = &self.samplers[col][channel];
+                let column = self.column(col);
+                let sampler = &column.samplers[channel];
                 draw_run(sampler, run_seed(seed, j), p, n, factors, sky, acc);
             }
         }
@@ -474,8 +443,8 @@ impl SceneModel {
     /// What profile `p`'s shots saw on average, every channel.
     pub fn truth(&self, runs: &[(usize, u64)]) -> ProfileTruth {
         let m = self.shots as f64;
-        let channels = self.expected[0].len();
-        let n = self.expected[0][0].n_bins();
+        let channels = self.dead.len();
+        let n = self.column(runs[0].0).expected[0].n_bins();
         let mut t = ProfileTruth {
             signal: vec![0.0; channels * n],
             recorded: vec![0.0; channels * n],
@@ -484,7 +453,8 @@ impl SceneModel {
         for c in 0..channels {
             let bins = c * n..(c + 1) * n;
             for &(col, shots) in runs {
-                let (w, e) = (shots as f64 / m, &self.expected[col][c]);
+                let column = self.column(col);
+                let (w, e) = (shots as f64 / m, &column.expected[c]);
                 add_scaled(&mut t.signal[bins.clone()], &e.signal, w);
                 add_scaled(&mut t.recorded[bins.clone()], &e.recorded, w);
                 add_scaled(
@@ -598,7 +568,7 @@ fn with_curtain(loaded: &LoadedConfig) -> Result<ScenarioConfig> {
 
 /// Channel scenario `c` in column `col`: its config with the column's layers, aerosol
 /// and surface.
-fn column_scenario(
+pub(super) fn column_scenario(
     track: &Track,
     c: &Scenario,
     cfg: &ScenarioConfig,

@@ -375,6 +375,23 @@ pub fn variables(
     vars
 }
 
+/// One column's rows of the (column, …) variables, in the order [`variables`] lists
+/// them: what a run hands [`super::ProfileSink::write_column`] for column `column` (every
+/// channel's model) of a scene whose columns are built as its profiles need them.
+pub fn column_rows(
+    lidar: &Lidar,
+    expected: &[ExpectedProfile],
+    column: &[ExpectedProfile],
+    shots: u64,
+    layout: TruthLayout,
+) -> Vec<Vec<f64>> {
+    variables(lidar, expected, &[column], shots, layout)
+        .into_iter()
+        .filter(|v| matches!(v.dims, Dims::ColumnBin | Dims::ColumnChannelBin))
+        .map(|v| v.data)
+        .collect()
+}
+
 /// `v` as a (column, channel, bin) variable of `data`: the column's value at the nominal
 /// pulse energy.
 fn per_column(mut v: Variable, data: Vec<f64>) -> Variable {

@@ -20,6 +20,7 @@ use hdf5::types::VarLenUnicode;
 use hdf5::{Dataset, File, Group, H5Type};
 
 use super::chunk;
+use super::column_stream::StreamedVar;
 use super::hdf5_ds::{attach_scales, set_scale, write_attr};
 use super::schema::{Element, PerProfile, Storage, Values, schema};
 use super::spec::{CountWidth, Dims, RESERVED_NAMES, RawFileSpec};
@@ -63,6 +64,8 @@ pub struct OpenFile {
     pub columns: Vec<Dataset>,
     /// `profile_column` and `profile_column_weight`, if the spec has column slots.
     pub profile_columns: Option<(Dataset, Dataset)>,
+    /// The (column, …) variables whose rows come column by column, in the spec's order.
+    pub streamed: Vec<StreamedVar>,
 }
 
 impl OpenFile {
@@ -76,8 +79,10 @@ impl OpenFile {
             pulse_energy,
             columns,
             profile_columns,
+            streamed,
         } = self;
         drop((rows, time, n_shots, pulse_energy, columns, profile_columns));
+        drop(streamed);
         file.close()
     }
 }
@@ -135,6 +140,10 @@ pub fn validate_spec(spec: &RawFileSpec) -> Result<(), String> {
         if matches!(var.dims, Dims::ColumnBin | Dims::ColumnChannelBin) && spec.n_columns == 0 {
             return Err(format!("variable `{}` needs a column dimension", var.name));
         }
+        let want = match var.dims {
+            Dims::ColumnBin | Dims::ColumnChannelBin if spec.streamed_columns => 0,
+            _ => want,
+        };
         if var.data.len() != want {
             return Err(format!(
                 "variable `{}` has {} values, its dimensions hold {want}",
@@ -248,6 +257,7 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
     let mut scales: Vec<(&str, Dataset)> = Vec::new();
     let mut rows = Vec::new();
     let mut singles: Vec<(PerProfile, Dataset)> = Vec::new();
+    let mut streamed = Vec::new();
     for var in schema(spec) {
         let ds = match var.storage {
             Storage::Rows { by_planes } => {
@@ -261,7 +271,19 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
                 rows.push(RowVar { by_planes, ..row });
                 ds
             }
-            Storage::Deflated => create_deflated(&file, var.name, &var.shape)?,
+            Storage::Deflated => {
+                let (ds, chunk_columns) = create_deflated(&file, var.name, &var.shape)?;
+                if var.values == Values::Streamed {
+                    let row_len = var.shape[1..].iter().product();
+                    streamed.push(StreamedVar {
+                        ds: ds.clone(),
+                        row_len,
+                        channels: (var.shape.len() == 3).then(|| var.shape[1]),
+                        chunk_columns,
+                    });
+                }
+                ds
+            }
             Storage::Contiguous => match var.element {
                 Element::I64 => create_var::<i64>(&file, var.name, &var.shape)?,
                 Element::Text => create_var::<VarLenUnicode>(&file, var.name, &var.shape)?,
@@ -274,7 +296,7 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
             Values::Index { first } => write_index(&ds, first, var.len())?,
             Values::Text(values) => write_text(&ds, values)?,
             Values::F64(values) => ds.write_raw(values)?,
-            Values::PerProfile(PerProfile::Row) => {}
+            Values::PerProfile(PerProfile::Row) | Values::Streamed => {}
             Values::PerProfile(per) => singles.push((per, ds.clone())),
         }
         for (k, v) in &var.attributes {
@@ -311,6 +333,7 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
         pulse_energy,
         columns,
         profile_columns,
+        streamed,
     })
 }
 
@@ -328,17 +351,20 @@ fn write_text(ds: &Dataset, values: &[String]) -> hdf5::Result<()> {
 
 /// A (column, …) f64 variable: chunked along columns (about [`TARGET_CHUNK_BYTES`] a
 /// chunk), shuffled and deflated (most of a scene's truth is zeros or repeats).
-fn create_deflated(file: &File, name: &str, shape: &[usize]) -> hdf5::Result<Dataset> {
+/// Returns it and its columns per chunk.
+fn create_deflated(file: &File, name: &str, shape: &[usize]) -> hdf5::Result<(Dataset, usize)> {
     let row: usize = shape[1..].iter().product::<usize>().max(1);
     let rows = (TARGET_CHUNK_BYTES / (8 * row)).clamp(1, shape[0].max(1));
     let mut chunk = shape.to_vec();
     chunk[0] = rows;
-    file.new_dataset::<f64>()
+    let ds = file
+        .new_dataset::<f64>()
         .shape(shape)
         .chunk(chunk)
         .shuffle()
         .deflate(chunk::DEFLATE_LEVEL)
         .obj_track_times(false)
         .attr_creation_order(AttrCreationOrder::Indexed)
-        .create(name)
+        .create(name)?;
+    Ok((ds, rows))
 }

@@ -53,6 +53,8 @@ fn array(var: &VarSchema, n: usize) -> Result<Array> {
         (Values::Index { first }, _) => Array::I64((0..n).map(|i| (first + i) as i64).collect()),
         (Values::Text(t), _) => Array::Text(t.to_vec()),
         (Values::F64(v), _) => Array::F64(v.to_vec()),
+        // NaN, the `_FillValue`, where no column comes
+        (Values::Streamed, _) => Array::F64(crate::resources::try_vec(what, n, f64::NAN)?),
         (Values::PerProfile(_), Element::Count(CountWidth::U16)) => {
             Array::U16(mapped(room(what, n)?))
         }
@@ -168,6 +170,8 @@ pub struct MemoryWriter {
     slots: Vec<(PerProfile, usize)>,
     /// Those of the count rows (`counts`, the components), in order.
     count_rows: Vec<usize>,
+    /// Indices in `file.variables` of the streamed (column, …) variables, in order.
+    streamed: Vec<usize>,
     n_written: usize,
 }
 
@@ -189,6 +193,9 @@ impl MemoryWriter {
             .filter(|&&(p, k)| p == PerProfile::Row && matches!(vars[k].element, Element::Count(_)))
             .map(|&(_, k)| k)
             .collect();
+        let streamed = (0..vars.len())
+            .filter(|&k| vars[k].values == Values::Streamed)
+            .collect();
         let variables = vars
             .iter()
             .map(|v| variable(v, v.len()))
@@ -201,8 +208,32 @@ impl MemoryWriter {
             },
             slots,
             count_rows,
+            streamed,
             n_written: 0,
         })
+    }
+
+    /// Takes column `c`'s truth: one row per streamed (column, …) variable, in order.
+    pub fn write_column(&mut self, c: usize, rows: &[&[f64]]) -> Result<()> {
+        let refused = |reason: String| Error::Unsupported(format!("in-memory run: {reason}"));
+        if rows.len() != self.streamed.len() {
+            return Err(refused(format!(
+                "column {c}: {} rows for {} column variables",
+                rows.len(),
+                self.streamed.len()
+            )));
+        }
+        for (&k, row) in self.streamed.iter().zip(rows) {
+            let v = &mut self.file.variables[k];
+            let n = row.len();
+            match &mut v.data {
+                Array::F64(data) if n > 0 && (c + 1) * n <= data.len() => {
+                    data[c * n..(c + 1) * n].copy_from_slice(row)
+                }
+                _ => return Err(refused(format!("column {c} does not fit `{}`", v.name))),
+            }
+        }
+        Ok(())
     }
 
     /// Takes the next profile: checked first as the file writer checks it (a refused
@@ -325,6 +356,10 @@ fn truncate(a: &mut Array, len: usize) {
 impl super::spec::ProfileSink for MemoryWriter {
     fn write_profile(&mut self, rec: &ProfileRecord) -> Result<()> {
         MemoryWriter::write_profile(self, rec)
+    }
+
+    fn write_column(&mut self, column: usize, rows: &[&[f64]]) -> Result<()> {
+        MemoryWriter::write_column(self, column, rows)
     }
 }
 

@@ -32,6 +32,7 @@
 pub mod bin_mean;
 pub mod check;
 pub mod chunk;
+mod column_stream;
 pub mod content;
 pub mod detection;
 pub(crate) mod hdf5_ds;

@@ -61,6 +61,9 @@ pub enum Values<'a> {
     F64(&'a [f64]),
     /// Filled by the profiles.
     PerProfile(PerProfile),
+    /// A (column, …) variable of a scene whose columns come one by one
+    /// ([`RawFileSpec::streamed_columns`]).
+    Streamed,
 }
 
 /// How HDF5 stores a variable (the in-memory form ignores it).
@@ -324,6 +327,9 @@ pub fn schema(spec: &RawFileSpec) -> Vec<VarSchema<'_>> {
             Dims::Profile | Dims::ProfileChannel => {
                 (Values::PerProfile(PerProfile::Value), Storage::Contiguous)
             }
+            Dims::ColumnBin | Dims::ColumnChannelBin if spec.streamed_columns => {
+                (Values::Streamed, Storage::Deflated)
+            }
             Dims::ColumnBin | Dims::ColumnChannelBin => (Values::F64(&var.data), Storage::Deflated),
             _ => (Values::F64(&var.data), Storage::Contiguous),
         };
@@ -396,6 +402,7 @@ pub(super) fn example_spec() -> RawFileSpec {
         ],
         channel_text: vec![],
         n_columns: 1,
+        streamed_columns: false,
         column_slots: 1,
         root_attributes: vec![("title".into(), AttrValue::Str("t".into()))],
         profile_coordinates: vec!["latitude".into()],

@@ -220,6 +220,10 @@ pub struct RawFileSpec {
     /// Distinct columns of the scene (the `column` dimension of the truth variables;
     /// 0: no such dimension).
     pub n_columns: usize,
+    /// Whether the (column, …) variables carry no values here: a scene whose columns are
+    /// built as its profiles need them hands each column's rows to
+    /// [`ProfileSink::write_column`] (memory flat in the track's length).
+    pub streamed_columns: bool,
     /// Column slots per profile (the `k` dimension of `profile_column` and
     /// `profile_column_weight`; 0: no such variables); each [`ProfileRecord`] then
     /// carries this many of each.
@@ -243,6 +247,10 @@ impl RawFileSpec {
 pub trait ProfileSink: Send {
     /// Takes one profile (in any order, each once).
     fn write_profile(&mut self, rec: &ProfileRecord) -> Result<()>;
+
+    /// Takes column `column`'s truth (with [`RawFileSpec::streamed_columns`]): one row per
+    /// (column, …) variable in the spec's order, each of its values per column.
+    fn write_column(&mut self, column: usize, rows: &[&[f64]]) -> Result<()>;
 }
 
 /// One profile, as handed to `RawFileWriter::write_profile`.

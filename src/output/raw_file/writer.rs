@@ -38,6 +38,7 @@ use rayon::prelude::*;
 
 use super::check::{RecordShape, Row};
 use super::chunk::{self, Filling};
+use super::column_stream::{ColumnRefused, ColumnStream};
 use super::hdf5_ds::write_chunk;
 use super::layout::{self, OpenFile};
 use super::planes;
@@ -102,6 +103,9 @@ pub struct RawFileWriter {
     display: PathBuf,
     /// `None` once closed (by `finish`, or by `Drop`).
     open: Option<OpenFile>,
+    /// The streamed (column, …) truth ([`RawFileSpec::streamed_columns`]); `None` once
+    /// closed.
+    columns: Option<ColumnStream>,
     /// What records are checked against.
     shape: RecordShape,
     /// The chunks being filled of each of [`OpenFile::rows`].
@@ -135,7 +139,7 @@ impl RawFileWriter {
             spec.n_profiles.div_ceil(64),
             0u64,
         )?;
-        let open = layout::create_layout(path, spec).map_err(|e| {
+        let mut open = layout::create_layout(path, spec).map_err(|e| {
             fail(format!(
                 "cannot write: {}",
                 describe_hdf5_error(&e.to_string())
@@ -153,8 +157,10 @@ impl RawFileWriter {
                 )
             })
             .collect();
+        let columns = ColumnStream::new(std::mem::take(&mut open.streamed), spec.n_columns);
         Ok(RawFileWriter {
             display: display.to_path_buf(),
+            columns: Some(columns),
             open: Some(open),
             shape: RecordShape::of(spec),
             vars,
@@ -253,6 +259,14 @@ impl RawFileWriter {
                 &self.display,
                 "internal: every profile was written but a chunk is incomplete",
             ));
+        }
+        if let Some(mut columns) = self.columns.take() {
+            columns.finish().map_err(|e| {
+                Error::output(
+                    &self.display,
+                    format!("cannot write: {}", describe_hdf5_error(&e.to_string())),
+                )
+            })?;
         }
         let open = self
             .open
@@ -519,14 +533,38 @@ impl RawFileWriter {
 impl Drop for RawFileWriter {
     /// An unfinished writer closes its file; [`crate::safe_file`] deletes it.
     fn drop(&mut self) {
+        self.columns.take();
         if let Some(open) = self.open.take() {
             let _ = open.close();
         }
     }
 }
 
+impl RawFileWriter {
+    /// Writes column `c`'s truth ([`super::spec::ProfileSink::write_column`]); a refused
+    /// column leaves the writer as it was, a failed write leaves it unusable.
+    pub fn write_column(&mut self, c: usize, rows: &[&[f64]]) -> Result<()> {
+        self.usable()?;
+        let Some(columns) = self.columns.as_mut() else {
+            return Err(Error::output(&self.display, "the writer is already closed"));
+        };
+        columns.put(c, rows).map_err(|e| match e {
+            ColumnRefused::Refused(why) => Error::output(&self.display, why),
+            ColumnRefused::Failed(why) => {
+                let why = format!("cannot write: {}", describe_hdf5_error(&why));
+                self.failed = Some(why.clone());
+                Error::output(&self.display, why)
+            }
+        })
+    }
+}
+
 impl super::spec::ProfileSink for RawFileWriter {
     fn write_profile(&mut self, rec: &ProfileRecord) -> Result<()> {
         RawFileWriter::write_profile(self, rec)
+    }
+
+    fn write_column(&mut self, column: usize, rows: &[&[f64]]) -> Result<()> {
+        RawFileWriter::write_column(self, column, rows)
     }
 }
