@@ -586,3 +586,78 @@ fn refusals_name_the_file_and_leave_the_writer_usable() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn streamed_columns_read_back_in_any_order_with_nan_where_none_came() {
+    // 2 channels × 3,000 bins: 10 columns a chunk (512 KiB), 45 columns, the last chunk
+    // an edge one; columns come out of order, 12 and 40–44 never (a shard's unseen ones)
+    let dir = scratch("columns");
+    let path = dir.join("c.h5");
+    let (channels, n_bins, n_columns) = (2, 3000, 45);
+    let mut spec = spec(3, channels, n_bins, CountWidth::U32, false);
+    spec.n_columns = n_columns;
+    spec.column_slots = 1;
+    spec.streamed_columns = true;
+    for (name, dims) in [("t_ccb", Dims::ColumnChannelBin), ("t_cb", Dims::ColumnBin)] {
+        spec.variables.push(Variable {
+            name: name.into(),
+            dims,
+            long_name: name.into(),
+            units: "1".into(),
+            attributes: vec![],
+            data: vec![],
+        });
+    }
+    let value = |c: usize, i: usize, k: usize| truth(c, i, k + 2);
+    let rows = |c: usize| -> (Vec<f64>, Vec<f64>) {
+        (
+            (0..channels * n_bins).map(|i| value(c, i, 0)).collect(),
+            (0..n_bins).map(|i| value(c, i, 1)).collect(),
+        )
+    };
+    let missing = |c: usize| c == 12 || c >= 40;
+    let order: Vec<usize> = (0..n_columns)
+        .map(|k| (k * 17) % n_columns)
+        .filter(|&c| !missing(c))
+        .collect();
+    let mut w = RawFileWriter::create(&path, &path, &spec).unwrap();
+    for &c in &order {
+        let (a, b) = rows(c);
+        w.write_column(c, &[&a, &b]).unwrap();
+    }
+    // refused, naming the file, the writer usable after
+    let (a, b) = rows(3);
+    let twice = w.write_column(3, &[&a, &b]).unwrap_err().to_string();
+    assert!(twice.contains("c.h5") && twice.contains("twice"), "{twice}");
+    let short = w.write_column(12, &[&a[1..], &b]).unwrap_err().to_string();
+    assert!(short.contains("values for"), "{short}");
+    assert!(w.write_column(45, &[&a, &b]).is_err());
+    for p in 0..3 {
+        let d = profile(&spec, p);
+        let values: Vec<&[f64]> = vec![&d.a, &d.lat, &d.b];
+        let rec = ProfileRecord {
+            columns: &[0],
+            column_weights: &[1.0],
+            ..record(&spec, p, &d, &values)
+        };
+        w.write_profile(&rec).unwrap();
+    }
+    w.finish().unwrap();
+    let f = hdf5::File::open(&path).unwrap();
+    let read = |name: &str| f.dataset(name).unwrap().read_raw::<f64>().unwrap();
+    let (ccb, cb) = (read("t_ccb"), read("t_cb"));
+    assert_eq!(ccb.len(), n_columns * channels * n_bins);
+    for c in 0..n_columns {
+        let (a, b) = rows(c);
+        let (got_a, got_b) = (
+            &ccb[c * a.len()..(c + 1) * a.len()],
+            &cb[c * b.len()..(c + 1) * b.len()],
+        );
+        if missing(c) {
+            assert!(got_a.iter().chain(got_b).all(|x| x.is_nan()), "column {c}");
+        } else {
+            assert!(got_a == &a[..] && got_b == &b[..], "column {c}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

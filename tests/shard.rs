@@ -114,6 +114,39 @@ fn a_scene_along_the_orbit_merges_byte_for_byte() {
 }
 
 #[test]
+fn a_model_field_scene_merges_byte_for_byte_across_its_column_batches() {
+    // 130 profiles: three batches of the run's 64, the shards cut inside them; each
+    // shard builds only the columns its profiles see, the merge builds them again at the
+    // run's own points (a change of either order or of the batches changes the bytes)
+    let dir = scratch("fields");
+    let cfg = "instruments/caliop_fields.toml";
+    let extra = [
+        "--profiles",
+        "130",
+        "--method",
+        "shot",
+        "--set",
+        "acquisition.top_altitude_km=12",
+    ];
+    let (whole, merged) = whole_and_merged(&dir, cfg, &extra, 3);
+    assert!(
+        whole == merged,
+        "{} and {} bytes",
+        whole.len(),
+        merged.len()
+    );
+    // a shard's file holds NaN for the columns its profiles do not see, and the truth
+    // of those they see
+    let (w, s) = (dir.join("whole.h5"), dir.join("s0.h5"));
+    let (t2_whole, t2_shard) = (read_f64(&w, "t2"), read_f64(&s, "t2"));
+    assert_eq!(t2_whole.len(), t2_shard.len());
+    assert!(t2_shard.iter().any(|x| x.is_nan()) && t2_whole.iter().all(|x| x.is_finite()));
+    let seen = t2_shard.iter().zip(&t2_whole).filter(|(a, _)| !a.is_nan());
+    assert!(seen.clone().count() > 0 && seen.clone().all(|(a, b)| a == b));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
 fn any_split_gives_the_whole_runs_counts() {
     // 4 shards of 10 profiles (2, 3, 2, 3), drawn shot by shot with component counts
     let dir = scratch("split");

@@ -39,14 +39,8 @@ impl Draw {
         let energy = simulate::run_energy(lidar, seed, duration)?;
         let profiles = native.shots as usize;
         let scene = simulate::changing_scene(lidar, seed, profiles, &mut method, false, &energy)?;
-        // any shot in any order: every column built
-        let built = match &scene {
-            Some(sc) => {
-                sc.build_all(lidar)?;
-                sc.all_columns()
-            }
-            None => vec![],
-        };
+        // any shot in any order: every column built (by `changing_scene`)
+        let built = scene.as_ref().map_or_else(Vec::new, |sc| sc.all_columns());
         let samplers = lidar
             .channels
             .iter()

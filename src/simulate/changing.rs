@@ -20,8 +20,26 @@ pub fn scene_changes(lidar: &Lidar) -> bool {
 }
 
 /// The scene model of a run whose scene changes along the track (`None` for one column
-/// everywhere); refuses what this version does not draw in a changing scene.
+/// everywhere), every column built (for a caller that draws any profile in any order);
+/// refuses what this version does not draw in a changing scene.
 pub fn changing_scene(
+    lidar: &Lidar,
+    seed: u64,
+    profiles: usize,
+    method: &mut ResolvedMethod,
+    components: bool,
+    energy: &RunEnergy,
+) -> Result<Option<scene::SceneModel>> {
+    let scene = unbuilt_scene(lidar, seed, profiles, method, components, energy)?;
+    if let Some(sc) = &scene {
+        sc.build_all(lidar)?;
+    }
+    Ok(scene)
+}
+
+/// [`changing_scene`] with no column built yet: a run builds them batch by batch
+/// ([`scene::SceneModel::prepare`]).
+pub(super) fn unbuilt_scene(
     lidar: &Lidar,
     seed: u64,
     profiles: usize,

@@ -12,22 +12,10 @@ use rayon::prelude::*;
 use super::energy::RunEnergy;
 use super::method::ResolvedMethod;
 use super::sampler::StreamSampler;
-use super::scene::{SceneModel, column_scenario};
+use super::scene::{BuiltColumn, SceneModel, column_scenario};
 use crate::error::{Error, Result};
 use crate::scenario::{ExpectedProfile, Lidar, Scenario};
 use crate::scene::sun;
-
-/// One column of the scene, every channel: its expectations, its shot samplers (`shot`
-/// only) and, under the sun, the albedo below it and the sunlight's path to it and back.
-pub struct BuiltColumn {
-    /// Per channel: the expectations.
-    pub expected: Vec<ExpectedProfile>,
-    /// Per channel: the shot samplers (empty but for `shot`).
-    pub(super) samplers: Vec<StreamSampler>,
-    /// Per channel: the reflector's albedo and the sunlight's path (empty without the
-    /// sun).
-    pub(super) reflectors: Vec<(f64, sun::SunlightPath)>,
-}
 
 /// Columns built at once when a run builds what no profile sees (at its end).
 const UNSEEN_BLOCK: usize = 64;

@@ -7,11 +7,11 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use super::changing::{SceneDraw, draw_scene_counts, file_rows};
-use super::columns::BuiltColumn;
 use super::drawn::{DrawnProfile, STATIC_COLUMN, draw_profile};
 use super::orbit::orbit_of;
 use super::plan::{RunOptions, RunPlan};
 use super::sampler::{StreamSampler, channel_seed, stream_samplers};
+use super::scene::BuiltColumn;
 use crate::error::{Error, Result};
 use crate::output::raw_file::{ProfileRecord, ProfileSink, content};
 use crate::scenario::Lidar;

@@ -234,7 +234,7 @@ impl Merge {
         let (lidar, plan) = (&self.lidar, &self.plan);
         let layout = crate::output::raw_file::content::TruthLayout::of(lidar, true, plan.truth);
         let shots = lidar.first().shots_per_profile();
-        let rows_of = |c: &super::columns::BuiltColumn| {
+        let rows_of = |c: &super::scene::BuiltColumn| {
             crate::output::raw_file::content::column_rows(
                 lidar,
                 &plan.expected,
@@ -243,7 +243,7 @@ impl Merge {
                 layout,
             )
         };
-        let put = |writer: &mut RawFileWriter, i: usize, c: &super::columns::BuiltColumn| {
+        let put = |writer: &mut RawFileWriter, i: usize, c: &super::scene::BuiltColumn| {
             let rows = rows_of(c);
             let rows: Vec<&[f64]> = rows.iter().map(Vec::as_slice).collect();
             writer.write_column(i, &rows)

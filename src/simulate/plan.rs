@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use super::changing::changing_scene;
+use super::changing::unbuilt_scene;
 use super::energy::{RunEnergy, run_energy};
 use super::method::{ResolvedMethod, check_detector, fastest_within_totals, resolve_method};
 use super::orbit::orbit_of;
@@ -190,7 +190,7 @@ pub fn plan(lidar: &Lidar, opts: &RunOptions, resolved: Option<ResolvedMethod>) 
         let approximable = method == ResolvedMethod::Aggregate && energy.law.is_constant();
         method = fastest_within_totals(t, &totals, shots, approximable);
     }
-    let mut scene = changing_scene(lidar, seed, profiles, &mut method, components, &energy)?;
+    let mut scene = unbuilt_scene(lidar, seed, profiles, &mut method, components, &energy)?;
     let spec = raw_file_spec(
         lidar,
         &expected,

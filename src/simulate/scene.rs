@@ -17,11 +17,9 @@
 use std::collections::HashMap;
 use std::sync::{Arc, RwLock};
 
-pub use super::columns::BuiltColumn;
 use super::energy::RunEnergy;
 use super::method::ResolvedMethod;
 use super::sampler::StreamSampler;
-use super::sizes::MAX_BATCH_PROFILES;
 use crate::config::{BackgroundModel, ScenarioConfig};
 use crate::detector::DeadTime;
 use crate::detector::dead_time::{ARRIVAL_STREAM, Scratch};
@@ -29,7 +27,7 @@ use crate::error::{Error, Result};
 use crate::loaded::LoadedConfig;
 use crate::receiver::ChannelConfig;
 use crate::sampling::{self, CountSink, SHOT_BLOCK, ShotCounts, ShotSampler};
-use crate::scenario::{Lidar, Scenario};
+use crate::scenario::{ExpectedProfile, Lidar, Scenario};
 use crate::scene::orbit::Orbit;
 use crate::scene::sun;
 use crate::scene::track::{AlongTrack, Column, MAX_COLUMNS, Track};
@@ -120,6 +118,21 @@ fn sunlit_dead_time_run(
         dead.record_shot(&mut arrivals, &shot, &mut scratch, acc);
     }
 }
+
+/// One column of the scene, every channel: its expectations, its shot samplers (`shot`
+/// only) and, under the sun, the albedo below it and the sunlight's path to it and back.
+pub struct BuiltColumn {
+    /// Per channel: the expectations.
+    pub expected: Vec<ExpectedProfile>,
+    /// Per channel: the shot samplers (empty but for `shot`).
+    pub(super) samplers: Vec<StreamSampler>,
+    /// Per channel: the reflector's albedo and the sunlight's path (empty without the
+    /// sun).
+    pub(super) reflectors: Vec<(f64, sun::SunlightPath)>,
+}
+
+/// The most profiles drawn in one batch (`sizes.rs`): the columns one batch builds.
+pub const MAX_BATCH_PROFILES: usize = 64;
 
 /// Seed of run `j`'s streams within a profile (run 0 keeps the channel's seed).
 fn run_seed(seed: u64, j: usize) -> u64 {

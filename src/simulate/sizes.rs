@@ -30,11 +30,8 @@ const FILE_NS_PER_COUNT: f64 = 40.0;
 /// 4 Mi counts (32 MiB), at least one profile, at most 64 (what the drawing loop,
 /// `simulate::draw`, draws and the estimate counts); two batches are held at once.
 pub(super) fn batch_profiles(n_bins: usize, streams: usize) -> usize {
-    ((4 << 20) / (n_bins * streams).max(1)).clamp(1, MAX_BATCH_PROFILES)
+    ((4 << 20) / (n_bins * streams).max(1)).clamp(1, super::scene::MAX_BATCH_PROFILES)
 }
-
-/// The most profiles drawn in one batch ([`batch_profiles`]).
-pub(super) const MAX_BATCH_PROFILES: usize = 64;
 
 /// Estimated size of the raw file, bytes: per stored count the smaller of its width and
 /// the compressed Poisson entropy of its mean.

@@ -367,8 +367,6 @@ fn changing(lidar: &Lidar, scene: SceneModel, energy: RunEnergy) -> Result<(Vec<
                 .into(),
         ));
     }
-    // realizations in any order: every column built
-    scene.build_all(lidar)?;
     let first = lidar.first();
     let n_bins = first.geometry.n_bins;
     let altitudes: Vec<f64> = (0..lidar.channels.len())

@@ -1,7 +1,7 @@
 //! The (column, …) truth of a scene whose columns are built as its profiles need them
-//! ([`RawFileSpec::streamed_columns`]): each column's rows arrive once, in any order
-//! ([`ProfileSink::write_column`](super::ProfileSink::write_column)), are gathered into
-//! the variables' chunks (as many columns as [`layout`](super::layout) puts in one) and
+//! (`RawFileSpec::streamed_columns`): each column's rows arrive once, in any order
+//! (`ProfileSink::write_column`), are gathered into the variables' chunks (the same
+//! number of columns in every streamed variable's chunk, set by `layout.rs`) and
 //! each chunk is written when its last column arrives. Memory: one chunk being filled
 //! per variable and open chunk (a run builds its columns in track order, so one or two
 //! are open at a time). A chunk still open at the end (the columns a shard's profiles do

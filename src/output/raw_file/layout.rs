@@ -272,7 +272,15 @@ pub fn create_layout(path: &Path, spec: &RawFileSpec) -> hdf5::Result<OpenFile> 
                 ds
             }
             Storage::Deflated => {
-                let (ds, chunk_columns) = create_deflated(&file, var.name, &var.shape)?;
+                // streamed variables share one chunking along columns (that of the
+                // widest, (column, channel, bin)): a column completes the same chunk of
+                // every one of them
+                let streamed_rows = (var.values == Values::Streamed).then(|| {
+                    let widest = 8 * spec.counts_per_profile().max(1);
+                    (TARGET_CHUNK_BYTES / widest).clamp(1, spec.n_columns.max(1))
+                });
+                let (ds, chunk_columns) =
+                    create_deflated(&file, var.name, &var.shape, streamed_rows)?;
                 if var.values == Values::Streamed {
                     let row_len = var.shape[1..].iter().product();
                     streamed.push(StreamedVar {
@@ -351,10 +359,15 @@ fn write_text(ds: &Dataset, values: &[String]) -> hdf5::Result<()> {
 
 /// A (column, …) f64 variable: chunked along columns (about [`TARGET_CHUNK_BYTES`] a
 /// chunk), shuffled and deflated (most of a scene's truth is zeros or repeats).
-/// Returns it and its columns per chunk.
-fn create_deflated(file: &File, name: &str, shape: &[usize]) -> hdf5::Result<(Dataset, usize)> {
+/// `rows` columns a chunk if given. Returns it and its columns per chunk.
+fn create_deflated(
+    file: &File,
+    name: &str,
+    shape: &[usize],
+    rows: Option<usize>,
+) -> hdf5::Result<(Dataset, usize)> {
     let row: usize = shape[1..].iter().product::<usize>().max(1);
-    let rows = (TARGET_CHUNK_BYTES / (8 * row)).clamp(1, shape[0].max(1));
+    let rows = rows.unwrap_or((TARGET_CHUNK_BYTES / (8 * row)).clamp(1, shape[0].max(1)));
     let mut chunk = shape.to_vec();
     chunk[0] = rows;
     let ds = file
