@@ -20,8 +20,24 @@ The numbers are made up to look like a mid-latitude winter night, not taken from
 Latitudes run north to south and levels top down, as in ERA5 files.
 
     /tmp/venv/bin/python tools/make_model_fields.py [OUTDIR]
+
+With --global DEG it writes instead one big model-level file, era5_like_global.nc, for
+the scale bench (benches/fields_whole_day.sh, issue 39): a global grid of DEG degrees
+(0.25: 1440 x 721, longitudes 0 to 360 - DEG east as ERA5's, latitudes 90 N to 90 S),
+--levels hybrid levels of the same family as the small file's, at --hours past
+2024-01-15 00 UTC; float32, zlib level 1 with shuffle, chunked (1, levels, 60, 60):
+
+    /tmp/venv/bin/python tools/make_model_fields.py --global 0.25 \
+        --hours 0,6,12,18,24 --levels 37 OUTDIR
+
+Its atmosphere is made up the same way, vectorised over the globe one level at a time:
+a lapse-rate temperature by latitude, an ITCZ of ice-topped deep cloud wandering about
+6 N, mid-latitude frontal bands near 45 N and 50 S whose slope and position wave with
+longitude and move east in time, and stratocumulus decks at 0.8-1.3 km over the
+subtropics (15-30 N and S) where a longitude pattern says "ocean".
 """
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -29,7 +45,7 @@ import numpy as np
 import netCDF4
 
 G0 = 9.80665
-OUT = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).resolve().parents[1] / "configs" / "fields"
+OUT = Path(__file__).resolve().parents[1] / "configs" / "fields"
 LAT = np.arange(45.0, 29.5, -1.0)          # 16, north to south
 LON = np.arange(-8.0, 6.5, 1.0)            # 15
 HOURS = np.array([1087296.0, 1087297.0])   # hours since 1900-01-01: 2024-01-15 00 and 01 UTC
@@ -68,9 +84,9 @@ def atmosphere(p, ps, hill, hour, lat, lon):
     return t, q, clwc, ciwc, cc
 
 
-def model_levels():
-    """Our own 40 hybrid levels: p = a + b*ps with b = eta**2, a = 1e5*(eta - b)."""
-    s = np.linspace(1.0, 0.0, 40, endpoint=False)[::-1]      # top down
+def model_levels(n=40):
+    """Our own n hybrid levels: p = a + b*ps with b = eta**2, a = 1e5*(eta - b)."""
+    s = np.linspace(1.0, 0.0, n, endpoint=False)[::-1]      # top down
     zl = 32000.0 * (1.0 - s) ** 1.7 + 15.0
     eta = np.exp(-zl / 7400.0)
     b = eta ** 2
@@ -231,7 +247,98 @@ def write_cams_levels(path):
     nc.close()
 
 
+def global_surface(hour, la, lo):
+    """Surface pressure (Pa) and height (m) on the global grid (la, lo float32)."""
+    hill = 1500.0 * np.exp(-((la - 35.0) ** 2 + ((lo - 90.0 + 180.0) % 360.0 - 180.0) ** 2 / 4.0) / 50.0)
+    hill = hill + 800.0 * np.exp(-((la + 20.0) ** 2 + ((lo - 290.0 + 180.0) % 360.0 - 180.0) ** 2 / 9.0) / 30.0)
+    ps = 101300.0 + 800.0 * np.cos(np.radians(2.0 * la)) * np.sin(np.radians(lo + 15.0 * hour)) - 11.5 * hill
+    return ps.astype(np.float32), hill.astype(np.float32)
+
+
+def global_atmosphere(p, ps, hill, hour, la, lo):
+    """t, q, clwc, ciwc, cc (float32) at pressure p (Pa) over the global grid."""
+    z = hill - 7400.0 * np.log(p / ps)
+    t_sfc = 300.0 - 40.0 * np.sin(np.radians(la)) ** 2 + 2.0 * np.cos(np.radians(lo - 15.0 * hour))
+    t = np.where(z < 11000.0, t_sfc - 6.5e-3 * z, t_sfc - 6.5e-3 * 11000.0 + 1e-3 * (z - 11000.0))
+    q = 0.018 * np.exp(-z / 2300.0) * np.cos(np.radians(la)) ** 2
+    liquid_part = np.clip((t - 253.0) / 15.0, 0.0, 1.0)
+    shape = np.zeros_like(z)
+    # the ITCZ: deep cloud 1-14 km in a 6 deg band about 6 N, gappy in longitude
+    itcz = 6.0 + 3.0 * np.sin(np.radians(2.0 * lo))
+    deep = (np.abs(la - itcz) < 3.0) & (np.sin(np.radians(7.0 * lo + 30.0 * hour)) > 0.0)
+    shape = np.where(deep & (z > 1000.0) & (z < 14000.0), np.sin(np.pi * np.clip((z - 1000.0) / 13000.0, 0, 1)), shape)
+    # mid-latitude fronts: bands rising poleward from 1.5 km to 9 km over 4 deg, 2.5 km deep
+    for centre, pole in ((45.0, 1.0), (-50.0, -1.0)):
+        front = centre + 5.0 * np.sin(np.radians(3.0 * (lo - 10.0 * hour)))
+        north = pole * (la - front)
+        base = 1500.0 + 1875.0 * north
+        inside = (north > 0.0) & (north < 4.0) & (z > base) & (z < base + 2500.0)
+        shape = np.where(inside, np.sin(np.pi * np.clip((z - base) / 2500.0, 0, 1)), shape)
+    clwc = 3e-4 * shape * liquid_part
+    ciwc = 1.5e-5 * shape * (1.0 - liquid_part)
+    # subtropical stratocumulus decks at 0.8-1.3 km where "ocean"
+    ocean = (hill < 50.0) & (np.sin(np.radians(lo * 2.0)) > -0.3)
+    sc = ocean & (np.abs(la) > 15.0) & (np.abs(la) < 30.0) & (z > 800.0) & (z < 1300.0)
+    clwc = clwc + np.where(sc, 2.5e-4 * np.sin(np.pi * (z - 800.0) / 500.0), 0.0)
+    cc = np.where((clwc + ciwc) > 0.0, np.where(sc, 0.8, 1.0), 0.0)
+    return [np.asarray(x, dtype=np.float32) for x in (t, q, clwc, ciwc, cc)]
+
+
+def write_global(path, deg, hours, nlev):
+    """The global model-level file (see the module's doc)."""
+    global LAT, LON, HOURS
+    LAT = np.linspace(90.0, -90.0, int(round(180.0 / deg)) + 1)
+    LON = np.arange(int(round(360.0 / deg))) * deg
+    HOURS = 1087296.0 + np.asarray(hours, dtype=float)
+    a, b = model_levels(nlev)
+    nc = netCDF4.Dataset(path, "w", format="NETCDF4")
+    nc.Conventions = "CF-1.6"
+    nc.history = "made by tools/make_model_fields.py --global"
+    nc.title = "ERA5-like global model-level fields (made up; tools/make_model_fields.py)"
+    axes(nc, nlev, np.arange(1, nlev + 1), {"units": "1", "long_name": "model_level_number"})
+    for name, vals, units in (("hyam", a, "Pa"), ("hybm", b, "1")):
+        v = nc.createVariable(name, "f8", ("level",))
+        v.units, v.long_name = units, f"hybrid coefficient {name[-2]} at full levels"
+        v[:] = vals
+    opts = dict(zlib=True, complevel=1, shuffle=True)
+    vs = {}
+    for name, (units, long) in META.items():
+        v = nc.createVariable(name, "f4", ("time", "level", "latitude", "longitude"), chunksizes=(1, nlev, 60, 60), **opts)
+        v.units, v.long_name = units, long
+        vs[name] = v
+    vsp = nc.createVariable("sp", "f4", ("time", "latitude", "longitude"), chunksizes=(1, 60, 60), **opts)
+    vsp.units, vsp.long_name = "Pa", "Surface pressure"
+    vz = nc.createVariable("z", "f4", ("time", "latitude", "longitude"), chunksizes=(1, 60, 60), **opts)
+    vz.units, vz.long_name = "m**2 s**-2", "Geopotential (surface)"
+    la, lo = np.meshgrid(LAT.astype(np.float32), LON.astype(np.float32), indexing="ij")
+    for i, h in enumerate(hours):
+        ps, hill = global_surface(float(h), la, lo)
+        vsp[i] = ps
+        vz[i] = hill * G0
+        block = {k: np.empty((nlev,) + la.shape, np.float32) for k in META}
+        for k in range(nlev):
+            for name, f in zip(META, global_atmosphere(np.float32(a[k]) + np.float32(b[k]) * ps, ps, hill, float(h), la, lo)):
+                block[name][k] = f
+        for name in META:
+            vs[name][i] = block[name]
+        print(f"  hour {h}: written", flush=True)
+    nc.close()
+
+
 if __name__ == "__main__":
+    ap = argparse.ArgumentParser(description="ERA5-like made-up model fields")
+    ap.add_argument("outdir", nargs="?", type=Path, default=OUT)
+    ap.add_argument("--global", dest="global_deg", type=float, help="write era5_like_global.nc on a global grid of this spacing, degrees")
+    ap.add_argument("--hours", default="0,6,12,18,24", help="with --global: hours past 2024-01-15 00 UTC")
+    ap.add_argument("--levels", type=int, default=37, help="with --global: number of hybrid levels")
+    args = ap.parse_args()
+    OUT = args.outdir
+    if args.global_deg is not None:
+        OUT.mkdir(parents=True, exist_ok=True)
+        f = OUT / "era5_like_global.nc"
+        write_global(f, args.global_deg, [float(h) for h in args.hours.split(",")], args.levels)
+        print(f, f.stat().st_size, "bytes")
+        sys.exit(0)
     OUT.mkdir(parents=True, exist_ok=True)
     write_model_levels(OUT / "era5_like_model_levels.nc")
     write_pressure_levels(OUT / "era5_like_pressure_levels.nc")

@@ -44,8 +44,11 @@ impl AlongTrack {
 
 /// Seed offset of the cloud-cell streams.
 const CELL_STREAM: u64 = 0xC311_5EED_0000_0001;
-/// Most columns a scene may have (segments × their broken-layer subsets).
-pub const MAX_COLUMNS: usize = 4096;
+/// Most columns a scene may have (segments × their broken-layer subsets). Columns are
+/// built when first drawn and dropped after their last profile, their truth streamed
+/// (issue 39), so the bound is on the per-column indices held for the whole run
+/// (a few tens of bytes each); a day of 5 km profiles through model fields has ~1.3e5.
+pub const MAX_COLUMNS: usize = 1 << 20;
 
 /// One column: a segment and which of its broken layers are present (bit k: the k-th
 /// broken layer of the segment).
