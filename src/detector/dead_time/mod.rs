@@ -60,13 +60,15 @@ mod clusters;
 mod model;
 mod record;
 mod shots;
+mod walk;
 
 pub use model::{DeadTime, DeadTimeModel, MAX_GRID_STEPS};
 pub use record::{ARRIVAL_STREAM, Scratch};
 pub use shots::{
-    DeadTimedShots, LAW_BUDGET_BYTES, LAW_FROM_PHOTONS, NS_PER_DENSE_LAW_BIN, NS_PER_GIVEN_PHOTON,
-    NS_PER_LAW_BIN, NS_PER_PHOTON,
+    DeadTimePath, DeadTimedShots, LAW_BUDGET_BYTES, LAW_FROM_PHOTONS, NS_PER_DENSE_LAW_BIN,
+    NS_PER_GIVEN_PHOTON, NS_PER_LAW_BIN, NS_PER_PHOTON,
 };
+pub use walk::{NS_PER_WALK_ARRIVAL, NS_PER_WALK_SHOT};
 
 /// One profile through the dead time, every photon drawn
 /// ([`super::recorder::recorded_profile`]; the detector's draws from the arrival stream
