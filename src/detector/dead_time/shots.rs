@@ -87,9 +87,10 @@ pub struct DeadTimedShots {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum DeadTimePath {
     /// The cheaper by the cost estimates: the arrival walk (`walk.rs`) where
-    /// [`WalkShots`]' estimate is below the other paths' ([`DeadTime::ns_per_shot`] for a
-    /// non-paralyzable detector, the clusters' for a paralyzable one), else as
-    /// [`Photons`](Self::Photons).
+    /// [`WalkShots`]' estimate is below the other path's (the clusters' for a paralyzable
+    /// detector on bins of 2τ or more, [`DeadTime::ns_per_shot`] on narrower bins; never
+    /// for a non-paralyzable one on bins of 2τ or more, whose clusters path and counting
+    /// law cost less at every rate, measured), else as [`Photons`](Self::Photons).
     #[default]
     Auto,
     /// The shot path's photons (the clusters path, the counting laws).
@@ -139,6 +140,11 @@ impl DeadTimedShots {
                         let other = match self.dead.model {
                             DeadTimeModel::Paralyzable if ClusterShots::serves(&self.dead) => {
                                 ClusterShots::ns_per_shot(means)
+                            }
+                            // on bins of 2τ or more the clusters path and the counting
+                            // law cost less than the walk at every rate (measured)
+                            DeadTimeModel::Nonparalyzable if ClusterShots::serves(&self.dead) => {
+                                0.0
                             }
                             _ => self.dead.ns_per_shot(means),
                         };
