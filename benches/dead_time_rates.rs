@@ -7,9 +7,10 @@
 //!
 //! ```text
 //! RAYON_NUM_THREADS=1 cargo bench --bench dead_time_rates
+//! PATH_DT=walk RATES="1e6 3e8" MODELS=par RAYON_NUM_THREADS=1 cargo bench --bench dead_time_rates
 //! ```
 
-use lidarsim::detector::dead_time::DeadTimedShots;
+use lidarsim::detector::dead_time::{DeadTimePath, DeadTimedShots};
 use lidarsim::detector::{DeadTime, DeadTimeModel};
 use lidarsim::sampling::{ShotSampler, shot_profile};
 
@@ -57,10 +58,16 @@ fn main() {
         },
     );
     let models = std::env::var("MODELS").unwrap_or_default();
+    // PATH=walk or PATH=photons forces a path (default: the one `simulate` picks)
+    let path = match std::env::var("PATH_DT").as_deref() {
+        Ok("walk") => DeadTimePath::Walk,
+        Ok("photons") => DeadTimePath::Photons,
+        _ => DeadTimePath::Auto,
+    };
     println!(
-        "| model | n (Hz) | photons / bin | ideal (ns / shot-bin) | dead time (ns / shot-bin) | ratio |"
+        "| model | n (Hz) | photons / bin | path | ideal (ns / shot-bin) | dead time (ns / shot-bin) | ratio |"
     );
-    println!("|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|");
     for model in [DeadTimeModel::Nonparalyzable, DeadTimeModel::Paralyzable] {
         let name = format!("{model:?}").to_lowercase();
         if !models.split_whitespace().all(|m| name.starts_with(m)) {
@@ -81,7 +88,8 @@ fn main() {
             if std::env::var("STRATEGY").is_ok() {
                 eprintln!("{lambda}: {}", sampler.strategy());
             }
-            let recorded = DeadTimedShots::new(sampler.clone(), dead);
+            let recorded = DeadTimedShots::new(sampler.clone(), dead).with_path(path);
+            let which = if recorded.walks() { "walk" } else { "photons" };
             let mut acc = vec![0u64; BINS];
             // warm up (tables built on first use)
             recorded.profile(1, 0, shots.min(1000), &mut acc);
@@ -89,7 +97,7 @@ fn main() {
             let dead_s = best(|i| recorded.profile(7, i, shots, &mut acc));
             let per = |s: f64| s * 1e9 / (shots as f64 * BINS as f64);
             println!(
-                "| {model:?} | {n:.0e} | {lambda:.3} | {:.2} | {:.2} | {:.2} |",
+                "| {model:?} | {n:.0e} | {lambda:.3} | {which} | {:.2} | {:.2} | {:.2} |",
                 per(ideal),
                 per(dead_s),
                 dead_s / ideal

@@ -83,3 +83,4 @@ mod ziggurat;
 pub use family::{Family, MAX_PHOTONS, family};
 pub(crate) use probabilities::pois_tails;
 pub use rate_law::{Drawn, RateLaw, is_dense, rate_law_bytes};
+pub(crate) use ziggurat::{exp1_slow, ziggurat};

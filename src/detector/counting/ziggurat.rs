@@ -15,7 +15,7 @@ const ZIG_R: f64 = 7.697_117_470_131_05;
 
 /// The exponential ziggurat's tables: the layers' right ends `x_0 = v/e^{−r}`, `x_1 = r`,
 /// `x_{i+1} = −ln(v/x_i + e^{−x_i})`, `x_256 = 0`, and `f_i = e^{−x_i}`.
-fn ziggurat() -> &'static ([f64; ZIG_LAYERS + 1], [f64; ZIG_LAYERS + 1]) {
+pub(crate) fn ziggurat() -> &'static ([f64; ZIG_LAYERS + 1], [f64; ZIG_LAYERS + 1]) {
     static TABLES: OnceLock<([f64; ZIG_LAYERS + 1], [f64; ZIG_LAYERS + 1])> = OnceLock::new();
     TABLES.get_or_init(|| {
         let v = (-ZIG_R).exp() * (ZIG_R + 1.0);
@@ -48,7 +48,7 @@ pub(super) fn exp1<R: Rng + ?Sized>(bits: u64, rng: &mut R) -> f64 {
 
 /// The ziggurat's wedge and tail for layer `i` and abscissa `u`, then on.
 #[cold]
-fn exp1_slow<R: Rng + ?Sized>(i: usize, u: f64, rng: &mut R) -> f64 {
+pub(crate) fn exp1_slow<R: Rng + ?Sized>(i: usize, u: f64, rng: &mut R) -> f64 {
     let (x, f) = ziggurat();
     let (mut i, mut u) = (i, u);
     loop {

@@ -134,7 +134,29 @@ impl CountSink for PlacedSink<'_> {
     }
 }
 
+/// Cost of the clusters path per bin and shot of mean λ (paralyzable), ns:
+/// `CLUSTER_NS_PER_BIN + λ·(CLUSTER_NS_PER_PHOTON + CLUSTER_NS_PER_PAIR·min(λ, 1))`, the
+/// last term the bins hit twice (sorted and swept); fitted to `benches/dead_time_rates.rs`
+/// (`validation/reports/dead_time_cost.md`, 2026-12-02: 0.17 ns a bin at 0.01 photons,
+/// 2.9 at 0.2, 8.4 at 0.5, 29 at 1, 12 ns a photon above).
+const CLUSTER_NS_PER_BIN: f64 = 0.1;
+/// See [`CLUSTER_NS_PER_BIN`].
+const CLUSTER_NS_PER_PHOTON: f64 = 10.0;
+/// See [`CLUSTER_NS_PER_BIN`].
+const CLUSTER_NS_PER_PAIR: f64 = 10.0;
+
 impl ClusterShots<'_> {
+    /// Estimated cost of one shot of means `lambda` on this path, ns
+    /// ([`CLUSTER_NS_PER_BIN`]).
+    pub(super) fn ns_per_shot(lambda: &[f64]) -> f64 {
+        lambda
+            .iter()
+            .map(|&l| {
+                CLUSTER_NS_PER_BIN + l * (CLUSTER_NS_PER_PHOTON + CLUSTER_NS_PER_PAIR * l.min(1.0))
+            })
+            .sum()
+    }
+
     /// Whether this path serves `dead`: bins at least 2τ wide.
     pub(super) fn serves(dead: &DeadTime) -> bool {
         dead.bin_width_s >= 2.0 * dead.tau_s

@@ -4,7 +4,7 @@
 //!
 //! **Sampler** ([`DeadTime::record_shot`], [`DeadTimedShots`]). The rate is taken
 //! constant within a bin (as in the model below), dead time crosses bin edges, and the
-//! detector is live at the start of the window. Four exact paths:
+//! detector is live at the start of the window. Five exact paths:
 //!
 //! * [`DeadTimedShots`] on bins at least 2τ wide, for a paralyzable detector at every
 //!   rate and for a non-paralyzable one whose bins all hold fewer than
@@ -22,6 +22,13 @@
 //!   of at least [`LAW_FROM_PHOTONS`] photons per shot from the counting law at their
 //!   rate, without their photons ([`RateLaw`], tables built once per run), and the
 //!   others as above;
+//! * where its cost estimate is the lower ([`DeadTimePath::Auto`]: the paralyzable
+//!   detector from ~0.5 photons a bin, narrow bins) [`DeadTimedShots`] walks the
+//!   shot's arrivals in time order as a Poisson process of the piecewise-constant rate
+//!   (`walk.rs`: the time-change theorem, a ziggurat exponential per arrival, a guide
+//!   table over the cumulative mean), the dead time applied as they come: O(arrivals)
+//!   paralyzable, O(recorded counts) non-paralyzable, exact for any bin width, the shot
+//!   path's photons not drawn;
 //! * otherwise ([`DeadTime::record_shot`] for a paralyzable detector, narrow bins) each
 //!   photon gets an arrival time uniform
 //!   within its bin, the shot's arrivals are swept in time order, and a photon is
@@ -60,13 +67,15 @@ mod clusters;
 mod model;
 mod record;
 mod shots;
+mod walk;
 
 pub use model::{DeadTime, DeadTimeModel, MAX_GRID_STEPS};
 pub use record::{ARRIVAL_STREAM, Scratch};
 pub use shots::{
-    DeadTimedShots, LAW_BUDGET_BYTES, LAW_FROM_PHOTONS, NS_PER_DENSE_LAW_BIN, NS_PER_GIVEN_PHOTON,
-    NS_PER_LAW_BIN, NS_PER_PHOTON,
+    DeadTimePath, DeadTimedShots, LAW_BUDGET_BYTES, LAW_FROM_PHOTONS, NS_PER_DENSE_LAW_BIN,
+    NS_PER_GIVEN_PHOTON, NS_PER_LAW_BIN, NS_PER_PHOTON,
 };
+pub use walk::{NS_PER_WALK_ARRIVAL, NS_PER_WALK_SHOT};
 
 /// One profile through the dead time, every photon drawn
 /// ([`super::recorder::recorded_profile`]; the detector's draws from the arrival stream

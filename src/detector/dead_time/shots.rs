@@ -4,6 +4,7 @@
 use super::clusters::ClusterShots;
 use super::model::{DeadTime, DeadTimeModel};
 use super::record::{ARRIVAL_STREAM, LawBins, Scratch};
+use super::walk::WalkShots;
 use crate::detector::counting::{self, RateLaw};
 use crate::detector::recorder::recorded_profile;
 use crate::sampling::{SHOT_BLOCK, ShotSampler, add_block_sums, stream_rng};
@@ -77,6 +78,25 @@ pub struct DeadTimedShots {
     /// the photons are then the shot path's own, shot for shot (a `both` detector's
     /// photon-counting half records the analog half's photons).
     every_photon: bool,
+    /// Which path draws the shots ([`DeadTimePath`]).
+    path: DeadTimePath,
+    walk: std::sync::OnceLock<Option<WalkShots>>,
+}
+
+/// Which of [`DeadTimedShots`]' paths draws a profile's shots.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum DeadTimePath {
+    /// The cheaper by the cost estimates: the arrival walk (`walk.rs`) where
+    /// [`WalkShots`]' estimate is below the other path's (the clusters' for a paralyzable
+    /// detector on bins of 2τ or more, [`DeadTime::ns_per_shot`] on narrower bins; never
+    /// for a non-paralyzable one on bins of 2τ or more, whose clusters path and counting
+    /// law cost less at every rate, measured), else as [`Photons`](Self::Photons).
+    #[default]
+    Auto,
+    /// The shot path's photons (the clusters path, the counting laws).
+    Photons,
+    /// The arrival walk, whatever it costs (benches and tests).
+    Walk,
 }
 
 /// The bins drawn by their law and the sampler of the others.
@@ -94,7 +114,51 @@ impl DeadTimedShots {
             dead,
             split: std::sync::OnceLock::new(),
             every_photon: false,
+            path: DeadTimePath::Auto,
+            walk: std::sync::OnceLock::new(),
         }
+    }
+
+    /// The same shots drawn by `path` (the default [`DeadTimePath::Auto`]); ignored, the
+    /// photons drawn, where [`drawing_every_photon`](Self::drawing_every_photon) is set.
+    pub fn with_path(mut self, path: DeadTimePath) -> Self {
+        self.path = path;
+        self.walk = std::sync::OnceLock::new();
+        self
+    }
+
+    /// The arrival walk, where it draws this profile's shots (see [`DeadTimePath`]).
+    fn by_walk(&self) -> Option<&WalkShots> {
+        self.walk
+            .get_or_init(|| {
+                let means = self.photons.means();
+                let walk = match self.path {
+                    _ if self.every_photon => false,
+                    DeadTimePath::Walk => true,
+                    DeadTimePath::Photons => false,
+                    DeadTimePath::Auto => {
+                        let other = match self.dead.model {
+                            DeadTimeModel::Paralyzable if ClusterShots::serves(&self.dead) => {
+                                ClusterShots::ns_per_shot(means)
+                            }
+                            // on bins of 2τ or more the clusters path and the counting
+                            // law cost less than the walk at every rate (measured)
+                            DeadTimeModel::Nonparalyzable if ClusterShots::serves(&self.dead) => {
+                                0.0
+                            }
+                            _ => self.dead.ns_per_shot(means),
+                        };
+                        WalkShots::ns_per_shot(means, &self.dead) < other
+                    }
+                };
+                walk.then(|| WalkShots::new(means, &self.dead))
+            })
+            .as_ref()
+    }
+
+    /// Whether the arrival walk draws this profile's shots (see [`DeadTimePath`]).
+    pub fn walks(&self) -> bool {
+        self.by_walk().is_some()
     }
 
     /// The same shots with every bin's photons drawn (no bin from its counting law), so
@@ -179,6 +243,9 @@ impl DeadTimedShots {
     /// Draws `shots` shots from `stream_rng(seed, profile, 0)` and its arrival stream and
     /// hands each one's recorded counts to `f` (per-shot consumers: tests, onboard sums).
     pub fn for_each_shot(&self, seed: u64, profile: u64, shots: u64, mut f: impl FnMut(&[u64])) {
+        if let Some(w) = self.by_walk() {
+            return w.for_each_shot(seed, profile, shots, f);
+        }
         if let Some(c) = self.by_clusters() {
             return c.for_each_shot(seed, profile, shots, f);
         }
@@ -208,6 +275,9 @@ impl DeadTimedShots {
     /// shots from `stream_rng(seed, profile, block)` (photons) and its arrival stream
     /// (the detector's draws), summed in integers: independent of the thread count.
     pub fn profile(&self, seed: u64, profile: u64, shots: u64, acc: &mut [u64]) {
+        if let Some(w) = self.by_walk() {
+            return w.profile(seed, profile, shots, acc);
+        }
         if let Some(c) = self.by_clusters() {
             return c.profile(seed, profile, shots, acc);
         }
