@@ -160,9 +160,13 @@ fn the_species_sum_to_the_aerosol_and_a_dust_species_is_its_mixing_ratio_by_hand
     assert!(seen > 20, "{seen} bins with dust");
 }
 
+/// A column by hand: levels bottom up (p, T, q), their layers' interfaces, a species'
+/// mass mixing ratio at each.
+type HandColumn = (Vec<(f64, f64, f64)>, Vec<f64>, Vec<f64>);
+
 /// Profile 0's levels bottom up (p, T, q), their layers' interfaces, and the species
 /// `name`'s mass mixing ratio at each, interpolated by hand from the raw CAMS-like file.
-fn hand_column(name: &str) -> (Vec<(f64, f64, f64)>, Vec<f64>, Vec<f64>) {
+fn hand_column(name: &str) -> HandColumn {
     let ov: Vec<String> = START.iter().map(|s| s.to_string()).collect();
     let cfg = lidarsim::loaded::load(&config_path(CONFIG), &ov)
         .unwrap()
