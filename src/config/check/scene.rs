@@ -83,6 +83,13 @@ impl ScenarioConfig {
                 ("liquid_depolarization".to_string(), m.liquid_depolarization),
                 ("ice_depolarization".to_string(), m.ice_depolarization),
             ]);
+        if !m.aerosol_depolarization.is_empty() && m.aerosol_optics.is_none() {
+            return Err(c.fail(
+                "scene.model_fields.aerosol_depolarization",
+                "needs scene.model_fields.aerosol_optics (without it no aerosol comes from \
+                 the fields)",
+            ));
+        }
         for (key, delta) in overrides {
             if let Some(d) = delta {
                 depolarization(c, &format!("scene.model_fields.{key}"), d)?;

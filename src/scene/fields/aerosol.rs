@@ -93,6 +93,16 @@ impl FieldAerosol {
                     Some(line) => rho * mmr * self.table.mass_extinction_at(s, rh, line)?,
                     None => a,
                 };
+                if (a > 0.0) != (a_line > 0.0) {
+                    return Err(Error::Unsupported(format!(
+                        "{}: {}'s mass extinction is 0 at one of {} nm and the Raman line {} nm \
+                         but not the other: no Ångström law joins them",
+                        self.table.path.display(),
+                        s.short_name,
+                        self.wavelength_m * 1e9,
+                        self.line_m.unwrap_or(self.wavelength_m) * 1e9
+                    )));
+                }
                 alpha_line += a_line;
                 species.push(SpeciesExtinction {
                     species: i,
