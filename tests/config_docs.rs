@@ -39,13 +39,19 @@ fn every_config_key_is_documented() {
         "instruments/caliop_fields.toml",
         "instruments/caliop_fields_aerosol.toml",
     ] {
-        let lidar = common::lidar(
-            cfg,
-            &[
-                "instrument.pulse_energy_jitter=0.01",
-                "instrument.energy_drift={ model = \"periodic\", amplitude = 0.01, period_s = 100 }",
-            ],
-        );
+        let mut overrides = vec![
+            "instrument.pulse_energy_jitter=0.01",
+            "instrument.energy_drift={ model = \"periodic\", amplitude = 0.01, period_s = 100 }",
+        ];
+        // the optional keys no shipped config sets
+        if cfg.ends_with("caliop_fields_aerosol.toml") {
+            overrides.extend([
+                "scene.model_fields.aerosol_depolarization={ dust = 0.3, marine = 0.1, smoke = 0.1, sulphate = 0.0 }",
+                "scene.model_fields.liquid_depolarization=0.0",
+                "scene.model_fields.ice_depolarization=0.4",
+            ]);
+        }
+        let lidar = common::lidar(cfg, &overrides);
         // every field, defaults included: the validated config serialized back
         let text = toml::to_string(&lidar.first().loaded.config).unwrap();
         keys(&text.parse::<toml::Table>().unwrap(), "", &mut all);

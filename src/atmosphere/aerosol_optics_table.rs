@@ -240,6 +240,75 @@ impl AerosolOpticsTable {
         relative_humidity: f64,
         wavelength_m: f64,
     ) -> Result<(f64, f64)> {
+        let w = self.wavelength_index(wavelength_m)?;
+        self.optics_at_index(species, relative_humidity, w)
+    }
+
+    /// The two neighbouring `wavelength_mono` indices around `wavelength_m`, with its
+    /// weight in `ln λ` between them (`(i, i, 0)` on a tabulated wavelength); refused
+    /// outside the table's wavelengths.
+    pub fn bracket(&self, wavelength_m: f64) -> Result<(usize, usize, f64)> {
+        if let Ok(i) = self.wavelength_index(wavelength_m) {
+            return Ok((i, i, 0.0));
+        }
+        let w = &self.wavelength_m;
+        let mut best: Option<(usize, usize)> = None;
+        for i in 0..w.len() {
+            for j in 0..w.len() {
+                let around = w[i] < wavelength_m && wavelength_m < w[j];
+                let closer = best.is_none_or(|(a, b)| w[i] >= w[a] && w[j] <= w[b]);
+                if around && closer {
+                    best = Some((i, j));
+                }
+            }
+        }
+        let (i, j) = best.ok_or_else(|| {
+            refuse(
+                &self.path,
+                "wavelength_mono",
+                format!(
+                    "{} nm is outside the table's wavelengths; lidarsim interpolates between \
+                     them, it does not extrapolate",
+                    (wavelength_m * 1e9 * 1000.0).round() / 1000.0
+                ),
+            )
+        })?;
+        let f = (wavelength_m / w[i]).ln() / (w[j] / w[i]).ln();
+        Ok((i, j, f))
+    }
+
+    /// The mass extinction (m² kg⁻¹) of `species` at relative humidity
+    /// `relative_humidity` and any `wavelength_m` within the table's: at a tabulated
+    /// wavelength its value ([`Self::optics`]); between the neighbouring tabulated
+    /// wavelengths `λ_a < λ < λ_b` log-log, an Ångström law between them:
+    /// `ln k = ln k_a + f·(ln k_b − ln k_a)`, `f = ln(λ/λ_a)/ln(λ_b/λ_a)` (linear in
+    /// `ln λ` where `k_a` or `k_b` is 0); refused outside them ([`Self::bracket`]).
+    pub fn mass_extinction_at(
+        &self,
+        species: &CamsSpecies,
+        relative_humidity: f64,
+        wavelength_m: f64,
+    ) -> Result<f64> {
+        let (i, j, f) = self.bracket(wavelength_m)?;
+        let a = self.optics_at_index(species, relative_humidity, i)?.0;
+        if i == j {
+            return Ok(a);
+        }
+        let b = self.optics_at_index(species, relative_humidity, j)?.0;
+        Ok(if a > 0.0 && b > 0.0 {
+            (a.ln() + f * (b.ln() - a.ln())).exp()
+        } else {
+            a + f * (b - a)
+        })
+    }
+
+    /// [`Self::optics`] at `wavelength_mono` index `w`.
+    fn optics_at_index(
+        &self,
+        species: &CamsSpecies,
+        relative_humidity: f64,
+        w: usize,
+    ) -> Result<(f64, f64)> {
         let Some(t) = species.ifs_type else {
             return Err(Error::Unsupported(format!(
                 "{}: {} ({}) has no optical type in ECMWF's table",
@@ -248,7 +317,6 @@ impl AerosolOpticsTable {
                 species.description
             )));
         };
-        let w = self.wavelength_index(wavelength_m)?;
         let nwl = self.wavelength_m.len();
         let (k, n, codes, var) = match t {
             IfsType::Hydrophobic(k) => (

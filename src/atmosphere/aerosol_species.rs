@@ -294,6 +294,24 @@ pub fn particle_depolarization(species: &CamsSpecies, wavelength_m: f64) -> Opti
     Some(by_wavelength[k])
 }
 
+/// The particle linear depolarization ratio of `species` at `wavelength_m`: the
+/// config's override for its class (`scene.model_fields.aerosol_depolarization`, at every
+/// wavelength) where given, else [`particle_depolarization`]'s default; None where
+/// neither gives one.
+pub fn particle_depolarization_or(
+    species: &CamsSpecies,
+    wavelength_m: f64,
+    overrides: &crate::config::AerosolDepolarization,
+) -> Option<f64> {
+    let given = match species.depolarization_class {
+        D::Dust => overrides.dust,
+        D::Marine => overrides.marine,
+        D::Smoke => overrides.smoke,
+        D::Spherical => overrides.sulphate,
+    };
+    given.or_else(|| particle_depolarization(species, wavelength_m))
+}
+
 /// Checks `scene.model_fields.aerosol_species`: each name a CAMS species with optics (the
 /// config's owner check, `src/loaded.rs`).
 pub fn validate(

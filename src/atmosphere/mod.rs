@@ -247,6 +247,24 @@ impl Atmosphere {
         self.raman.as_ref().map_or(self, |r| &r.line)
     }
 
+    /// The CAMS species (0-based, increasing) the layers at the line the channel
+    /// detects carry (none but in a model-field scene with aerosol).
+    pub fn aerosol_species(&self) -> Vec<usize> {
+        let mut present: Vec<usize> = (self.detected_line().layers.iter())
+            .flat_map(|l| l.species.iter().map(|s| s.0))
+            .collect();
+        present.sort_unstable();
+        present.dedup();
+        present
+    }
+
+    /// Adds the aerosol extinction by CAMS species at `z_m` at the line the channel
+    /// detects (the parts of `optics_at`'s `alpha_aer`), m⁻¹, into `out` (indexed by
+    /// species, 0-based, longer than [`Self::aerosol_species`]'s last).
+    pub fn add_aerosol_species_extinction(&self, z_m: f64, out: &mut [f64]) {
+        particles::add_species_extinction(&self.detected_line().layers, z_m, out);
+    }
+
     /// The share of the surface echo (an unbroadened line at the laser's wavelength) the
     /// channel sees: the particle line's share, and none for a Raman channel.
     pub fn surface_echo_share(&self) -> f64 {

@@ -64,11 +64,25 @@ pub struct Layer {
     pub asymmetry_factor: f64,
     /// A cloud of liquid droplets (`multiple_scattering::phase`).
     pub water: bool,
+    /// A model-field aerosol layer's extinction by CAMS species, m⁻¹ (`(species
+    /// 0-based, α_s)`, summing to `extinction_per_m`); empty for any other layer.
+    pub species: Vec<(usize, f64)>,
 }
 
 impl Layer {
     pub(super) fn contains(&self, z_m: f64) -> bool {
         z_m >= self.base_m && z_m < self.top_m
+    }
+}
+
+/// The aerosol extinction by CAMS species at `z_m`, m⁻¹, added into `out` (indexed by
+/// species, 0-based): the species of the aerosol layers that contain it, as
+/// `elastic_optics_at` adds their extinction into `alpha_aer`.
+pub fn add_species_extinction(layers: &[Layer], z_m: f64, out: &mut [f64]) {
+    for l in layers.iter().filter(|l| l.contains(z_m)) {
+        for &(s, a) in &l.species {
+            out[s] += a;
+        }
     }
 }
 
@@ -133,6 +147,11 @@ pub(super) fn layers(cfg: &ScenarioConfig) -> Vec<Layer> {
                 asymmetry_factor: multiple_scattering::asymmetry_factor(l),
                 water: l.kind == LayerKind::Cloud
                     && multiple_scattering::phase(l) == crate::config::CloudPhase::Water,
+                species: l
+                    .species_at_wavelength(wl, wl)
+                    .into_iter()
+                    .map(|(s, a)| (s, a * 1e-3))
+                    .collect(),
             }
         })
         .collect()

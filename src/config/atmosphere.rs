@@ -217,6 +217,22 @@ pub struct LayerConfig {
     /// (`{ 1064 = 30.0 }`); a wavelength not listed uses `lidar_ratio_sr`.
     #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     pub lidar_ratio_sr_by_wavelength: std::collections::BTreeMap<String, f64>,
+    /// The CAMS species that make a model-field aerosol layer, for the truth
+    /// (`src/scene/fields/aerosol.rs`); not a config key (None in a config's layers).
+    #[serde(skip)]
+    pub species: Option<std::sync::Arc<[SpeciesExtinction]>>,
+}
+
+/// One species' part of a layer's extinction (a model-field aerosol layer's
+/// [`LayerConfig::species`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpeciesExtinction {
+    /// The species, 0-based in CAMS's order (`aermr01` at 0).
+    pub species: usize,
+    /// Its extinction at the layer's `reference_wavelength_nm`, km⁻¹.
+    pub extinction_per_km: f64,
+    /// Its Ångström exponent: at λ its extinction is `extinction_per_km·(λ_ref/λ)^å`.
+    pub angstrom_exponent: f64,
 }
 
 impl LayerConfig {
@@ -235,6 +251,25 @@ impl LayerConfig {
             })
             .map_or(self.lidar_ratio_sr, |(_, v)| *v);
         (extinction, lidar_ratio)
+    }
+
+    /// Its species' extinctions at `wavelength_nm`, km⁻¹ (`(species, α_s)`; none but in
+    /// a model-field aerosol layer), each by its own Ångström exponent as
+    /// [`Self::at_wavelength`] scales the layer's.
+    pub fn species_at_wavelength(
+        &self,
+        wavelength_nm: f64,
+        instrument_nm: f64,
+    ) -> Vec<(usize, f64)> {
+        let reference = self.reference_wavelength_nm.unwrap_or(instrument_nm);
+        self.species
+            .iter()
+            .flat_map(|s| s.iter())
+            .map(|s| {
+                let scale = (reference / wavelength_nm).powf(s.angstrom_exponent);
+                (s.species, s.extinction_per_km * scale)
+            })
+            .collect()
     }
 }
 

@@ -40,7 +40,8 @@ mod warnings;
 pub use acquisition::{AcquisitionConfig, DEFAULT_START_TIME};
 pub use atmosphere::{
     AerosolConfig, AtmosphereConfig, CloudPhase, ExtinctionSource, LayerConfig, LayerKind,
-    MolecularConfig, MolecularLine, MolecularModel, StratosphericAerosol, WaterVapourConfig,
+    MolecularConfig, MolecularLine, MolecularModel, SpeciesExtinction, StratosphericAerosol,
+    WaterVapourConfig,
 };
 pub use background::{BackgroundConfig, BackgroundEfficiency, BackgroundModel};
 pub use check::{Checker, OwnerCheck, OwnerChecks};
@@ -51,7 +52,9 @@ pub use instrument::{
     Channel, EnergyDriftConfig, InstrumentConfig, OverlapConfig, WAVELENGTH_RANGE_NM,
 };
 pub use load::{Parsed, deserialize, parse, plain_serde_message};
-pub use model_fields::{FieldsInterpolation, FieldsModel, FieldsMolecules, ModelFieldsConfig};
+pub use model_fields::{
+    AerosolDepolarization, FieldsInterpolation, FieldsModel, FieldsMolecules, ModelFieldsConfig,
+};
 pub use multiple_scattering::{MultipleScatteringConfig, MultipleScatteringModel};
 pub use overrides::{apply_override, attribute_to_override};
 pub use scenario::ScenarioConfig;

@@ -72,6 +72,54 @@ pub struct ModelFieldsConfig {
     /// the files hold.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub aerosol_species: Option<Vec<String>>,
+    /// The species' particle linear depolarization ratios by class, replacing the
+    /// defaults (docs/model.md §4l) at every wavelength.
+    #[serde(default, skip_serializing_if = "AerosolDepolarization::is_empty")]
+    pub aerosol_depolarization: AerosolDepolarization,
+    /// Linear depolarization ratio of singly scattered light by the fields' liquid cloud;
+    /// absent = the default (0, spheres).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub liquid_depolarization: Option<f64>,
+    /// Linear depolarization ratio of the fields' ice cloud; absent = the default (0.4).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ice_depolarization: Option<f64>,
+}
+
+/// `scene.model_fields.aerosol_depolarization`: a particle linear depolarization ratio
+/// `δ = β⊥/β∥` per species class, each replacing that class's default at every
+/// wavelength; absent = the default.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct AerosolDepolarization {
+    /// Mineral dust (`aermr04` … `aermr06`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dust: Option<f64>,
+    /// Sea salt (`aermr01` … `aermr03`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub marine: Option<f64>,
+    /// Organic matter and black carbon (`aermr07` … `aermr10`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub smoke: Option<f64>,
+    /// Sulphate, nitrate and ammonium (`aermr11`, `aermr16` … `aermr18`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sulphate: Option<f64>,
+}
+
+impl AerosolDepolarization {
+    /// No override given.
+    pub fn is_empty(&self) -> bool {
+        *self == AerosolDepolarization::default()
+    }
+
+    /// The overrides with their keys (under `scene.model_fields.aerosol_depolarization`).
+    pub fn keyed(&self) -> [(&'static str, Option<f64>); 4] {
+        [
+            ("dust", self.dust),
+            ("marine", self.marine),
+            ("smoke", self.smoke),
+            ("sulphate", self.sulphate),
+        ]
+    }
 }
 
 /// The molecules of a model-field scene (`scene.model_fields.molecules`).

@@ -89,6 +89,10 @@ pub struct ExpectedProfile {
     /// Their indices: bins of the window lying wholly above the atmosphere, nearest the
     /// atmosphere first, at most `acquisition.background_bins` of them.
     pub background_bin_indices: Vec<usize>,
+    /// The point truth's aerosol extinction by CAMS species, m⁻¹: `(species 0-based,
+    /// α_s per bin)` for each species the column's layers carry, summing to
+    /// `point[i].alpha_aer` (none but in a model-field scene with aerosol).
+    pub alpha_aer_by_species: Vec<(usize, Vec<f64>)>,
 }
 
 impl ExpectedProfile {

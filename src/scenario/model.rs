@@ -48,6 +48,7 @@ impl Scenario {
             }
         }
         self.add_multiple_scattering(&mut e);
+        e.alpha_aer_by_species = self.alpha_aer_by_species(&e);
         let detector = self.loaded.config.instrument.detector.as_ref();
         if let Some(sin) = detector.and_then(|d| d.signal_induced_noise.as_ref()) {
             let power_law = matches!(
@@ -92,6 +93,28 @@ impl Scenario {
         e.background_bins = e.background_bin_indices.len();
         check_finite(&e)?;
         Ok(e)
+    }
+
+    /// The point truth's aerosol extinction by species (`ExpectedProfile::
+    /// alpha_aer_by_species`): at each bin centre with aerosol, the species of the layers
+    /// there; 0 where the point truth has none (below the surface, before the trigger).
+    fn alpha_aer_by_species(&self, e: &ExpectedProfile) -> Vec<(usize, Vec<f64>)> {
+        let species = self.atmosphere.aerosol_species();
+        let Some(last) = species.last() else {
+            return Vec::new();
+        };
+        let n = e.altitude_m.len();
+        let mut out: Vec<(usize, Vec<f64>)> = species.iter().map(|s| (*s, vec![0.0; n])).collect();
+        let mut at = vec![0.0; last + 1];
+        for i in (0..n).filter(|i| e.point[*i].alpha_aer > 0.0) {
+            at.fill(0.0);
+            self.atmosphere
+                .add_aerosol_species_extinction(e.altitude_m[i], &mut at);
+            for (s, v) in &mut out {
+                v[i] = at[*s];
+            }
+        }
+        out
     }
 
     /// The model of bin `i` (past the pre-trigger bins): Eq. 2's bin integral, the truth

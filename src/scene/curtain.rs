@@ -155,6 +155,7 @@ pub fn segments(path: &Path) -> Result<Vec<SegmentConfig>> {
                             lidar_ratio_sr_by_wavelength: Default::default(),
                             cloud_fraction: None,
                             cell_length_km: None,
+                            species: None,
                         });
                     }
                 }

@@ -75,6 +75,26 @@ impl ScenarioConfig {
             1.0,
             3.0,
         )?;
+        let classes = m.aerosol_depolarization.keyed();
+        let overrides = classes
+            .iter()
+            .map(|(k, v)| (format!("aerosol_depolarization.{k}"), *v))
+            .chain([
+                ("liquid_depolarization".to_string(), m.liquid_depolarization),
+                ("ice_depolarization".to_string(), m.ice_depolarization),
+            ]);
+        if !m.aerosol_depolarization.is_empty() && m.aerosol_optics.is_none() {
+            return Err(c.fail(
+                "scene.model_fields.aerosol_depolarization",
+                "needs scene.model_fields.aerosol_optics (without it no aerosol comes from \
+                 the fields)",
+            ));
+        }
+        for (key, delta) in overrides {
+            if let Some(d) = delta {
+                depolarization(c, &format!("scene.model_fields.{key}"), d)?;
+            }
+        }
         // (the names themselves: the species table's owner, `owners.aerosol_species`)
         if m.aerosol_species.is_some() && m.aerosol_optics.is_none() {
             return Err(c.fail(
@@ -181,4 +201,14 @@ impl ScenarioConfig {
         }
         Ok(())
     }
+}
+
+/// A linear depolarization ratio `δ = β⊥/β∥`: finite, `0 ≤ δ < 1` (δ = 1 would be
+/// unpolarized backscatter, beyond any particle's single scattering).
+fn depolarization(c: &Checker, key: &str, delta: f64) -> Result<()> {
+    c.range(key, delta, 0.0, 1.0)?;
+    if delta == 1.0 {
+        return Err(c.fail(key, "must be below 1, got 1"));
+    }
+    Ok(())
 }

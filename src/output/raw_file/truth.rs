@@ -236,6 +236,46 @@ pub fn column_variables(lidar: &Lidar, columns: &[&[ExpectedProfile]]) -> Vec<Va
         }
         vars.push(v);
     }
+    vars.extend(species_variables(columns));
+    vars
+}
+
+/// The aerosol extinction by CAMS species at the bin centre (a model-field scene with
+/// aerosol, docs/file-format.md "Aerosol by species"): one (column, channel, bin)
+/// variable `alpha_aer_<species>` (`alpha_aer_aermr04`, ...) per species some column
+/// carries, in CAMS's order, 0 where a column has none of it; they sum to `alpha_aer`.
+fn species_variables(columns: &[&[ExpectedProfile]]) -> Vec<Variable> {
+    use crate::atmosphere::aerosol_species::CAMS_SPECIES;
+    let mut present: Vec<usize> = (columns.iter().flat_map(|col| col.iter()))
+        .flat_map(|e| e.alpha_aer_by_species.iter().map(|s| s.0))
+        .collect();
+    present.sort_unstable();
+    present.dedup();
+    let mut vars = Vec::new();
+    for s in present {
+        let species = &CAMS_SPECIES[s];
+        let mut data = Vec::new();
+        for e in columns.iter().flat_map(|col| col.iter()) {
+            match e.alpha_aer_by_species.iter().find(|o| o.0 == s) {
+                Some((_, v)) => data.extend_from_slice(v),
+                None => data.extend(std::iter::repeat_n(0.0, e.n_bins())),
+            }
+        }
+        let long_name = format!(
+            "aerosol extinction coefficient at the bin centre of CAMS species {} ({}): its part of alpha_aer",
+            species.short_name, species.description
+        );
+        let attrs = [("cams_species", species.short_name)];
+        let name = format!("alpha_aer_{}", species.short_name);
+        vars.push(var(
+            &name,
+            Dims::ColumnChannelBin,
+            &long_name,
+            "m-1",
+            &attrs,
+            data,
+        ));
+    }
     vars
 }
 

@@ -12,10 +12,11 @@
 //! each cloudy level holding the in-cloud water q/C, the profile's shots spread evenly
 //! over them (identical subcolumns merged); with 1, the grid-box mean water over the
 //! whole box. With `aerosol_optics` (ECMWF's table), each level's CAMS species make an
-//! aerosol layer in every subcolumn ([`aerosol_layers`], docs/model.md §4l), replacing
+//! aerosol layer in every subcolumn ([`aerosol::FieldAerosol::layers`], docs/model.md §4l), replacing
 //! the config's background aerosol. The segments are the same scene as a curtain's: the
 //! truth, shards, onboard and validate see columns.
 
+pub mod aerosol;
 pub mod column;
 pub mod grid;
 pub mod names;
@@ -121,7 +122,12 @@ fn layers_where(
                 continue;
             }
             let alpha = extinction_per_m(phase, q, rho, r_e, m.extinction_efficiency) * 1e3;
-            let (lidar_ratio_sr, depolarization) = phase_optics(phase);
+            let (lidar_ratio_sr, default_depolarization) = phase_optics(phase);
+            let depolarization = match phase {
+                CloudPhase::Water => m.liquid_depolarization,
+                CloudPhase::Ice => m.ice_depolarization,
+            }
+            .unwrap_or(default_depolarization);
             out.push(LayerConfig {
                 kind: LayerKind::Cloud,
                 base_km,
@@ -138,6 +144,7 @@ fn layers_where(
                 lidar_ratio_sr_by_wavelength: Default::default(),
                 cloud_fraction: None,
                 cell_length_km: None,
+                species: None,
             });
         }
     }
@@ -146,7 +153,8 @@ fn layers_where(
 
 /// The segments of `cfg`'s model fields `m` (its `files`, resolved) along `track`,
 /// a profile's [`profile_subcolumns`] for each of `profiles` profiles of
-/// `shots_per_profile` shots, drawn from `seed` (the run's).
+/// `shots_per_profile` shots, drawn from `seed` (the run's); a Raman channel's aerosol
+/// also at its detected line `raman_line_nm`.
 pub fn segments(
     cfg: &ScenarioConfig,
     m: &ModelFieldsConfig,
@@ -154,25 +162,26 @@ pub fn segments(
     track: &AlongTrack,
     (shots_per_profile, profiles): (u64, u64),
     seed: u64,
+    raman_line_nm: Option<f64>,
 ) -> Result<Vec<SegmentConfig>> {
     let samples = profile_samples(cfg, track, shots_per_profile, profiles)?;
     let points: Vec<Sample> = samples.iter().map(|s| s.0).collect();
     let columns =
         read::columns(m, files, &points).map_err(|(path, why)| Error::output(path, why))?;
     let aerosol = match &m.aerosol_optics {
-        Some(path) => {
-            let table = crate::atmosphere::aerosol_optics_table::AerosolOpticsTable::read(path)?;
-            let wavelength_m = aerosol_wavelength_m(cfg)?;
-            table.wavelength_index(wavelength_m)?;
-            Some((table, wavelength_m))
-        }
+        Some(path) => Some(aerosol::FieldAerosol::read(
+            path,
+            aerosol_wavelength_m(cfg)?,
+            raman_line_nm.map(|nm| nm * 1e-9),
+            m.aerosol_depolarization,
+        )?),
         None => None,
     };
     let mut out = Vec::new();
     for (p, (c, (_, length_km))) in columns.iter().zip(&samples).enumerate() {
         let aerosol_layers = match &aerosol {
-            Some((table, wavelength_m)) => Some(
-                aerosol_layers(table, c, *wavelength_m)
+            Some(a) => Some(
+                a.layers(c)
                     .map_err(|e| Error::Unsupported(format!("profile {p}: {e}")))?,
             ),
             None => None,
@@ -211,69 +220,6 @@ pub fn segments(
 /// aerosol at its own wavelength).
 fn aerosol_wavelength_m(cfg: &ScenarioConfig) -> Result<f64> {
     Ok(cfg.instrument.wavelength_nm * 1e-9)
-}
-
-/// The aerosol layers of a column from its CAMS species (docs/model.md §4l): at each
-/// level with aerosol, `ρ_air = p/(R_d·T_v)`, the RH over water from q, T, p, and per
-/// species `α_s = ρ_air·mmr_s·k_ext,s(RH, λ)`, `β_s = α_s/S_s` from `table`; the level's
-/// layer has `α = Σα_s`, lidar ratio `α/Σβ_s` and the backscatter-weighted mean of the
-/// species' default depolarizations (an approximation: depolarization ratios do not
-/// mix linearly, the exact mixture's being `Σβ_s⊥/Σβ_s∥`).
-pub fn aerosol_layers(
-    table: &crate::atmosphere::aerosol_optics_table::AerosolOpticsTable,
-    c: &FieldColumn,
-    wavelength_m: f64,
-) -> Result<Vec<LayerConfig>> {
-    use crate::atmosphere::aerosol_species::{
-        CAMS_SPECIES, particle_depolarization, relative_humidity_over_water,
-    };
-    let mut out = Vec::new();
-    for (k, l) in c.levels.iter().enumerate() {
-        if l.aerosol_mmr.iter().all(|x| *x <= 0.0) {
-            continue;
-        }
-        let rho = air_density(l.p_pa, l.t_k, l.q);
-        let rh = relative_humidity_over_water(l.q, l.t_k, l.p_pa);
-        let (mut alpha, mut beta, mut beta_delta) = (0.0, 0.0, 0.0);
-        for (s, mmr) in CAMS_SPECIES.iter().zip(l.aerosol_mmr) {
-            if mmr <= 0.0 {
-                continue;
-            }
-            let (k_ext, lidar_ratio) = table.optics(s, rh, wavelength_m)?;
-            let delta = particle_depolarization(s, wavelength_m).ok_or_else(|| {
-                Error::Unsupported(format!(
-                    "{}: no default depolarization at {} nm (only 355, 532, 1064 nm)",
-                    s.short_name,
-                    wavelength_m * 1e9
-                ))
-            })?;
-            let a = rho * mmr * k_ext;
-            alpha += a;
-            beta += a / lidar_ratio;
-            beta_delta += a / lidar_ratio * delta;
-        }
-        if alpha <= 0.0 || beta <= 0.0 {
-            continue;
-        }
-        out.push(LayerConfig {
-            kind: LayerKind::Aerosol,
-            base_km: c.interfaces_m[k] / 1e3,
-            top_km: c.interfaces_m[k + 1] / 1e3,
-            extinction_per_km: alpha * 1e3,
-            lidar_ratio_sr: alpha / beta,
-            depolarization: beta_delta / beta,
-            multiple_scattering: 1.0,
-            phase: None,
-            effective_radius_um: None,
-            asymmetry_factor: None,
-            angstrom_exponent: None,
-            reference_wavelength_nm: None,
-            lidar_ratio_sr_by_wavelength: Default::default(),
-            cloud_fraction: None,
-            cell_length_km: None,
-        });
-    }
-    Ok(out)
 }
 
 /// The molecules of a column: its levels' heights, pressures and temperatures as a
@@ -363,7 +309,21 @@ pub fn with_model_fields(
         crate::input_file::check("scene.model_fields.aerosol_optics", &t)?;
         m.aerosol_optics = Some(t);
     }
-    let segments = segments(&cfg, &m, &files, track, (shots, profiles), seed)?;
+    // a Raman channel's return sees the aerosol at its detected line
+    let raman_line_nm = loaded
+        .channels
+        .first()
+        .filter(|c| c.kind == crate::receiver::ChannelKind::Raman)
+        .map(|c| c.detection_wavelength_nm());
+    let segments = segments(
+        &cfg,
+        &m,
+        &files,
+        track,
+        (shots, profiles),
+        seed,
+        raman_line_nm,
+    )?;
     if let Some(s) = cfg.scene.as_mut() {
         s.segments = segments;
     }
