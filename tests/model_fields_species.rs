@@ -350,3 +350,41 @@ fn a_raman_channel_sees_each_species_at_its_line() {
         }
     }
 }
+
+/// The shipped pass from 42 N south into the plume: its first columns carry no dust, its
+/// last do. The file names every species the scene carries before its first column is
+/// built (the columns come lazily, docs/file-format.md): seven `alpha_aer_aermrNN`, the
+/// dust ones 0 in the first column and not in the last, the species summing to
+/// `alpha_aer` in every column.
+#[test]
+fn a_species_the_first_columns_lack_is_in_the_file_with_zeros_there() {
+    let dir = scratch("species_later");
+    let f = simulate_with(&dir, &config_path(CONFIG), "a.h5", "200", &[]);
+    let total = floats(&f, "alpha_aer");
+    let names: Vec<String> = (f.member_names().unwrap().into_iter())
+        .filter(|n| n.starts_with("alpha_aer_aermr"))
+        .collect();
+    assert_eq!(names.len(), 7, "{names:?}");
+    let (n_columns, _, nb) = sizes(&f, 1);
+    // (profile, slot), -1 in unused slots: each profile's first column
+    let ds = f.dataset("profile_column").unwrap();
+    let slots = ds.shape()[1];
+    let col = ds.read_raw::<i64>().unwrap();
+    let (first, last) = (col[0] as usize, col[col.len() - slots] as usize);
+    let dust = floats(&f, "alpha_aer_aermr04");
+    let of = |c: usize| &dust[c * nb..(c + 1) * nb];
+    assert!(
+        of(first).iter().all(|x| *x == 0.0),
+        "dust in column {first}"
+    );
+    assert!(
+        of(last).iter().any(|x| *x > 0.0),
+        "no dust in column {last}"
+    );
+    let parts: Vec<Vec<f64>> = names.iter().map(|n| floats(&f, n)).collect();
+    assert_eq!(total.len(), n_columns * nb);
+    for (i, t) in total.iter().enumerate() {
+        let sum: f64 = parts.iter().map(|p| p[i]).sum();
+        assert!(rel(sum, *t) < 1e-12, "value {i}: Σ species {sum} vs {t}");
+    }
+}

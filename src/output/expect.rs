@@ -76,6 +76,7 @@ pub fn model_variables(
             lidar,
             &plan.expected,
             &columns,
+            &crate::output::raw_file::truth::aerosol_species_of(&columns),
             shots,
             content::TruthLayout::Static,
         );

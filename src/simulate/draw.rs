@@ -115,8 +115,10 @@ pub(super) fn draw_into<S: ProfileSink>(
         let drawn: Vec<DrawnProfile> = drawn.into_iter().map(|(d, _)| d).collect();
         Some((first_profile, drawn, took, counted))
     };
-    let column_rows =
-        |c: &BuiltColumn| content::column_rows(lidar, expected, &c.expected, shots, layout);
+    let species = scene.as_ref().map_or(&[][..], |sc| &sc.aerosol_species[..]);
+    let column_rows = |c: &BuiltColumn| {
+        content::column_rows(lidar, expected, &c.expected, species, shots, layout)
+    };
     let mut write_batch = |(first_profile, drawn, took, counted): Batch,
                            new_columns: Vec<(usize, Arc<BuiltColumn>)>,
                            sink: &mut S| {

@@ -239,6 +239,7 @@ impl Merge {
                 lidar,
                 &plan.expected,
                 &c.expected,
+                &sc.aerosol_species,
                 shots,
                 layout,
             )

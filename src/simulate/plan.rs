@@ -286,6 +286,10 @@ fn raw_file_spec(
         Some(_) => &[],
         None => &static_columns,
     };
+    let species = match scene {
+        Some(sc) => sc.aerosol_species.clone(),
+        None => crate::output::raw_file::truth::aerosol_species_of(&static_columns),
+    };
     Ok(RawFileSpec {
         n_bins: first.geometry.n_bins,
         n_profiles: profiles,
@@ -298,7 +302,7 @@ fn raw_file_spec(
         count_width,
         components,
         time_units: content::time_units(&first.loaded.config.acquisition.start_time)?,
-        variables: content::variables(lidar, expected, column_models, shots, layout)
+        variables: content::variables(lidar, expected, column_models, &species, shots, layout)
             .into_iter()
             .chain(
                 orbit_of(lidar)?

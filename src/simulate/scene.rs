@@ -168,6 +168,25 @@ pub struct SceneModel {
     /// The largest count the file's counters hold ([`SceneModel::set_count_width`]):
     /// a column whose brightest bin could outgrow it is refused when it is built.
     pub(super) max_count: f64,
+    /// The CAMS species some column's aerosol carries (0-based, increasing): the file's
+    /// `alpha_aer_<species>`, named before any column is built (from the layers the
+    /// model fields made, the union `truth::aerosol_species_of` takes over the columns).
+    pub aerosol_species: Vec<usize>,
+}
+
+/// The CAMS species the segments' layers carry, over every channel (0-based, increasing).
+fn scene_aerosol_species(configs: &[ScenarioConfig]) -> Vec<usize> {
+    let mut present: Vec<usize> = (configs.iter())
+        .filter_map(|c| c.scene.as_ref())
+        .flat_map(|s| s.segments.iter())
+        .filter_map(|s| s.layers.as_ref())
+        .flatten()
+        .filter_map(|l| l.species.as_ref())
+        .flat_map(|s| s.iter().map(|e| e.species))
+        .collect();
+    present.sort_unstable();
+    present.dedup();
+    present
 }
 
 /// What the solar background needs: where the sun is for each profile.
@@ -319,6 +338,7 @@ impl SceneModel {
                 )
             })
             .collect();
+        let aerosol_species = scene_aerosol_species(&configs);
         Ok(SceneModel {
             built: RwLock::new(vec![None; all.len()]),
             track,
@@ -338,6 +358,7 @@ impl SceneModel {
                 .collect(),
             column_slots,
             max_count: f64::INFINITY,
+            aerosol_species,
         })
     }
 

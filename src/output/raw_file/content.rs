@@ -163,6 +163,7 @@ pub fn variables(
     lidar: &Lidar,
     expected: &[ExpectedProfile],
     columns: &[&[ExpectedProfile]],
+    species: &[usize],
     shots: u64,
     layout: TruthLayout,
 ) -> Vec<Variable> {
@@ -309,7 +310,7 @@ pub fn variables(
             instrument(|c| c.instrument.dead_time.map_or(1.0, |d| f64::from(d.pixels))),
         ));
     }
-    vars.extend(truth::column_variables(lidar, columns));
+    vars.extend(truth::column_variables(lidar, columns, species));
     match layout {
         TruthLayout::Static => {}
         TruthLayout::PerProfile => {
@@ -377,15 +378,17 @@ pub fn variables(
 
 /// One column's rows of the (column, …) variables, in the order [`variables`] lists
 /// them: what a run hands [`super::ProfileSink::write_column`] for column `column` (every
-/// channel's model) of a scene whose columns are built as its profiles need them.
+/// channel's model) of a scene whose columns are built as its profiles need them and
+/// whose aerosol `species` are those of [`truth::aerosol_species_of`] over all of them.
 pub fn column_rows(
     lidar: &Lidar,
     expected: &[ExpectedProfile],
     column: &[ExpectedProfile],
+    species: &[usize],
     shots: u64,
     layout: TruthLayout,
 ) -> Vec<Vec<f64>> {
-    variables(lidar, expected, &[column], shots, layout)
+    variables(lidar, expected, &[column], species, shots, layout)
         .into_iter()
         .filter(|v| matches!(v.dims, Dims::ColumnBin | Dims::ColumnChannelBin))
         .map(|v| v.data)

@@ -182,7 +182,11 @@ const COLUMN_STATE: [(&str, &str, &str, &str, Truth); 4] = [
 /// channel `k` (one column in a static scene). The species' optics and `t2` are
 /// (column, channel, bin), the molecular state (column, bin); pressure and temperature
 /// are NaN (their `_FillValue`) where the molecular source gives none.
-pub fn column_variables(lidar: &Lidar, columns: &[&[ExpectedProfile]]) -> Vec<Variable> {
+pub fn column_variables(
+    lidar: &Lidar,
+    columns: &[&[ExpectedProfile]],
+    species: &[usize],
+) -> Vec<Variable> {
     let mut vars = Vec::new();
     let bin_means = BIN_MEAN_TRUTH.iter().map(|t| (t, &[CELL_METHODS][..]));
     for ((name, long_name, units, f), attrs) in
@@ -236,23 +240,32 @@ pub fn column_variables(lidar: &Lidar, columns: &[&[ExpectedProfile]]) -> Vec<Va
         }
         vars.push(v);
     }
-    vars.extend(species_variables(columns));
+    vars.extend(species_variables(columns, species));
     vars
 }
 
-/// The aerosol extinction by CAMS species at the bin centre (a model-field scene with
-/// aerosol, docs/file-format.md "Aerosol by species"): one (column, channel, bin)
-/// variable `alpha_aer_<species>` (`alpha_aer_aermr04`, ...) per species some column
-/// carries, in CAMS's order, 0 where a column has none of it; they sum to `alpha_aer`.
-fn species_variables(columns: &[&[ExpectedProfile]]) -> Vec<Variable> {
-    use crate::atmosphere::aerosol_species::CAMS_SPECIES;
+/// The CAMS species (0-based, increasing) some of `columns` carries: the
+/// `alpha_aer_<species>` variables a file of those columns writes. A changing scene's
+/// file names its species before its columns are built (`SceneModel::aerosol_species`,
+/// the same set from the scene's layers).
+pub fn aerosol_species_of(columns: &[&[ExpectedProfile]]) -> Vec<usize> {
     let mut present: Vec<usize> = (columns.iter().flat_map(|col| col.iter()))
         .flat_map(|e| e.alpha_aer_by_species.iter().map(|s| s.0))
         .collect();
     present.sort_unstable();
     present.dedup();
+    present
+}
+
+/// The aerosol extinction by CAMS species at the bin centre (a model-field scene with
+/// aerosol, docs/file-format.md "Aerosol by species"): one (column, channel, bin)
+/// variable `alpha_aer_<species>` (`alpha_aer_aermr04`, ...) per species of `species`
+/// (the scene's, [`aerosol_species_of`]), in CAMS's order, 0 where a column has none of
+/// it; they sum to `alpha_aer`.
+fn species_variables(columns: &[&[ExpectedProfile]], species: &[usize]) -> Vec<Variable> {
+    use crate::atmosphere::aerosol_species::CAMS_SPECIES;
     let mut vars = Vec::new();
-    for s in present {
+    for &s in species {
         let species = &CAMS_SPECIES[s];
         let mut data = Vec::new();
         for e in columns.iter().flat_map(|col| col.iter()) {
