@@ -596,32 +596,6 @@ fn the_counting_paths_do_not_depend_on_the_thread_count() {
     assert!(one[4] > 0 && one[0] > 0, "{one:?}");
 }
 
-/// The stationary variance of a non-paralyzable counter's count in a window T, written
-/// here from renewal theory (Cox 1962, *Renewal Theory*, §4.5: for the equilibrium
-/// process `Var N(T) = T/μ + (2/μ)∫₀ᵀ H(s) ds − (T/μ)²`, μ = τ + 1/n the mean interval,
-/// H the renewal function `Σ_k P(kτ + Γ(k, n) ≤ s)`), with `∫₀ᵀ P(Γ(k,1) ≤ n(s − kτ)) ds =
-/// (y·F_k(y) − k·F_{k+1}(y))/n`, `y = n(T − kτ)`, F_k the Gamma(k, 1) CDF
-/// `1 − Σ_{j<k} e^{−y}y^j/j!` (summed here).
-fn stationary_window_variance(n: f64, tau: f64, t: f64) -> f64 {
-    let mu = tau + 1.0 / n;
-    let f = |k: u32, y: f64| {
-        let (mut sum, mut term) = (0.0, (-y).exp());
-        for j in 0..k {
-            sum += term;
-            term *= y / f64::from(j + 1);
-        }
-        1.0 - sum
-    };
-    let mut integral = 0.0;
-    let mut k = 1u32;
-    while f64::from(k) * tau < t {
-        let y = n * (t - f64::from(k) * tau);
-        integral += (y * f(k, y) - f64::from(k) * f(k + 1, y)) / n;
-        k += 1;
-    }
-    t / mu + 2.0 / mu * integral - (t / mu).powi(2)
-}
-
 /// Issue 36 item 2: the recorded variance where the count nears its ceiling Δt/τ. Deep
 /// in a long window of constant rate (the state entering a bin then stationary) the law
 /// `validate` uses equals the stationary window variance of renewal theory written here
@@ -640,7 +614,7 @@ fn the_recorded_variance_is_the_windows_own_at_high_rates() {
     for (x, low) in [(1.0, 1.02), (10.0, 1.5), (40.0, 5.0)] {
         let n = x / tau;
         let (_, var) = d.recorded_mean_and_variance(&vec![n * dt; 400]);
-        let want = stationary_window_variance(n, tau, dt);
+        let want = common::reference::nonparalyzable_window_variance(n, tau, dt);
         assert!(
             (var[399] / want - 1.0).abs() < 5e-3,
             "nτ = {x}: {} vs {want}",

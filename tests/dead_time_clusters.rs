@@ -12,6 +12,8 @@
 //! ~1e-4 of the shots, hence 3·10⁷ shots there. With τ 1 % too long in the photon path's
 //! sweep the four photon-path checks at 300 MHz fail (χ² 111–194, limit 29.9; issue 41).
 
+mod common;
+
 use lidarsim::detector::dead_time::{DeadTimePath, DeadTimedShots};
 use lidarsim::detector::{DeadTime, DeadTimeModel};
 use lidarsim::sampling::ShotSampler;
@@ -262,28 +264,6 @@ fn the_arrival_walk_follows_the_exact_laws() {
     assert!(failed.is_empty(), "{failed:#?}");
 }
 
-/// The stationary variance of a non-paralyzable counter's count in a window T (renewal
-/// theory, Cox 1962 §4.5; as written in `tests/dead_time.rs`, repeated here).
-fn nonparalyzable_window_variance(n: f64, tau: f64, t: f64) -> f64 {
-    let mu = tau + 1.0 / n;
-    let f = |k: u32, y: f64| {
-        let (mut sum, mut term) = (0.0, (-y).exp());
-        for j in 0..k {
-            sum += term;
-            term *= y / f64::from(j + 1);
-        }
-        1.0 - sum
-    };
-    let mut integral = 0.0;
-    let mut k = 1u32;
-    while f64::from(k) * tau < t {
-        let y = n * (t - f64::from(k) * tau);
-        integral += (y * f(k, y) - f64::from(k) * f(k + 1, y)) / n;
-        k += 1;
-    }
-    t / mu + 2.0 / mu * integral - (t / mu).powi(2)
-}
-
 /// The stationary variance of a paralyzable counter's count in a window T ≥ τ: a record
 /// at s is an arrival with none in (s − τ, s), so records at u < v have the product
 /// density `n²e^{−2nτ}` for v − u > τ and 0 below (disjoint empty intervals), whence
@@ -332,7 +312,7 @@ fn the_arrival_walk_has_the_renewal_mean_and_variance() {
             let (want_mean, want_var) = match model {
                 DeadTimeModel::Nonparalyzable => (
                     n * dt / (1.0 + n * TAU),
-                    nonparalyzable_window_variance(n, TAU, dt),
+                    common::reference::nonparalyzable_window_variance(n, TAU, dt),
                 ),
                 DeadTimeModel::Paralyzable => (
                     n * dt * (-n * TAU).exp(),

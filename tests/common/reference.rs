@@ -850,3 +850,29 @@ pub fn cos_solar_zenith(unix_s: f64, lat_deg: f64, lon_deg: f64) -> f64 {
     let (phi, delta) = (lat_deg.to_radians(), declination.to_radians());
     phi.sin() * delta.sin() + phi.cos() * delta.cos() * h.cos()
 }
+
+/// The stationary variance of a non-paralyzable counter's count in a window T, written
+/// here from renewal theory (Cox 1962, *Renewal Theory*, §4.5: for the equilibrium
+/// process `Var N(T) = T/μ + (2/μ)∫₀ᵀ H(s) ds − (T/μ)²`, μ = τ + 1/n the mean interval,
+/// H the renewal function `Σ_k P(kτ + Γ(k, n) ≤ s)`), with `∫₀ᵀ P(Γ(k,1) ≤ n(s − kτ)) ds =
+/// (y·F_k(y) − k·F_{k+1}(y))/n`, `y = n(T − kτ)`, F_k the Gamma(k, 1) CDF
+/// `1 − Σ_{j<k} e^{−y}y^j/j!` (summed here).
+pub fn nonparalyzable_window_variance(n: f64, tau: f64, t: f64) -> f64 {
+    let mu = tau + 1.0 / n;
+    let f = |k: u32, y: f64| {
+        let (mut sum, mut term) = (0.0, (-y).exp());
+        for j in 0..k {
+            sum += term;
+            term *= y / f64::from(j + 1);
+        }
+        1.0 - sum
+    };
+    let mut integral = 0.0;
+    let mut k = 1u32;
+    while f64::from(k) * tau < t {
+        let y = n * (t - f64::from(k) * tau);
+        integral += (y * f(k, y) - f64::from(k) * f(k + 1, y)) / n;
+        k += 1;
+    }
+    t / mu + 2.0 / mu * integral - (t / mu).powi(2)
+}
