@@ -155,6 +155,31 @@ fn temperature_pressure_and_liquid_extinction_are_the_hand_values() {
     assert!(liquid > 300, "{liquid} liquid levels");
 }
 
+/// The fields read in runs of profiles (a box per run, memory flat in the track) give
+/// the same columns, bit for bit, whatever the run's bound: one box for the whole pass,
+/// one per profile, and runs of a few profiles; the model-level (netCDF-4) and
+/// pressure-level (netCDF-3) fixtures. (With the box's index made to drop the latitude
+/// offset, `Slab::index`, the per-profile reads go wrong and this test fails.)
+#[test]
+fn the_columns_are_the_same_whatever_the_runs_the_fields_are_read_in() {
+    let (_, m, mut samples) = shipped();
+    // the pass's points at times across the whole file
+    let (raw, _) = model_level_raw();
+    let (t0, t1) = (raw.time[0], raw.time[raw.time.len() - 1]);
+    let n = samples.len() as f64;
+    for (i, s) in samples.iter_mut().enumerate() {
+        s.time_s = t0 + (t1 - t0) * i as f64 / n;
+    }
+    for file in ["era5_like_model_levels.nc", "era5_like_pressure_levels.nc"] {
+        let files = [fixture(file)];
+        let whole = read::columns_in_runs(&m, &files, &samples, usize::MAX).unwrap();
+        for cap in [1, 5_000, 40_000] {
+            let runs = read::columns_in_runs(&m, &files, &samples, cap).unwrap();
+            assert!(whole == runs, "{file}: runs of at most {cap} cells differ");
+        }
+    }
+}
+
 /// The netCDF-3 pressure-level fixture (temperature packed as int16 with
 /// scale_factor / add_offset, latitudes north to south): temperature, pressure (the
 /// level coordinate, hPa) and height (geopotential / g₀) equal the hand values within

@@ -49,6 +49,42 @@ pub struct ScenarioConfig {
 }
 
 impl ScenarioConfig {
+    /// A copy of the config without its scene: what one column of the scene is built
+    /// from (`Track::column_config`). Cloning the scene too would copy every segment of
+    /// the track for every column, quadratic in the track length (a day of model fields
+    /// has ~1e5 segments). The destructuring names every field, so that a new one is
+    /// not forgotten here.
+    pub fn clone_without_scene(&self) -> ScenarioConfig {
+        let ScenarioConfig {
+            name,
+            description,
+            instrument,
+            platform,
+            acquisition,
+            atmosphere,
+            background,
+            surface,
+            scene: _,
+            orbit,
+            simulation,
+            multiple_scattering,
+        } = self;
+        ScenarioConfig {
+            name: name.clone(),
+            description: description.clone(),
+            instrument: instrument.clone(),
+            platform: platform.clone(),
+            acquisition: acquisition.clone(),
+            atmosphere: atmosphere.clone(),
+            background: background.clone(),
+            surface: surface.clone(),
+            scene: None,
+            orbit: orbit.clone(),
+            simulation: simulation.clone(),
+            multiple_scattering: multiple_scattering.clone(),
+        }
+    }
+
     /// Every file the config names, with its key, as written (relative to the config
     /// file): the molecular profile file, the scene's curtain, model fields and aerosol
     /// optics table. A key that names a

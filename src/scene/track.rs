@@ -241,7 +241,7 @@ impl Track {
     /// The config of one column: the segment's layers, aerosol, surface, water vapour and molecules in place of
     /// the atmosphere's, its absent broken layers removed and its present ones whole.
     pub fn column_config(&self, base: &ScenarioConfig, c: Column) -> ScenarioConfig {
-        let mut cfg = base.clone();
+        let mut cfg = base.clone_without_scene();
         let segment = base.scene.as_ref().and_then(|s| s.segments.get(c.segment));
         if let Some(seg) = segment {
             match &seg.aerosol {
@@ -276,7 +276,6 @@ impl Track {
                 ..l.clone()
             })
             .collect();
-        cfg.scene = None;
         cfg
     }
 }

@@ -22,6 +22,7 @@ pub mod grid;
 pub mod names;
 pub mod read;
 pub mod reader;
+pub mod slab;
 pub mod subcolumns;
 
 use std::path::PathBuf;

@@ -8,9 +8,10 @@
 use std::path::PathBuf;
 
 use super::column::{FieldColumn, Level, STANDARD_GRAVITY, build};
-use super::grid::{Axes, Weight, parse_time_units};
+use super::grid::{Axes, parse_time_units};
 use super::names::{Quantity, candidates, factor, quantity};
 use super::reader::{Fail, Files, Var};
+use super::slab::{Boxed, MAX_SLAB_CELLS, Slab, Vertical, runs};
 use crate::config::ModelFieldsConfig;
 
 /// Where and when a profile samples the fields.
@@ -104,11 +105,24 @@ fn monotonic(x: &[f64], rising_only: bool) -> bool {
     up || (!rising_only && x.windows(2).all(|w| w[1] < w[0]))
 }
 
-/// The columns of `samples` from the files `paths` of `cfg`.
+/// The columns of `samples` from the files `paths` of `cfg`, the fields read in runs of
+/// profiles of at most [`MAX_SLAB_CELLS`] cells each.
 pub fn columns(
     cfg: &ModelFieldsConfig,
     paths: &[PathBuf],
     samples: &[Sample],
+) -> Result<Vec<FieldColumn>, Fail> {
+    columns_in_runs(cfg, paths, samples, MAX_SLAB_CELLS)
+}
+
+/// [`columns`] with the fields read in runs of profiles whose box has at most
+/// `max_cells` cells (a profile's own box always read whole): the same columns
+/// whatever the bound.
+pub fn columns_in_runs(
+    cfg: &ModelFieldsConfig,
+    paths: &[PathBuf],
+    samples: &[Sample],
+    max_cells: usize,
 ) -> Result<Vec<FieldColumn>, Fail> {
     let files = Files::open(paths)?;
     let first = || files.path(0).to_path_buf();
@@ -195,27 +209,18 @@ pub fn columns(
             })?;
         weights.push(w);
     }
-    let all = weights.iter().flatten();
-    let span = |f: fn(&Weight) -> usize| {
-        let (lo, hi) = all
-            .clone()
-            .map(f)
-            .fold((usize::MAX, 0), |(a, b), i| (a.min(i), b.max(i)));
-        (lo, hi - lo + 1)
-    };
-    let (t0, ct) = span(|w| w.t);
-    let (y0, cy) = span(|w| w.y);
-    let (x0, cx) = span(|w| w.x);
-    let cells = ct * nl * cy * cx;
-    crate::resources::require_memory(
-        &format!("{}: the model fields' slab", first().display()),
-        (cells * 8 * (LEVEL_ROLES.len() + 4)) as f64,
-    )
-    .map_err(|e| (first(), e.to_string()))?;
-    // read a role's slab: per level (t, level, y, x) or surface (t, y, x) / (y, x)
-    let read = |v: &Var, role: &str, per_level: bool| -> Result<Vec<f64>, Fail> {
+    // read a role's box: per level (t, level, y, x) or surface (t, y, x) / (y, x)
+    let read = |v: &Var, role: &str, per_level: bool, b: &Slab| -> Result<Vec<f64>, Fail> {
         let f = units(&files, v, role)?;
         let fail = |why: String| (at(v), format!("`{}`: {why}", v.name));
+        let Slab {
+            t0,
+            ct,
+            y0,
+            cy,
+            x0,
+            cx,
+        } = *b;
         let (start, count) = match (per_level, &v.shape[..]) {
             (true, [a, b, c, d]) if [*a, *b, *c, *d] == [nt, nl, ny, nx] => {
                 (vec![t0, 0, y0, x0], vec![ct, nl, cy, cx])
@@ -260,10 +265,7 @@ pub fn columns(
         // ERA5's `z` is geopotential on pressure levels, the surface's on model levels
         let v = v
             .filter(|v| role != "geopotential" || v.shape.len() == 4 && v.shape[1] == nl && nl > 1);
-        per_level.push(match v {
-            Some(v) => Some((read(&v, role, true)?, v)),
-            None => None,
-        });
+        per_level.push(v);
     }
     // the CAMS aerosol species (with an optics table): the requested, else all found
     let mut species = Vec::new();
@@ -301,19 +303,18 @@ pub fn columns(
                     ),
                 )
             })?;
-            species.push((index, read(&v, "aerosol", true)?));
+            species.push((index, v));
         }
     }
-    let surface = |role: &str| -> Result<Option<Vec<f64>>, Fail> {
-        match find(&files, cfg, role)? {
-            Some(v) if !(v.shape.len() == 4 && v.shape[1] == nl && nl > 1) => {
-                Ok(Some(read(&v, role, false)?))
-            }
-            _ => Ok(None),
-        }
-    };
-    let ps = surface("surface_pressure")?;
-    let zs = surface("surface_geopotential")?;
+    let surface =
+        |role: &str| -> Result<Option<Var>, Fail> {
+            Ok(find(&files, cfg, role)?
+                .filter(|v| !(v.shape.len() == 4 && v.shape[1] == nl && nl > 1)))
+        };
+    let (ps_v, zs_v) = (
+        surface("surface_pressure")?,
+        surface("surface_geopotential")?,
+    );
     // the level coordinate's own meaning: pressure or height, if its units say so
     let lev_units = files.text_attr(&lev_v, "units").unwrap_or_default();
     let lev_p = factor(Quantity::Pressure, &lev_units)
@@ -357,63 +358,75 @@ pub fn columns(
             ),
         ));
     }
-    if hybrid.is_some() && !has(5) && ps.is_none() {
+    if hybrid.is_some() && !has(5) && ps_v.is_none() {
         return Err((
             first(),
             "hybrid levels need the surface pressure: no surface_pressure variable".into(),
         ));
     }
-    // sample each profile
-    let index = |w: &Weight, k: usize| (((w.t - t0) * nl + k) * cy + (w.y - y0)) * cx + (w.x - x0);
-    let index2 = |w: &Weight| ((w.t - t0) * cy + (w.y - y0)) * cx + (w.x - x0);
+    // sample each profile, the fields read by the box of a run of profiles at a time
     let mut out = Vec::with_capacity(samples.len());
-    for (p, ws) in weights.iter().enumerate() {
-        let mix = |f: &[f64], k: usize| ws.iter().map(|w| w.w * f[index(w, k)]).sum::<f64>();
-        let mix2 = |f: &[f64]| ws.iter().map(|w| w.w * f[index2(w)]).sum::<f64>();
-        let sp = ps.as_deref().map(mix2);
-        let zsurf = zs.as_deref().map(|z| mix2(z) / STANDARD_GRAVITY);
-        let value = |i: usize, k: usize| per_level[i].as_ref().map(|(f, _)| mix(f, k));
-        let mut levels = Vec::with_capacity(nl);
-        for k in 0..nl {
-            let p_pa = value(5, k)
-                .or_else(|| hybrid.as_ref().zip(sp).map(|((a, b), s)| a[k] + b[k] * s))
-                .or_else(|| lev_p.as_ref().map(|l| l[k]))
-                .unwrap_or(f64::NAN);
-            let height_m = value(6, k)
-                .or_else(|| value(7, k).map(|g| g / STANDARD_GRAVITY))
-                .or_else(|| lev_z.as_ref().map(|l| l[k]))
-                .unwrap_or(f64::NAN);
-            let level = Level {
-                p_pa,
-                t_k: value(0, k).unwrap_or(f64::NAN),
-                q: value(1, k).unwrap_or(0.0).max(0.0),
-                liquid: value(2, k).unwrap_or(0.0).max(0.0),
-                ice: value(3, k).unwrap_or(0.0).max(0.0),
-                cloud_fraction: value(4, k).unwrap_or(1.0),
-                height_m,
-                liquid_radius_um: value(8, k),
-                ice_radius_um: value(9, k),
-                aerosol_mmr: {
-                    let mut a = [0.0; 18];
-                    for (i, f) in &species {
-                        a[*i] = mix(f, k).max(0.0);
-                    }
-                    a
-                },
-            };
-            check_level(&level).map_err(|(i, why)| {
-                let v = &per_level[i].as_ref().map_or(&t_var, |(_, v)| v);
-                (
-                    at(v),
-                    format!("`{}`: {why} at level {k} of profile {p}", v.name),
-                )
-            })?;
-            levels.push(level);
+    for run in runs(&weights, nl, max_cells) {
+        let Some(b) = Slab::spanning(weights[run.clone()].iter().flatten()) else {
+            continue;
+        };
+        crate::resources::require_memory(
+            &format!("{}: the model fields' slab", first().display()),
+            (b.cells(nl) * 8 * (LEVEL_ROLES.len() + 4 + species.len())) as f64,
+        )
+        .map_err(|e| (first(), e.to_string()))?;
+        let mut fields = Vec::with_capacity(per_level.len());
+        for (v, role) in per_level.iter().zip(LEVEL_ROLES) {
+            fields.push(match v {
+                Some(v) => Some(read(v, role, true, &b)?),
+                None => None,
+            });
         }
-        out.push(
-            build(levels, sp, zsurf)
-                .map_err(|e| (at(&lev_v), format!("`{}`: {e} (profile {p})", lev_v.name)))?,
-        );
+        let mut mmr = Vec::with_capacity(species.len());
+        for (i, v) in &species {
+            mmr.push((*i, read(v, "aerosol", true, &b)?));
+        }
+        let ps = match &ps_v {
+            Some(v) => Some(read(v, "surface_pressure", false, &b)?),
+            None => None,
+        };
+        let zs = match &zs_v {
+            Some(v) => Some(read(v, "surface_geopotential", false, &b)?),
+            None => None,
+        };
+        let boxed = Boxed {
+            b,
+            levels: nl,
+            fields: &fields,
+            species: &mmr,
+        };
+        let vertical = Vertical {
+            hybrid: hybrid.as_ref(),
+            lev_p: lev_p.as_deref(),
+            lev_z: lev_z.as_deref(),
+        };
+        for p in run {
+            let sp = ps.as_deref().map(|f| boxed.mix_surface(f, &weights[p]));
+            let zsurf = zs
+                .as_deref()
+                .map(|z| boxed.mix_surface(z, &weights[p]) / STANDARD_GRAVITY);
+            let mut levels = Vec::with_capacity(nl);
+            for k in 0..nl {
+                let level = vertical.level(&boxed, &weights[p], k, sp);
+                check_level(&level).map_err(|(i, why)| {
+                    let v = per_level[i].as_ref().unwrap_or(&t_var);
+                    (
+                        at(v),
+                        format!("`{}`: {why} at level {k} of profile {p}", v.name),
+                    )
+                })?;
+                levels.push(level);
+            }
+            out.push(
+                build(levels, sp, zsurf)
+                    .map_err(|e| (at(&lev_v), format!("`{}`: {e} (profile {p})", lev_v.name)))?,
+            );
+        }
     }
     Ok(out)
 }
