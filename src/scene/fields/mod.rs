@@ -167,8 +167,6 @@ pub fn segments(
 ) -> Result<Vec<SegmentConfig>> {
     let samples = profile_samples(cfg, track, shots_per_profile, profiles)?;
     let points: Vec<Sample> = samples.iter().map(|s| s.0).collect();
-    let columns =
-        read::columns(m, files, &points).map_err(|(path, why)| Error::output(path, why))?;
     let aerosol = match &m.aerosol_optics {
         Some(path) => Some(aerosol::FieldAerosol::read(
             path,
@@ -179,41 +177,80 @@ pub fn segments(
         None => None,
     };
     let mut out = Vec::new();
-    for (p, (c, (_, length_km))) in columns.iter().zip(&samples).enumerate() {
-        let aerosol_layers = match &aerosol {
-            Some(a) => Some(
-                a.layers(c)
-                    .map_err(|e| Error::Unsupported(format!("profile {p}: {e}")))?,
-            ),
-            None => None,
-        };
-        // the config's surface at the model's height
-        let surface = cfg.surface.as_ref().zip(c.surface_height_m).map(|(s, z)| {
-            crate::config::SurfaceConfig {
+    // each column made into its segments as it is read, not kept
+    let mut failed = None;
+    read::for_each_column(
+        m,
+        files,
+        &points,
+        slab::MAX_SLAB_CELLS,
+        |p, c| match column_segments(
+            cfg,
+            m,
+            aerosol.as_ref(),
+            &c,
+            (p, samples[p].1),
+            (seed, shots_per_profile),
+        ) {
+            Ok(s) => {
+                out.extend(s);
+                Ok(())
+            }
+            Err(e) => {
+                failed = Some(e);
+                Err((PathBuf::new(), String::new()))
+            }
+        },
+    )
+    .map_err(|(path, why)| failed.take().unwrap_or_else(|| Error::output(path, why)))?;
+    Ok(out)
+}
+
+/// The segments of profile `p` (its column `c`, its stretch `length_km`): its
+/// subcolumns, each with the profile's aerosol layers, surface and molecules.
+fn column_segments(
+    cfg: &ScenarioConfig,
+    m: &ModelFieldsConfig,
+    aerosol: Option<&aerosol::FieldAerosol>,
+    c: &FieldColumn,
+    (p, length_km): (usize, f64),
+    (seed, shots_per_profile): (u64, u64),
+) -> Result<Vec<SegmentConfig>> {
+    let aerosol_layers = match aerosol {
+        Some(a) => Some(
+            a.layers(c)
+                .map_err(|e| Error::Unsupported(format!("profile {p}: {e}")))?,
+        ),
+        None => None,
+    };
+    // the config's surface at the model's height
+    let surface =
+        cfg.surface
+            .as_ref()
+            .zip(c.surface_height_m)
+            .map(|(s, z)| crate::config::SurfaceConfig {
                 altitude_km: (z / 1e3).clamp(-0.5, 9.0),
                 ..s.clone()
-            }
-        });
-        let (molecular, water_vapour) = match m.molecules {
-            FieldsMolecules::Fields => (Some(molecules(c)), Some(water_vapour(c))),
-            FieldsMolecules::Config => (None, None),
-        };
-        let segment = |length_km: f64, mut layers: Vec<LayerConfig>| SegmentConfig {
-            length_km,
-            aerosol: aerosol_layers.as_ref().map(|a| {
-                layers.extend(a.iter().cloned());
-                SegmentAerosol::Named("none".into())
-            }),
-            layers: Some(layers),
-            surface: surface.clone(),
-            water_vapour: water_vapour.clone(),
-            molecular: molecular.clone(),
-        };
-        for (share, layers) in profile_subcolumns(m, c, seed, p as u64, shots_per_profile) {
-            out.push(segment(length_km * share, layers));
-        }
-    }
-    Ok(out)
+            });
+    let (molecular, water_vapour) = match m.molecules {
+        FieldsMolecules::Fields => (Some(molecules(c)), Some(water_vapour(c))),
+        FieldsMolecules::Config => (None, None),
+    };
+    let segment = |length_km: f64, mut layers: Vec<LayerConfig>| SegmentConfig {
+        length_km,
+        aerosol: aerosol_layers.as_ref().map(|a| {
+            layers.extend(a.iter().cloned());
+            SegmentAerosol::Named("none".into())
+        }),
+        layers: Some(layers),
+        surface: surface.clone(),
+        water_vapour: water_vapour.clone(),
+        molecular: molecular.clone(),
+    };
+    Ok(profile_subcolumns(m, c, seed, p as u64, shots_per_profile)
+        .into_iter()
+        .map(|(share, layers)| segment(length_km * share, layers))
+        .collect())
 }
 
 /// The wavelength of the fields' aerosol, m: the config's laser's (each channel's

@@ -124,6 +124,24 @@ pub fn columns_in_runs(
     samples: &[Sample],
     max_cells: usize,
 ) -> Result<Vec<FieldColumn>, Fail> {
+    let mut out = Vec::with_capacity(samples.len());
+    for_each_column(cfg, paths, samples, max_cells, |_, c| {
+        out.push(c);
+        Ok(())
+    })?;
+    Ok(out)
+}
+
+/// Each column of `samples` in order, handed to `each` with its profile index as soon as
+/// it is sampled (so that a caller keeping less than the column holds less than every
+/// column), the fields read in runs of at most `max_cells` cells.
+pub fn for_each_column(
+    cfg: &ModelFieldsConfig,
+    paths: &[PathBuf],
+    samples: &[Sample],
+    max_cells: usize,
+    mut each: impl FnMut(usize, FieldColumn) -> Result<(), Fail>,
+) -> Result<(), Fail> {
     let files = Files::open(paths)?;
     let first = || files.path(0).to_path_buf();
     let need = |role: &str| -> Result<Var, Fail> {
@@ -365,7 +383,6 @@ pub fn columns_in_runs(
         ));
     }
     // sample each profile, the fields read by the box of a run of profiles at a time
-    let mut out = Vec::with_capacity(samples.len());
     for run in runs(&weights, nl, max_cells) {
         let Some(b) = Slab::spanning(weights[run.clone()].iter().flatten()) else {
             continue;
@@ -422,13 +439,14 @@ pub fn columns_in_runs(
                 })?;
                 levels.push(level);
             }
-            out.push(
+            each(
+                p,
                 build(levels, sp, zsurf)
                     .map_err(|e| (at(&lev_v), format!("`{}`: {e} (profile {p})", lev_v.name)))?,
-            );
+            )?;
         }
     }
-    Ok(out)
+    Ok(())
 }
 
 /// A sampled level's values within physics: `Err((role index, why))`.
