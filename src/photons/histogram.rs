@@ -71,7 +71,7 @@ fn read_1d<T: hdf5::H5Type + Copy>(ds: &Dataset, path: &Path, a: usize, b: usize
 /// The profiles of `path`'s events at bin width `bin_width_m` (default: the run's) and
 /// `shots` shots per profile (default: the run's).
 pub fn histogram(path: &Path, bin_width_m: Option<f64>, shots: Option<u64>) -> Result<Histogram> {
-    let f = File::open(path).map_err(|e| input_err(path, format!("cannot open: {e}")))?;
+    let f = File::open(path).map_err(|e| bad(path, format!("cannot open it as HDF5 ({})", crate::error::describe_hdf5_error(&e.to_string()))))?;
     let run_shots: u64 = attr(&f, path, "shots_per_profile")?;
     let run_profiles: u64 = attr(&f, path, "profiles")?;
     let rep: f64 = attr(&f, path, "rep_rate_hz")?;

@@ -164,6 +164,14 @@ fn append<T: H5Type>(ds: &Dataset, len: usize, data: &[T]) -> hdf5::Result<()> {
     ds.write_slice(data, len..len + data.len())
 }
 
+/// A new group of `parent` without times (the same bytes for the same run).
+fn group(parent: &Group, name: &str) -> hdf5::Result<Group> {
+    parent
+        .create_group_builder()
+        .with_gcpl(|gcpl| gcpl.obj_track_times(false))
+        .create(name)
+}
+
 /// The new file at `path` (shown as `shown`): LIBVER 1.8, no times (same bytes for the
 /// same run).
 fn create(path: &Path) -> hdf5::Result<File> {
@@ -190,11 +198,11 @@ impl PhotonWriter {
             num_attr(&file, "bin_range_m", &h.bin_range_m)?;
             num_attr(&file, "seed", &h.seed)?;
             str_attr(&file, "config", &h.config_toml)?;
-            let bins = file.create_group("bins")?;
+            let bins = group(&file, "bins")?;
             fixed(&bins, "range_start", &h.bin_start_range_m, "m")?;
-            let chans = file.create_group("channels")?;
+            let chans = group(&file, "channels")?;
             fixed(&chans, "pixels", &h.pixels, "1")?;
-            let heights = file.create_group("heights")?;
+            let heights = group(&file, "heights")?;
             let origin_list = ORIGINS
                 .iter()
                 .map(|(o, n)| format!("{}={n}", *o as u8))
@@ -212,7 +220,7 @@ impl PhotonWriter {
                 growing::<u8>(&heights, "truth_origin", "1", "where the event came from (truth)")?,
             ];
             str_attr(&events[8], "flag_meanings", &origin_list)?;
-            let pulse = file.create_group("pulse")?;
+            let pulse = group(&file, "pulse")?;
             let shots = vec![
                 growing::<f64>(&pulse, "delta_time", "s", "time of the shot since the run's start")?,
                 growing::<f64>(&pulse, "energy", "J", "emitted pulse energy (the profile's mean)")?,
