@@ -44,11 +44,17 @@ fn histogram_is_counts(name: &str, config: &str, profiles: usize, more: &[&str])
     let dir = scratch(name);
     run(&dir, config, &profiles.to_string(), more);
     let counts = raw_counts(&dir.join("raw.h5"));
-    assert!(counts.iter().sum::<u64>() > 1000, "{name}: too few counts to judge");
+    assert!(
+        counts.iter().sum::<u64>() > 1000,
+        "{name}: too few counts to judge"
+    );
     let h = lidarsim::photons::histogram::histogram(&dir.join("ph.h5"), None, None).unwrap();
     assert_eq!(h.profiles, profiles);
     assert_eq!(h.counts.len(), counts.len());
-    assert!(h.counts == counts, "{name}: the events' histogram is not the raw counts");
+    assert!(
+        h.counts == counts,
+        "{name}: the events' histogram is not the raw counts"
+    );
     // the origins add up to the counts
     for i in 0..counts.len() {
         let s: u64 = h.by_origin.iter().map(|o| o[i]).sum();
@@ -66,9 +72,12 @@ fn histogram_is_counts(name: &str, config: &str, profiles: usize, more: &[&str])
         .read_raw::<u64>()
         .unwrap()[0];
     let dr = h.bin_range_m;
-    let h2 =
-        lidarsim::photons::histogram::histogram(&dir.join("ph.h5"), Some(2.0 * dr), Some(2 * shots))
-            .unwrap();
+    let h2 = lidarsim::photons::histogram::histogram(
+        &dir.join("ph.h5"),
+        Some(2.0 * dr),
+        Some(2 * shots),
+    )
+    .unwrap();
     let (nb2, np2) = (nb.div_ceil(2), profiles.div_ceil(2));
     assert_eq!((h2.bins, h2.profiles), (nb2, np2));
     let mut want = vec![0u64; np2 * nc * nb2];
@@ -79,7 +88,10 @@ fn histogram_is_counts(name: &str, config: &str, profiles: usize, more: &[&str])
             }
         }
     }
-    assert!(h2.counts == want, "{name}: 2x histogram is not the summed counts");
+    assert!(
+        h2.counts == want,
+        "{name}: 2x histogram is not the summed counts"
+    );
 }
 
 #[test]
@@ -185,18 +197,55 @@ fn refusals() {
     let i = is2.to_str().unwrap();
     let e = refused(
         &dir,
-        &["simulate", d, "-o", "raw.h5", "--profiles", "2", "--method", "aggregate", "--photons", "ph.h5"],
+        &[
+            "simulate",
+            d,
+            "-o",
+            "raw.h5",
+            "--profiles",
+            "2",
+            "--method",
+            "aggregate",
+            "--photons",
+            "ph.h5",
+        ],
     );
-    assert!(e.contains("--photons") && e.contains("--method shot"), "{e}");
+    assert!(
+        e.contains("--photons") && e.contains("--method shot"),
+        "{e}"
+    );
     let e = refused(
         &dir,
-        &["simulate", d, "-o", "raw.h5", "--profiles", "2", "--method", "shot", "--components", "--photons", "ph.h5"],
+        &[
+            "simulate",
+            d,
+            "-o",
+            "raw.h5",
+            "--profiles",
+            "2",
+            "--method",
+            "shot",
+            "--components",
+            "--photons",
+            "ph.h5",
+        ],
     );
     assert!(e.contains("--photons") && e.contains("--components"), "{e}");
     // a day of ICESat-2 day-time events (~1e11): the photon file cannot fit
     let e = refused(
         &dir,
-        &["simulate", i, "-o", "raw.h5", "--profiles", "2e6", "--set", "background.radiance=7e17", "--photons", "ph.h5"],
+        &[
+            "simulate",
+            i,
+            "-o",
+            "raw.h5",
+            "--profiles",
+            "2e6",
+            "--set",
+            "background.radiance=7e17",
+            "--photons",
+            "ph.h5",
+        ],
     );
     assert!(e.contains("--photons"), "{e}");
     // the histogram's own inputs

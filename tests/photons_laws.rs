@@ -46,15 +46,17 @@ fn ks(sorted: &[f64], cdf: impl Fn(f64) -> f64) -> f64 {
 fn erf(x: f64) -> f64 {
     let z = x.abs();
     let t = 1.0 / (1.0 + 0.5 * z);
-    let r = t * (-z * z - 1.265_512_23
-        + t * (1.000_023_68
-            + t * (0.374_091_96
-                + t * (0.096_784_18
-                    + t * (-0.186_288_06
-                        + t * (0.278_868_07
-                            + t * (-1.135_203_98
-                                + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
-        .exp();
+    let r = t
+        * (-z * z - 1.265_512_23
+            + t * (1.000_023_68
+                + t * (0.374_091_96
+                    + t * (0.096_784_18
+                        + t * (-0.186_288_06
+                            + t * (0.278_868_07
+                                + t * (-1.135_203_98
+                                    + t * (1.488_515_87
+                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
+            .exp();
     if x >= 0.0 { 1.0 - r } else { r - 1.0 }
 }
 
@@ -91,7 +93,10 @@ fn surface_echo_events_follow_the_pulse_inside_the_bin() {
         .zip(&origin)
         .filter(|(_, o)| **o == 4)
         .map(|(r, _)| {
-            assert!(*r >= ra && *r < ra + dr, "a surface event at {r} m, outside its bin");
+            assert!(
+                *r >= ra && *r < ra + dr,
+                "a surface event at {r} m, outside its bin"
+            );
             (r - ra) / dr
         })
         .collect();
@@ -106,8 +111,13 @@ fn surface_echo_events_follow_the_pulse_inside_the_bin() {
     let d = ks(&x, model);
     assert!(d < crit, "KS {d} ≥ {crit} (n = {n}): not the pulse's shape");
     let d_uniform = ks(&x, |u| u.clamp(0.0, 1.0));
-    assert!(d_uniform > crit, "uniform placement not rejected: {d_uniform} < {crit}");
-    eprintln!("surface events {n}: KS {d:.4} vs pulse, {d_uniform:.4} vs uniform, critical {crit:.4}");
+    assert!(
+        d_uniform > crit,
+        "uniform placement not rejected: {d_uniform} < {crit}"
+    );
+    eprintln!(
+        "surface events {n}: KS {d:.4} vs pulse, {d_uniform:.4} vs uniform, critical {crit:.4}"
+    );
 }
 
 const TAU_S: f64 = 3.2e-9;
@@ -157,7 +167,11 @@ fn per_pixel_dead_time_of_the_events() {
     let one = n / (1.0 + n * TAU_S);
     let total = per_pixel.iter().sum::<u64>() as f64 / time_s;
     let rel = total / (16.0 * one) - 1.0;
-    assert!(rel.abs() < 5e-3, "16 pixels record {total:.5e} Hz, 16 × renewal {:.5e} ({rel:+.2e})", 16.0 * one);
+    assert!(
+        rel.abs() < 5e-3,
+        "16 pixels record {total:.5e} Hz, 16 × renewal {:.5e} ({rel:+.2e})",
+        16.0 * one
+    );
     for (p, &k) in per_pixel.iter().enumerate() {
         let r = k as f64 / time_s / one - 1.0;
         assert!(r.abs() < 2e-2, "pixel {p}: {r:+.2e} from the renewal rate");
@@ -198,5 +212,8 @@ fn dark_and_background_events_in_their_shares() {
     let z = (dark - n * p) / (n * p * (1.0 - p)).sqrt();
     eprintln!("dark {dark}, sky {sky}, expected share {p:.5}, z = {z:.2}");
     assert!(n > 1e6, "too few events ({n})");
-    assert!(z.abs() < 3.29, "dark events {dark} of {n}: z = {z:.2} from the share {p}");
+    assert!(
+        z.abs() < 3.29,
+        "dark events {dark} of {n}: z = {z:.2} from the share {p}"
+    );
 }

@@ -54,7 +54,12 @@ fn bad(path: &Path, what: impl std::fmt::Display) -> Error {
 fn attr<T: hdf5::H5Type>(f: &File, path: &Path, name: &str) -> Result<T> {
     f.attr(name)
         .and_then(|a| a.read_scalar::<T>())
-        .map_err(|_| bad(path, format!("attribute `{name}` missing or of the wrong type")))
+        .map_err(|_| {
+            bad(
+                path,
+                format!("attribute `{name}` missing or of the wrong type"),
+            )
+        })
 }
 
 fn dataset(f: &File, path: &Path, name: &str) -> Result<Dataset> {
@@ -62,7 +67,12 @@ fn dataset(f: &File, path: &Path, name: &str) -> Result<Dataset> {
         .map_err(|_| bad(path, format!("dataset `{name}` missing")))
 }
 
-fn read_1d<T: hdf5::H5Type + Copy>(ds: &Dataset, path: &Path, a: usize, b: usize) -> Result<Vec<T>> {
+fn read_1d<T: hdf5::H5Type + Copy>(
+    ds: &Dataset,
+    path: &Path,
+    a: usize,
+    b: usize,
+) -> Result<Vec<T>> {
     ds.read_slice_1d::<T, _>(a..b)
         .map(|v| v.iter().copied().collect())
         .map_err(|e| input_err(path, format!("cannot read `{}`: {e}", ds.name())))
@@ -71,7 +81,15 @@ fn read_1d<T: hdf5::H5Type + Copy>(ds: &Dataset, path: &Path, a: usize, b: usize
 /// The profiles of `path`'s events at bin width `bin_width_m` (default: the run's) and
 /// `shots` shots per profile (default: the run's).
 pub fn histogram(path: &Path, bin_width_m: Option<f64>, shots: Option<u64>) -> Result<Histogram> {
-    let f = File::open(path).map_err(|e| bad(path, format!("cannot open it as HDF5 ({})", crate::error::describe_hdf5_error(&e.to_string()))))?;
+    let f = File::open(path).map_err(|e| {
+        bad(
+            path,
+            format!(
+                "cannot open it as HDF5 ({})",
+                crate::error::describe_hdf5_error(&e.to_string())
+            ),
+        )
+    })?;
     let run_shots: u64 = attr(&f, path, "shots_per_profile")?;
     let run_profiles: u64 = attr(&f, path, "profiles")?;
     let rep: f64 = attr(&f, path, "rep_rate_hz")?;
@@ -163,9 +181,7 @@ pub fn histogram(path: &Path, bin_width_m: Option<f64>, shots: Option<u64>) -> R
         latitude.push(read_1d::<f64>(&lat_ds, path, s, s + 1)?[0]);
         longitude.push(read_1d::<f64>(&lon_ds, path, s, s + 1)?[0]);
     }
-    let range_m = (0..bins)
-        .map(|j| r0 + (j as f64 + 0.5) * width)
-        .collect();
+    let range_m = (0..bins).map(|j| r0 + (j as f64 + 0.5) * width).collect();
     Ok(Histogram {
         counts,
         by_origin,

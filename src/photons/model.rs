@@ -101,10 +101,7 @@ impl EchoInBin {
         if self.sigma <= 0.0 {
             return self.centre;
         }
-        let (lo, hi) = (
-            self.cdf_at(0.0),
-            self.cdf_at(1.0),
-        );
+        let (lo, hi) = (self.cdf_at(0.0), self.cdf_at(1.0));
         let u = lo + (hi - lo) * rng.random::<f64>();
         let x = self.centre
             + self.sigma * std::f64::consts::SQRT_2 * statrs::function::erf::erf_inv(2.0 * u - 1.0);
@@ -220,7 +217,10 @@ impl ChannelModel {
         let x = u * c[6];
         let k = c.iter().position(|&s| x < s).unwrap_or_else(|| {
             // rounding at the top: the last origin with a share
-            (0..7).rev().find(|&k| self.expected(b)[k] > 0.0).unwrap_or(6)
+            (0..7)
+                .rev()
+                .find(|&k| self.expected(b)[k] > 0.0)
+                .unwrap_or(6)
         });
         SHARED_ORIGINS[k]
     }

@@ -125,11 +125,19 @@ fn str_attr(loc: &Location, name: &str, value: &str) -> hdf5::Result<()> {
 }
 
 fn num_attr<T: H5Type>(loc: &Location, name: &str, value: &T) -> hdf5::Result<()> {
-    loc.new_attr::<T>().shape(()).create(name)?.write_scalar(value)
+    loc.new_attr::<T>()
+        .shape(())
+        .create(name)?
+        .write_scalar(value)
 }
 
 /// A growing 1-D dataset of `T`, chunked and compressed, with its units and description.
-fn growing<T: H5Type>(g: &Group, name: &str, units: &str, long_name: &str) -> hdf5::Result<Dataset> {
+fn growing<T: H5Type>(
+    g: &Group,
+    name: &str,
+    units: &str,
+    long_name: &str,
+) -> hdf5::Result<Dataset> {
     let ds = g
         .new_dataset::<T>()
         .chunk(FLUSH_EVENTS)
@@ -209,23 +217,78 @@ impl PhotonWriter {
                 .collect::<Vec<_>>()
                 .join(" ");
             let events = vec![
-                growing::<f64>(&heights, "delta_time", "s", "time of the event's shot since the run's start")?,
-                growing::<u64>(&heights, "ph_id_pulse", "1", "shot index in the run, 0-based")?,
-                growing::<u16>(&heights, "ph_id_channel", "1", "channel index (attribute `channels` of the file)")?,
+                growing::<f64>(
+                    &heights,
+                    "delta_time",
+                    "s",
+                    "time of the event's shot since the run's start",
+                )?,
+                growing::<u64>(
+                    &heights,
+                    "ph_id_pulse",
+                    "1",
+                    "shot index in the run, 0-based",
+                )?,
+                growing::<u16>(
+                    &heights,
+                    "ph_id_channel",
+                    "1",
+                    "channel index (attribute `channels` of the file)",
+                )?,
                 growing::<u16>(&heights, "ph_id_pixel", "1", "detector pixel, 0-based")?,
-                growing::<u32>(&heights, "ph_id_bin", "1", "the raw file's bin holding the event")?,
+                growing::<u32>(
+                    &heights,
+                    "ph_id_bin",
+                    "1",
+                    "the raw file's bin holding the event",
+                )?,
                 growing::<f64>(&heights, "range", "m", "range from the instrument")?,
-                growing::<f64>(&heights, "time_of_flight", "s", "time since the pulse left (negative in pre-trigger bins)")?,
-                growing::<f64>(&heights, "h_ph", "m", "height above sea level along the beam")?,
-                growing::<u8>(&heights, "truth_origin", "1", "where the event came from (truth)")?,
+                growing::<f64>(
+                    &heights,
+                    "time_of_flight",
+                    "s",
+                    "time since the pulse left (negative in pre-trigger bins)",
+                )?,
+                growing::<f64>(
+                    &heights,
+                    "h_ph",
+                    "m",
+                    "height above sea level along the beam",
+                )?,
+                growing::<u8>(
+                    &heights,
+                    "truth_origin",
+                    "1",
+                    "where the event came from (truth)",
+                )?,
             ];
             str_attr(&events[8], "flag_meanings", &origin_list)?;
             let pulse = group(&file, "pulse")?;
             let shots = vec![
-                growing::<f64>(&pulse, "delta_time", "s", "time of the shot since the run's start")?,
-                growing::<f64>(&pulse, "energy", "J", "emitted pulse energy (the profile's mean)")?,
-                growing::<f64>(&pulse, "latitude", "degrees_north", "latitude of the footprint (NaN without an orbit)")?,
-                growing::<f64>(&pulse, "longitude", "degrees_east", "longitude of the footprint (NaN without an orbit)")?,
+                growing::<f64>(
+                    &pulse,
+                    "delta_time",
+                    "s",
+                    "time of the shot since the run's start",
+                )?,
+                growing::<f64>(
+                    &pulse,
+                    "energy",
+                    "J",
+                    "emitted pulse energy (the profile's mean)",
+                )?,
+                growing::<f64>(
+                    &pulse,
+                    "latitude",
+                    "degrees_north",
+                    "latitude of the footprint (NaN without an orbit)",
+                )?,
+                growing::<f64>(
+                    &pulse,
+                    "longitude",
+                    "degrees_east",
+                    "longitude of the footprint (NaN without an orbit)",
+                )?,
             ];
             Ok((events, shots))
         };

@@ -88,8 +88,7 @@ pub(super) fn draw_into<S: ProfileSink>(
         let mut events: Vec<Vec<crate::photons::Event>> = Vec::new();
         let mut drawn: Vec<(DrawnProfile, Option<SceneDraw>)> = match &models {
             Some(models) => {
-                let both: Vec<(DrawnProfile, Vec<crate::photons::Event>)> = (first_profile
-                    ..last)
+                let both: Vec<(DrawnProfile, Vec<crate::photons::Event>)> = (first_profile..last)
                     .into_par_iter()
                     .map(|p| {
                         (!cancelled(opts)).then(|| {

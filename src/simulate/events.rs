@@ -13,7 +13,7 @@ use crate::sampling::{self, stream_rng};
 use crate::scenario::{ExpectedProfile, Scenario};
 
 /// Mixed into a stream's seed for its events' draws (shot, origin, place in the bin).
-const EVENT_STREAM: u64 = 0x5EED_0F_E7E4_75A1;
+const EVENT_STREAM: u64 = 0x5EED_0FE7_E475_A1C3;
 /// Block of the events' stream that draws the afterpulses' events.
 const AFTERPULSE_EVENTS: u64 = u64::MAX - 1;
 
@@ -48,9 +48,9 @@ pub fn channel_model(c: &Scenario, e: &ExpectedProfile) -> Result<ChannelModel> 
         let mut echo_part = 0.0;
         if let Some(s) = echo.filter(|s| s.range_m >= ra && s.range_m < rb) {
             let r = s.range_m;
-            echo_part = path.overlap().eta(r) * s.integrated_backscatter_sr
-                * path.two_way_transmission(r)
-                / (r * r);
+            echo_part =
+                path.overlap().eta(r) * s.integrated_backscatter_sr * path.two_way_transmission(r)
+                    / (r * r);
             let j = (((r - ra) / w) as usize).min(SUB_BINS - 1);
             p.sub[j] = (p.sub[j] - echo_part).max(0.0);
             let fwhm_s = c.loaded.config.instrument.pulse_fwhm_s.unwrap_or(0.0);
@@ -209,10 +209,26 @@ pub fn profile_events(
         StreamSampler::Afterpulsed(inner, a) => {
             let mut recorded = vec![0u64; counts.len()];
             let first = out.len();
-            profile_events(inner, seed, profile, shots, model, channel, &mut recorded, out);
-            let pixels = out[first..].iter().map(|e| e.pixel).max().map_or(1, |p| p + 1);
-            let mut rng =
-                sampling::stream_rng(seed ^ AFTERPULSE_STREAM, profile, sampling::AGGREGATE_STREAM);
+            profile_events(
+                inner,
+                seed,
+                profile,
+                shots,
+                model,
+                channel,
+                &mut recorded,
+                out,
+            );
+            let pixels = out[first..]
+                .iter()
+                .map(|e| e.pixel)
+                .max()
+                .map_or(1, |p| p + 1);
+            let mut rng = sampling::stream_rng(
+                seed ^ AFTERPULSE_STREAM,
+                profile,
+                sampling::AGGREGATE_STREAM,
+            );
             let mut after = vec![0u64; counts.len()];
             a.add_profile(&mut rng, &recorded, &mut after);
             let mut rng = stream_rng(seed ^ EVENT_STREAM, profile, AFTERPULSE_EVENTS);
@@ -259,7 +275,16 @@ pub(super) fn draw_profile_with_events(
     for (k, streams) in channels.iter().enumerate() {
         let acc = &mut counts[k * n_bins..(k + 1) * n_bins];
         for (sampler, seed) in streams {
-            profile_events(sampler, *seed, p, shots, &models[k], k as u16, acc, &mut events);
+            profile_events(
+                sampler,
+                *seed,
+                p,
+                shots,
+                &models[k],
+                k as u16,
+                acc,
+                &mut events,
+            );
         }
     }
     events.sort_unstable_by(|a, b| {

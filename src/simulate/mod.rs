@@ -114,15 +114,7 @@ pub fn run(
     writer.finish()?;
     let events = photons.map(|p| p.finish()).transpose()?;
     outputs.commit()?;
-    let mut done = summary(
-        lidar,
-        &planned,
-        opts,
-        rows,
-        start,
-        total_counts,
-        drawing,
-    );
+    let mut done = summary(lidar, &planned, opts, rows, start, total_counts, drawing);
     if let (Some(n), Some(p)) = (events, &opts.photons) {
         done.photons = Some((p.clone(), n, sizes::expected_events(lidar, &planned)));
     }
@@ -134,7 +126,11 @@ fn photon_header(lidar: &Lidar, planned: &RunPlan) -> crate::photons::PhotonHead
     let first = lidar.first();
     let g = &first.geometry;
     crate::photons::PhotonHeader {
-        channels: lidar.channels.iter().map(|c| c.channel_name.clone()).collect(),
+        channels: lidar
+            .channels
+            .iter()
+            .map(|c| c.channel_name.clone())
+            .collect(),
         pixels: lidar
             .channels
             .iter()

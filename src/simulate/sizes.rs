@@ -116,10 +116,17 @@ pub(super) fn check_sizes(
         // the batch written), and the file's buffers
         let events = expected_events(lidar, planned) * profiles as f64 / planned.profiles as f64;
         let per_profile = events / profiles.max(1) as f64;
-        let held = 2.0 * batch as f64 * per_profile * 2.0 * std::mem::size_of::<crate::photons::Event>() as f64
-            + crate::photons::writer::FLUSH_EVENTS as f64 * (crate::photons::FILE_BYTES_PER_EVENT + 32.0);
+        let held = 2.0
+            * batch as f64
+            * per_profile
+            * 2.0
+            * std::mem::size_of::<crate::photons::Event>() as f64
+            + crate::photons::writer::FLUSH_EVENTS as f64
+                * (crate::photons::FILE_BYTES_PER_EVENT + 32.0);
         crate::resources::require_memory(
-            &format!("--photons: holding the events of {batch} profiles (~{per_profile:.3e} a profile)"),
+            &format!(
+                "--photons: holding the events of {batch} profiles (~{per_profile:.3e} a profile)"
+            ),
             memory + held,
         )?;
         let bytes = events * crate::photons::FILE_BYTES_PER_EVENT
