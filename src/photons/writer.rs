@@ -36,7 +36,7 @@ pub struct EventRow {
     pub tof_s: f64,
     /// Height above sea level, m.
     pub h_ph: f64,
-    /// Origin code ([`super::Origin`]).
+    /// Origin code (`model::Origin`).
     pub origin: u8,
 }
 
