@@ -143,6 +143,41 @@ fn histogram_equals_counts_through_the_walk() {
             "instrument.detector.dead_time_s=1.5e-8",
         ],
     );
+    // the walk's registrations: a paralyzable detector records an arrival only τ or
+    // more after the one before, so a pixel's events of one shot are τ apart at least
+    // (events placed in their bins without the walk would not be)
+    let f = hdf5::File::open(scratch_path("ph-walk").join("ph.h5")).unwrap();
+    let read_u = |n: &str| f.dataset(n).unwrap().read_raw::<u64>().unwrap();
+    let (pulse, channel, pixel) = (
+        read_u("heights/ph_id_pulse"),
+        read_u("heights/ph_id_channel"),
+        read_u("heights/ph_id_pixel"),
+    );
+    let tof = f
+        .dataset("heights/time_of_flight")
+        .unwrap()
+        .read_raw::<f64>()
+        .unwrap();
+    let mut last: std::collections::HashMap<(u64, u64, u64), f64> = Default::default();
+    let mut pairs = 0;
+    for i in 0..tof.len() {
+        let key = (pulse[i], channel[i], pixel[i]);
+        if let Some(t) = last.insert(key, tof[i]) {
+            assert!(tof[i] >= t, "events out of time order");
+            assert!(
+                tof[i] - t >= 1.5e-8 - 1e-12,
+                "two events {} s apart",
+                tof[i] - t
+            );
+            pairs += 1;
+        }
+    }
+    assert!(pairs > 1000, "too few pairs ({pairs}) to judge the spacing");
+}
+
+/// The scratch directory `scratch(name)` made (without emptying it).
+fn scratch_path(name: &str) -> std::path::PathBuf {
+    std::env::temp_dir().join(format!("lidarsim-shard-{name}-{}", std::process::id()))
 }
 
 #[test]
