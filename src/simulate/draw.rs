@@ -85,16 +85,25 @@ pub(super) fn draw_into<S: ProfileSink>(
         let last = (first_profile + batch).min(rows.end);
         let draw_start = Instant::now();
         let n_channels = lidar.channels.len();
-        let mut events: Vec<Vec<crate::photons::Event>> = Vec::new();
+        let mut events: Vec<Vec<crate::photons::EventRow>> = Vec::new();
         let mut drawn: Vec<(DrawnProfile, Option<SceneDraw>)> = match &models {
             Some(models) => {
-                let both: Vec<(DrawnProfile, Vec<crate::photons::Event>)> = (first_profile..last)
+                let both: Vec<(DrawnProfile, Vec<crate::photons::EventRow>)> = (first_profile
+                    ..last)
                     .into_par_iter()
                     .map(|p| {
                         (!cancelled(opts)).then(|| {
-                            super::events::draw_profile_with_events(
+                            let (d, e) = super::events::draw_profile_with_events(
                                 &channels, models, p as u64, shots, n_bins, &energy,
-                            )
+                            );
+                            let rows = event_rows(
+                                &first.geometry,
+                                first.instrument.rep_rate_hz,
+                                p as u64,
+                                shots,
+                                &e,
+                            );
+                            (d, rows)
                         })
                     })
                     .collect::<Option<_>>()?;
@@ -146,7 +155,6 @@ pub(super) fn draw_into<S: ProfileSink>(
     let column_rows = |c: &BuiltColumn| {
         content::column_rows(lidar, expected, &c.expected, species, shots, layout)
     };
-    let geometry = &first.geometry;
     let rep_rate_hz = first.instrument.rep_rate_hz;
     let mut write_batch = |(first_profile, drawn, took, counted, events): Batch,
                            new_columns: Vec<(usize, Arc<BuiltColumn>)>,
@@ -196,7 +204,7 @@ pub(super) fn draw_into<S: ProfileSink>(
                         (g.latitude_deg, g.longitude_deg)
                     })
                 };
-                write_events(w, geometry, rep_rate_hz, index as u64, shots, ev)?;
+                w.events(ev)?;
                 let shot_rows: Vec<crate::photons::ShotRow> = (0..shots)
                     .map(|s| {
                         let t = (index as u64 * shots + s) as f64 / rep_rate_hz;
@@ -286,7 +294,7 @@ type Batch = (
     Vec<DrawnProfile>,
     Duration,
     u64,
-    Vec<Vec<crate::photons::Event>>,
+    Vec<Vec<crate::photons::EventRow>>,
 );
 
 /// The origin models of a run's channels, refusing a run whose events cannot be drawn.
@@ -322,18 +330,17 @@ fn photon_models(
         .collect()
 }
 
-/// Writes profile `profile`'s events (of `shots` shots) to `w`: shot times, ranges, times
-/// of flight and heights on the run's bins.
-fn write_events(
-    w: &mut crate::photons::PhotonWriter,
+/// Profile `profile`'s events (of `shots` shots) as the photon file stores them: shot
+/// times, ranges, times of flight and heights on the run's bins (on the drawing threads).
+fn event_rows(
     geometry: &crate::geometry::Geometry,
     rep_rate_hz: f64,
     profile: u64,
     shots: u64,
     events: &[crate::photons::Event],
-) -> Result<()> {
+) -> Vec<crate::photons::EventRow> {
     let c = crate::constants::SPEED_OF_LIGHT_M_PER_S;
-    let rows: Vec<crate::photons::EventRow> = events
+    events
         .iter()
         .map(|e| {
             let (ra, rb) = geometry.bin_range_bounds(e.bin as usize);
@@ -351,8 +358,7 @@ fn write_events(
                 origin: e.origin as u8,
             }
         })
-        .collect();
-    w.events(&rows)
+        .collect()
 }
 
 pub fn progress_bar(show: bool, profiles: usize) -> indicatif::ProgressBar {

@@ -112,15 +112,15 @@ pub(super) fn check_sizes(
         crate::resources::require_disk("-o", &opts.output, file)?;
     }
     if let Some(p) = &opts.photons {
-        // the events of one profile of every channel, held twice (the batch drawn and
-        // the batch written), and the file's buffers
+        // the events of a batch of profiles (as the file's rows), held twice (the batch
+        // drawn and the batch written), and the file's buffers
         let events = expected_events(lidar, planned) * profiles as f64 / planned.profiles as f64;
         let per_profile = events / profiles.max(1) as f64;
         let held = 2.0
             * batch as f64
             * per_profile
             * 2.0
-            * std::mem::size_of::<crate::photons::Event>() as f64
+            * std::mem::size_of::<crate::photons::EventRow>() as f64
             + crate::photons::writer::FLUSH_EVENTS as f64
                 * (crate::photons::FILE_BYTES_PER_EVENT + 32.0);
         crate::resources::require_memory(
