@@ -647,3 +647,28 @@ pub fn onboard_combine(partials: &[PathBuf], report: Option<&Path>) -> Result<()
     outputs.write(id, |w| crate::onboard::report::write_report(w, &input))?;
     outputs.commit()
 }
+
+/// `lidarsim histogram PHOTONS.h5 -o OUT.h5 --bin-width M --shots N`: the profiles of a
+/// photon file's events ([`crate::photons::histogram`]).
+pub fn histogram(
+    photons: &Path,
+    output: &Path,
+    bin_width_m: Option<f64>,
+    shots: Option<u64>,
+) -> Result<()> {
+    let mut outputs = Outputs::new([photons]);
+    let out = outputs.add("-o", output, Stream::Binary)?;
+    let h = crate::photons::histogram::histogram(photons, bin_width_m, shots)?;
+    crate::photons::histogram::write_histogram(&h, outputs.temp_path(out)?, output)?;
+    outputs.commit()?;
+    crate::tell!(
+        "Wrote {}: {} profiles × {} channels × {} bins of {} m, {} counts in all.",
+        output.display(),
+        h.profiles,
+        h.channels.len(),
+        h.bins,
+        h.bin_range_m,
+        h.counts.iter().sum::<u64>()
+    );
+    Ok(())
+}

@@ -31,6 +31,7 @@ pub mod limits;
 pub mod loaded;
 pub mod onboard;
 pub mod output;
+pub mod photons;
 pub mod receiver;
 pub mod resources;
 pub mod safe_file;

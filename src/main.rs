@@ -126,6 +126,25 @@ enum Command {
         /// with that seed), not with the seed derived from it and the rotation.
         #[arg(long, requires = "calibration")]
         same_noise: bool,
+        /// Also write every recorded event (time-tagged photons with their truth) to
+        /// this HDF5 file (docs/photons.md); shot-level runs of photon counters only.
+        #[arg(long, value_name = "PHOTONS.h5")]
+        photons: Option<PathBuf>,
+    },
+    /// Profiles of a photon file's events (`simulate --photons`) at any range
+    /// resolution and shot accumulation, with their truth (docs/photons.md).
+    Histogram {
+        /// The photon file.
+        photons: PathBuf,
+        /// The histogram file (HDF5).
+        #[arg(short = 'o', long = "output", value_name = "OUT.h5")]
+        output: PathBuf,
+        /// Bin width, m (default: the run's).
+        #[arg(long, value_name = "M")]
+        bin_width: Option<f64>,
+        /// Shots per profile (default: the run's).
+        #[arg(long, value_name = "N")]
+        shots: Option<u64>,
     },
     /// Merges the shards of a run (`simulate --shard K/N`) into the file of the whole run.
     Merge {
@@ -361,6 +380,7 @@ fn main() -> ExitCode {
             shard,
             calibration,
             same_noise,
+            photons,
         } => shard
             .map(ShardArg::resolve)
             .transpose()
@@ -379,6 +399,7 @@ fn main() -> ExitCode {
                     ),
                     shard,
                     cancel: None,
+                    photons: photons.clone(),
                 };
                 match calibration {
                     Some(c) => lidarsim::commands::simulate_calibration(
@@ -394,6 +415,12 @@ fn main() -> ExitCode {
                 }
             })
             .map(|()| true),
+        Command::Histogram {
+            photons,
+            output,
+            bin_width,
+            shots,
+        } => lidarsim::commands::histogram(photons, output, *bin_width, *shots).map(|()| true),
         Command::Merge { output, shards } => {
             lidarsim::commands::merge(output, shards).map(|()| true)
         }

@@ -219,7 +219,8 @@ def expect(config: ConfigLike, channel: Optional[str] = None) -> xr.Dataset:
 
 def simulate(config: ConfigLike, profiles: Optional[int] = None, seed: Optional[int] = None,
              method: Optional[str] = None, path: Union[str, os.PathLike, None] = None,
-             progress: bool = False, truth: Optional[str] = None) -> Union[xr.Dataset, Path]:
+             progress: bool = False, truth: Optional[str] = None,
+             photons: Union[str, os.PathLike, None] = None) -> Union[xr.Dataset, Path]:
     """``lidarsim simulate CONFIG -o PATH``: with ``path``, writes the raw file exactly
     as the CLI does (same seed, same counts and truth) and returns its path; without,
     returns the raw file's Dataset built in memory (no file, no compression; the same
@@ -227,7 +228,9 @@ def simulate(config: ConfigLike, profiles: Optional[int] = None, seed: Optional[
     ``method``: ``"auto"``, ``"shot"`` or ``"aggregate"``; ``progress``: the CLI's
     progress bar on a terminal; ``truth``: ``"compact"`` (the default,
     ``simulation.truth``) or ``"per-profile"`` (``--truth per-profile``: a changing
-    scene's expectations also as format 3's (profile, channel, bin) arrays). Ctrl-C stops
+    scene's expectations also as format 3's (profile, channel, bin) arrays); ``photons``:
+    also write every recorded event to this photon file (``--photons``, docs/photons.md;
+    with ``path`` only). Ctrl-C stops
     the run before its next profile and leaves no file. A scene beyond a photon
     counter's range gives a ``UserWarning``."""
     cfg = _config(config)
@@ -235,9 +238,12 @@ def simulate(config: ConfigLike, profiles: Optional[int] = None, seed: Optional[
     if path is not None:
         with _terminable():
             warning = _lidarsim.simulate(cfg.loaded, os.fspath(path), profiles, seed, method,
-                                         truth, progress)
+                                         truth, progress,
+                                         None if photons is None else os.fspath(photons))
         _warn(warning)
         return Path(path)
+    if photons is not None:
+        raise ValueError("photons are written to a file: give path= too (the raw file's)")
     with _terminable():
         variables, root, warning, _times = _lidarsim.simulate_in_memory(
             cfg.loaded, profiles, seed, method, truth, progress)

@@ -287,7 +287,7 @@ fn expect<'py>(
 /// (same seed, same counts and truth; the `history` attribute names this call);
 /// returns the run's warning, if any.
 #[pyfunction]
-#[pyo3(signature = (loaded, output, profiles=None, seed=None, method=None, truth=None, progress=false))]
+#[pyo3(signature = (loaded, output, profiles=None, seed=None, method=None, truth=None, progress=false, photons=None))]
 #[allow(clippy::too_many_arguments)]
 fn simulate(
     py: Python<'_>,
@@ -298,11 +298,13 @@ fn simulate(
     method: Option<&str>,
     truth: Option<&str>,
     progress: bool,
+    photons: Option<PathBuf>,
 ) -> PyResult<Option<String>> {
     let opts = run_options(loaded, output, profiles, seed, method, truth, progress)?;
     let summary = interruptible(py, |cancel| {
         let opts = RunOptions {
             cancel: Some(cancel),
+            photons,
             ..opts
         };
         lidarsim::commands::simulate_quietly(

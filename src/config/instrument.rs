@@ -17,6 +17,11 @@ pub struct InstrumentConfig {
     /// Relative rms shot-to-shot pulse-energy jitter (0 = none; at most 0.2).
     #[serde(default)]
     pub pulse_energy_jitter: f64,
+    /// Laser pulse duration, full width at half maximum, s: the surface echo's width in
+    /// the photon file's event times (`simulate --photons`, docs/photons.md); absent =
+    /// a pulse far shorter than a bin (the echo at the surface range).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pulse_fwhm_s: Option<f64>,
     /// Pulse repetition frequency fL, Hz.
     pub rep_rate_hz: f64,
     /// Effective telescope collecting area A, m².

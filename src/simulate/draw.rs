@@ -33,6 +33,7 @@ pub(super) fn draw_into<S: ProfileSink>(
     rows: std::ops::Range<usize>,
     opts: &RunOptions,
     sink: &mut S,
+    mut photons: Option<&mut crate::photons::PhotonWriter>,
 ) -> Result<(u64, Duration)> {
     let first = lidar.first();
     let RunPlan {
@@ -62,6 +63,11 @@ pub(super) fn draw_into<S: ProfileSink>(
             stream_samplers(e, method, energy, components, seed, &c.instrument)
         })
         .collect();
+    // the events' truth of each channel (`--photons`)
+    let models: Option<Vec<crate::photons::ChannelModel>> = match photons {
+        Some(_) => Some(photon_models(lidar, planned, &channels)?),
+        None => None,
+    };
     // each channel's laser line has its own nominal energy; the shots' factors are shared
     let nominal_energy_j: Vec<f64> = lidar
         .channels
@@ -79,25 +85,55 @@ pub(super) fn draw_into<S: ProfileSink>(
         let last = (first_profile + batch).min(rows.end);
         let draw_start = Instant::now();
         let n_channels = lidar.channels.len();
-        let mut drawn: Vec<(DrawnProfile, Option<SceneDraw>)> = (first_profile..last)
-            .into_par_iter()
-            .map(|p| {
-                if cancelled(opts) {
-                    return None;
-                }
-                Some(match scene {
-                    Some(sc) => {
-                        let (d, draw) =
-                            draw_scene_counts(sc, seed, n_channels, p as u64, n_bins, &energy);
-                        (d, Some(draw))
+        let mut events: Vec<Vec<crate::photons::EventRow>> = Vec::new();
+        let mut drawn: Vec<(DrawnProfile, Option<SceneDraw>)> = match &models {
+            Some(models) => {
+                let both: Vec<(DrawnProfile, Vec<crate::photons::EventRow>)> = (first_profile
+                    ..last)
+                    .into_par_iter()
+                    .map(|p| {
+                        (!cancelled(opts)).then(|| {
+                            let (d, e) = super::events::draw_profile_with_events(
+                                &channels, models, p as u64, shots, n_bins, &energy,
+                            );
+                            let rows = event_rows(
+                                &first.geometry,
+                                first.instrument.rep_rate_hz,
+                                p as u64,
+                                shots,
+                                &e,
+                            );
+                            (d, rows)
+                        })
+                    })
+                    .collect::<Option<_>>()?;
+                both.into_iter()
+                    .map(|(d, e)| {
+                        events.push(e);
+                        (d, None)
+                    })
+                    .collect()
+            }
+            None => (first_profile..last)
+                .into_par_iter()
+                .map(|p| {
+                    if cancelled(opts) {
+                        return None;
                     }
-                    None => (
-                        draw_profile(&channels, p as u64, shots, n_bins, components, &energy),
-                        None,
-                    ),
+                    Some(match scene {
+                        Some(sc) => {
+                            let (d, draw) =
+                                draw_scene_counts(sc, seed, n_channels, p as u64, n_bins, &energy);
+                            (d, Some(draw))
+                        }
+                        None => (
+                            draw_profile(&channels, p as u64, shots, n_bins, components, &energy),
+                            None,
+                        ),
+                    })
                 })
-            })
-            .collect::<Option<_>>()?;
+                .collect::<Option<_>>()?,
+        };
         let took = draw_start.elapsed();
         // the truth of a changing scene's profiles (the model, not the draw)
         if let Some(sc) = scene {
@@ -113,13 +149,14 @@ pub(super) fn draw_into<S: ProfileSink>(
             .map(|(d, _)| d.counts.iter().sum::<u64>())
             .sum();
         let drawn: Vec<DrawnProfile> = drawn.into_iter().map(|(d, _)| d).collect();
-        Some((first_profile, drawn, took, counted))
+        Some((first_profile, drawn, took, counted, events))
     };
     let species = scene.as_ref().map_or(&[][..], |sc| &sc.aerosol_species[..]);
     let column_rows = |c: &BuiltColumn| {
         content::column_rows(lidar, expected, &c.expected, species, shots, layout)
     };
-    let mut write_batch = |(first_profile, drawn, took, counted): Batch,
+    let rep_rate_hz = first.instrument.rep_rate_hz;
+    let mut write_batch = |(first_profile, drawn, took, counted, events): Batch,
                            new_columns: Vec<(usize, Arc<BuiltColumn>)>,
                            sink: &mut S| {
         drawing += took;
@@ -160,6 +197,28 @@ pub(super) fn draw_into<S: ProfileSink>(
                 columns: d.columns.as_ref().map_or(STATIC_COLUMN.0, |c| &c.0),
                 column_weights: d.columns.as_ref().map_or(STATIC_COLUMN.1, |c| &c.1),
             })?;
+            if let (Some(w), Some(ev)) = (photons.as_deref_mut(), events.get(k)) {
+                let place = |t: f64| {
+                    orbit.as_ref().map_or((f64::NAN, f64::NAN), |o| {
+                        let g = o.position(t);
+                        (g.latitude_deg, g.longitude_deg)
+                    })
+                };
+                w.events(ev)?;
+                let shot_rows: Vec<crate::photons::ShotRow> = (0..shots)
+                    .map(|s| {
+                        let t = (index as u64 * shots + s) as f64 / rep_rate_hz;
+                        let (latitude, longitude) = place(t);
+                        crate::photons::ShotRow {
+                            delta_time: t,
+                            energy_j: pulse_energy_j[0],
+                            latitude,
+                            longitude,
+                        }
+                    })
+                    .collect();
+                w.shots(&shot_rows)?;
+            }
         }
         progress.inc(drawn.len() as u64);
         Ok::<(), Error>(())
@@ -230,7 +289,77 @@ pub(super) fn run_batch(lidar: &Lidar, planned: &RunPlan) -> usize {
 
 /// A drawn batch: its first profile, its profiles, the time their counts took to draw,
 /// and the sum of their counts.
-type Batch = (usize, Vec<DrawnProfile>, Duration, u64);
+type Batch = (
+    usize,
+    Vec<DrawnProfile>,
+    Duration,
+    u64,
+    Vec<Vec<crate::photons::EventRow>>,
+);
+
+/// The origin models of a run's channels, refusing a run whose events cannot be drawn.
+fn photon_models(
+    lidar: &Lidar,
+    planned: &RunPlan,
+    channels: &[Vec<(StreamSampler, u64)>],
+) -> Result<Vec<crate::photons::ChannelModel>> {
+    if planned.scene.is_some() {
+        return Err(Error::Unsupported(
+            "--photons: a scene that changes along the track (scene, orbit columns, model \
+             fields) is not supported yet; the events are drawn for a static scene"
+                .into(),
+        ));
+    }
+    if planned.components {
+        return Err(Error::Unsupported(
+            "--photons and --components: the events carry their origin (truth_origin); \
+             drop --components"
+                .into(),
+        ));
+    }
+    for (c, streams) in lidar.channels.iter().zip(channels) {
+        for (s, _) in streams {
+            super::events::check_sampler(s, &c.channel_name)?;
+        }
+    }
+    lidar
+        .channels
+        .iter()
+        .zip(&planned.expected)
+        .map(|(c, e)| super::events::channel_model(c, e))
+        .collect()
+}
+
+/// Profile `profile`'s events (of `shots` shots) as the photon file stores them: shot
+/// times, ranges, times of flight and heights on the run's bins (on the drawing threads).
+fn event_rows(
+    geometry: &crate::geometry::Geometry,
+    rep_rate_hz: f64,
+    profile: u64,
+    shots: u64,
+    events: &[crate::photons::Event],
+) -> Vec<crate::photons::EventRow> {
+    let c = crate::constants::SPEED_OF_LIGHT_M_PER_S;
+    events
+        .iter()
+        .map(|e| {
+            let (ra, rb) = geometry.bin_range_bounds(e.bin as usize);
+            let range_m = ra + e.frac * (rb - ra);
+            let pulse = profile * shots + u64::from(e.shot);
+            crate::photons::EventRow {
+                delta_time: pulse as f64 / rep_rate_hz,
+                pulse,
+                channel: e.channel,
+                pixel: e.pixel,
+                bin: e.bin,
+                range_m,
+                tof_s: 2.0 * range_m / c,
+                h_ph: geometry.altitude_at_range(range_m),
+                origin: e.origin as u8,
+            }
+        })
+        .collect()
+}
 
 pub fn progress_bar(show: bool, profiles: usize) -> indicatif::ProgressBar {
     if !show {

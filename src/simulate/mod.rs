@@ -23,6 +23,7 @@ mod columns;
 mod draw;
 mod drawn;
 mod energy;
+pub mod events;
 pub mod merge;
 mod method;
 mod orbit;
@@ -80,20 +81,78 @@ pub fn run(
         None => (0..planned.profiles, None),
     };
     let spec = shard_spec.as_ref().unwrap_or(&planned.spec);
+    let mut outputs = outputs;
+    let photon_file = match &opts.photons {
+        Some(p) => {
+            if opts.shard.is_some() {
+                return Err(Error::Unsupported(
+                    "--photons with --shard: write the photons of a whole run".into(),
+                ));
+            }
+            Some(outputs.add("--photons", p, crate::safe_file::Stream::Binary)?)
+        }
+        None => None,
+    };
     check_sizes(lidar, &planned, rows.len(), opts, true)?;
     let mut writer = RawFileWriter::create(outputs.temp_path(raw)?, &opts.output, spec)?;
-    let (total_counts, drawing) = draw_into(lidar, &planned, rows.clone(), opts, &mut writer)?;
-    writer.finish()?;
-    outputs.commit()?;
-    Ok(summary(
+    let mut photons = match (photon_file, &opts.photons) {
+        (Some(id), Some(shown)) => Some(crate::photons::PhotonWriter::create(
+            outputs.temp_path(id)?,
+            shown,
+            &photon_header(lidar, &planned),
+        )?),
+        _ => None,
+    };
+    let (total_counts, drawing) = draw_into(
         lidar,
         &planned,
+        rows.clone(),
         opts,
-        rows,
-        start,
-        total_counts,
-        drawing,
-    ))
+        &mut writer,
+        photons.as_mut(),
+    )?;
+    writer.finish()?;
+    let events = photons.map(|p| p.finish()).transpose()?;
+    outputs.commit()?;
+    let mut done = summary(lidar, &planned, opts, rows, start, total_counts, drawing);
+    if let (Some(n), Some(p)) = (events, &opts.photons) {
+        done.photons = Some((p.clone(), n, sizes::expected_events(lidar, &planned)));
+    }
+    Ok(done)
+}
+
+/// What the photon file says of its run.
+fn photon_header(lidar: &Lidar, planned: &RunPlan) -> crate::photons::PhotonHeader {
+    let first = lidar.first();
+    let g = &first.geometry;
+    crate::photons::PhotonHeader {
+        channels: lidar
+            .channels
+            .iter()
+            .map(|c| c.channel_name.clone())
+            .collect(),
+        pixels: lidar
+            .channels
+            .iter()
+            .map(|c| c.instrument.dead_time.map_or(1, |d| d.pixels.max(1)))
+            .collect(),
+        bin_start_range_m: (0..g.n_bins).map(|i| g.bin_range_bounds(i).0).collect(),
+        bin_range_m: g.bin_range_m,
+        bin_width_s: first.loaded.config.instrument.bin_width_s,
+        shots_per_profile: first.shots_per_profile(),
+        profiles: planned.profiles as u64,
+        rep_rate_hz: first.instrument.rep_rate_hz,
+        seed: planned.seed,
+        config_toml: planned
+            .spec
+            .root_attributes
+            .iter()
+            .find_map(|(k, v)| match v {
+                crate::output::raw_file::AttrValue::Str(s) if k == "config" => Some(s.clone()),
+                _ => None,
+            })
+            .unwrap_or_default(),
+    }
 }
 
 /// Runs the Monte Carlo as [`run`] does (the same counts and truth for the same seed) and
@@ -115,7 +174,12 @@ pub fn run_in_memory(lidar: &Lidar, opts: &RunOptions) -> Result<(MemoryFile, Ru
     )?;
     check_sizes(lidar, &planned, rows.len(), opts, false)?;
     let mut sink = MemoryWriter::new(&planned.spec)?;
-    let (total_counts, drawing) = draw_into(lidar, &planned, rows.clone(), opts, &mut sink)?;
+    if opts.photons.is_some() {
+        return Err(Error::Unsupported(
+            "photons are written to a file: run simulate to a path".into(),
+        ));
+    }
+    let (total_counts, drawing) = draw_into(lidar, &planned, rows.clone(), opts, &mut sink, None)?;
     let file = sink.finish()?;
     Ok((
         file,

@@ -42,6 +42,9 @@ pub struct RunOptions {
     /// Stops the run when set (the Python module's Ctrl-C): `simulate::run` then returns
     /// [`Error::Interrupted`] before its next profile, its temporary file removed.
     pub cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
+    /// Also write every recorded event to this photon file (`--photons`,
+    /// docs/photons.md); shot-level runs of photon-counting channels only.
+    pub photons: Option<PathBuf>,
 }
 
 /// What a run is before any count is drawn: the resolved seed, method, model and scene,

@@ -33,6 +33,18 @@ pub(super) fn batch_profiles(n_bins: usize, streams: usize) -> usize {
     ((4 << 20) / (n_bins * streams).max(1)).clamp(1, super::scene::MAX_BATCH_PROFILES)
 }
 
+/// Events a `--photons` run of `planned` is expected to write: the expected recorded
+/// counts summed over its channels, bins, shots and profiles.
+pub(super) fn expected_events(lidar: &Lidar, planned: &RunPlan) -> f64 {
+    let shots = lidar.first().shots_per_profile() as f64;
+    let per_shot: f64 = planned
+        .expected
+        .iter()
+        .map(|e| e.recorded.iter().sum::<f64>())
+        .sum();
+    per_shot * shots * planned.profiles as f64
+}
+
 /// Estimated size of the raw file, bytes: per stored count the smaller of its width and
 /// the compressed Poisson entropy of its mean.
 pub fn estimated_file_bytes(totals: &[f64], shots: u64, profiles: usize, streams: usize) -> f64 {
@@ -98,6 +110,32 @@ pub(super) fn check_sizes(
     if to_disk {
         let file = estimated_file_bytes(totals, shots, profiles, streams);
         crate::resources::require_disk("-o", &opts.output, file)?;
+    }
+    if let Some(p) = &opts.photons {
+        // the events of a batch of profiles (as the file's rows), held twice (the batch
+        // drawn and the batch written), and the file's buffers
+        let events = expected_events(lidar, planned) * profiles as f64 / planned.profiles as f64;
+        let per_profile = events / profiles.max(1) as f64;
+        let held = 2.0
+            * batch as f64
+            * per_profile
+            * 2.0
+            * std::mem::size_of::<crate::photons::EventRow>() as f64
+            + crate::photons::writer::FLUSH_EVENTS as f64
+                * (crate::photons::FILE_BYTES_PER_EVENT + 32.0);
+        crate::resources::require_memory(
+            &format!(
+                "--photons: holding the events of {batch} profiles (~{per_profile:.3e} a profile)"
+            ),
+            memory + held,
+        )?;
+        let bytes = events * crate::photons::FILE_BYTES_PER_EVENT
+            + (profiles as u64 * shots) as f64 * crate::photons::FILE_BYTES_PER_SHOT;
+        crate::resources::require_disk(
+            &format!("--photons ({events:.4e} events expected)"),
+            p,
+            bytes,
+        )?;
     }
     // the afterpulses, drawn one at a time from each profile's recorded counts
     let afterpulse_ns: f64 = lidar

@@ -32,6 +32,9 @@ pub struct RunSummary {
     pub drawing: Duration,
     /// A warning about the scene (rates beyond a photon counter's range), if any.
     pub warning: Option<String>,
+    /// With `--photons`: the photon file, the events it holds and the estimate made
+    /// before the run.
+    pub photons: Option<(PathBuf, u64, f64)>,
 }
 
 impl std::fmt::Display for RunSummary {
@@ -61,7 +64,17 @@ impl std::fmt::Display for RunSummary {
             rate(self.elapsed),
             self.drawing.as_secs_f64(),
             rate(self.drawing)
-        )
+        )?;
+        if let Some((p, n, est)) = &self.photons {
+            write!(
+                f,
+                " Wrote {}: {} events (estimated {:.4e} before the run).",
+                p.display(),
+                human_count(*n),
+                est
+            )?;
+        }
+        Ok(())
     }
 }
 
@@ -97,5 +110,6 @@ pub(super) fn summary(
         elapsed: start.elapsed(),
         drawing,
         warning: lidar.run_notes(&planned.expected),
+        photons: None,
     }
 }

@@ -20,6 +20,9 @@ impl ScenarioConfig {
         c.positive("instrument.pulse_energy_j", i.pulse_energy_j, 1e3)?;
         (owners.laser)(self, c)?;
         c.positive("instrument.rep_rate_hz", i.rep_rate_hz, 1e7)?;
+        if let Some(w) = i.pulse_fwhm_s {
+            c.positive("instrument.pulse_fwhm_s", w, 1e-3)?;
+        }
         c.positive("instrument.telescope_area_m2", i.telescope_area_m2, 1e3)?;
         c.efficiency("instrument.optical_efficiency", i.optical_efficiency)?;
         c.efficiency("instrument.receiver_efficiency", i.receiver_efficiency)?;

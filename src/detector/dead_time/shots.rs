@@ -156,6 +156,26 @@ impl DeadTimedShots {
             .as_ref()
     }
 
+    /// Where the arrival walk draws the shots: [`profile`](Self::profile)'s draws
+    /// replayed, each recorded arrival handed to `f(shot, bin, place in the bin)` (their
+    /// histogram is `profile`'s counts, bit for bit), and `true`; else `false`, nothing
+    /// drawn.
+    pub fn walk_registrations(
+        &self,
+        seed: u64,
+        profile: u64,
+        shots: u64,
+        f: impl FnMut(u64, usize, f64),
+    ) -> bool {
+        match self.by_walk() {
+            Some(w) => {
+                w.registrations(seed, profile, shots, f);
+                true
+            }
+            None => false,
+        }
+    }
+
     /// Whether the arrival walk draws this profile's shots (see [`DeadTimePath`]).
     pub fn walks(&self) -> bool {
         self.by_walk().is_some()

@@ -191,6 +191,77 @@ impl WalkShots {
         }
     }
 
+    /// [`profile`](Self::profile)'s draws replayed, the same blocks and streams, each
+    /// recorded arrival handed to `f(shot, bin, place in the bin)`: the histogram of what
+    /// `f` gets is `profile`'s counts, bit for bit (the photon file, `crate::photons`).
+    pub(super) fn registrations(
+        &self,
+        seed: u64,
+        profile: u64,
+        shots: u64,
+        mut f: impl FnMut(u64, usize, f64),
+    ) {
+        for b in 0..shots.div_ceil(SHOT_BLOCK) {
+            let n = SHOT_BLOCK.min(shots - b * SHOT_BLOCK);
+            let mut rng = stream_rng(seed ^ ARRIVAL_STREAM, profile, b);
+            for i in 0..n {
+                let shot = b * SHOT_BLOCK + i;
+                let mut emit = |bin: usize, t: f64| f(shot, bin, t - bin as f64);
+                if self.paralyzable {
+                    self.paralyzable_events(&mut rng, &mut emit);
+                } else {
+                    self.nonparalyzable_events(&mut rng, &mut emit);
+                }
+            }
+        }
+    }
+
+    /// [`paralyzable_shot`](Self::paralyzable_shot)'s draws, each recorded arrival's bin
+    /// and time (in bins) handed to `emit`.
+    fn paralyzable_events<R: Rng + Clone>(&self, rng: &mut R, emit: &mut impl FnMut(usize, f64)) {
+        let x = &ziggurat().0;
+        let (mut b, mut last) = (0usize, f64::NEG_INFINITY);
+        let mut g = exp_draw(x, rng);
+        while g < self.total {
+            b = self.bin_from(b, g);
+            let t = self.time(b, g);
+            if t - last >= self.tau {
+                emit(b, t);
+            }
+            last = t;
+            g += exp_draw(x, rng);
+        }
+    }
+
+    /// [`nonparalyzable_shot`](Self::nonparalyzable_shot)'s draws, each recorded
+    /// arrival's bin and time (in bins) handed to `emit`.
+    fn nonparalyzable_events<R: Rng + Clone>(
+        &self,
+        rng: &mut R,
+        emit: &mut impl FnMut(usize, f64),
+    ) {
+        let x = &ziggurat().0;
+        let bins = self.means.len();
+        let mut b = 0usize;
+        let mut g = exp_draw(x, rng);
+        while g < self.total {
+            b = self.bin_from(b, g);
+            emit(b, self.time(b, g));
+            let live_g = g + self.tau * self.means[b];
+            if live_g < self.starts[b + 1] {
+                g = live_g + exp_draw(x, rng);
+                continue;
+            }
+            let live = self.time(b, g) + self.tau;
+            let lb = live as usize;
+            if lb >= bins {
+                return;
+            }
+            b = lb;
+            g = self.starts[lb] + (live - lb as f64) * self.means[lb] + exp_draw(x, rng);
+        }
+    }
+
     /// One shot's recorded counts added to `acc` (the generator a local copy: kept in
     /// registers through the loop).
     #[inline(never)]

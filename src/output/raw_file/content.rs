@@ -33,7 +33,7 @@ pub struct RunInfo<'a> {
 /// with their values: the output path, the shard and the thread count. So the whole run
 /// and the merge of its shards (`lidarsim merge`) record the same history, and a
 /// run gives the same bytes whatever its output name (docs/file-format.md).
-pub const HISTORY_OMITS: [&str; 4] = ["-o", "--output", "--shard", "--threads"];
+pub const HISTORY_OMITS: [&str; 5] = ["-o", "--output", "--shard", "--threads", "--photons"];
 
 /// Options of `onboard` left out of its product's `history` besides [`HISTORY_OMITS`]:
 /// its other outputs and the partial of a shard, which do not change the product, so

@@ -1,0 +1,289 @@
+//! `simulate --photons` and `lidarsim histogram` (issue 42, docs/photons.md): the
+//! histogram of the events is the raw file's counts bit for bit (at the run's resolution,
+//! and summed at whole multiples of it); the raw file is the same bytes with and without
+//! the photons; the refusals.
+
+mod common;
+
+use common::cli::{lidarsim, ok, scratch};
+use common::config_path;
+
+/// The raw file's `counts`, as u64, C order (profile, channel, bin).
+fn raw_counts(path: &std::path::Path) -> Vec<u64> {
+    hdf5::File::open(path)
+        .unwrap()
+        .dataset("counts")
+        .unwrap()
+        .read_raw::<u64>()
+        .unwrap()
+}
+
+/// `simulate CONFIG --profiles N --method shot MORE -o raw.h5 --photons ph.h5` in `dir`.
+fn run(dir: &std::path::Path, config: &str, profiles: &str, more: &[&str]) {
+    let cfg = config_path(config);
+    let mut args = vec![
+        "simulate",
+        cfg.to_str().unwrap(),
+        "-o",
+        "raw.h5",
+        "--profiles",
+        profiles,
+        "--method",
+        "shot",
+        "--photons",
+        "ph.h5",
+    ];
+    args.extend_from_slice(more);
+    ok(lidarsim(dir, &args, &[]));
+}
+
+/// The events' histogram at the run's resolution equals the raw counts, bit for bit;
+/// at twice the bin width and twice the shots, the raw counts summed in pairs of bins
+/// and of profiles.
+fn histogram_is_counts(name: &str, config: &str, profiles: usize, more: &[&str]) {
+    let dir = scratch(name);
+    run(&dir, config, &profiles.to_string(), more);
+    let counts = raw_counts(&dir.join("raw.h5"));
+    assert!(
+        counts.iter().sum::<u64>() > 1000,
+        "{name}: too few counts to judge"
+    );
+    let h = lidarsim::photons::histogram::histogram(&dir.join("ph.h5"), None, None).unwrap();
+    assert_eq!(h.profiles, profiles);
+    assert_eq!(h.counts.len(), counts.len());
+    assert!(
+        h.counts == counts,
+        "{name}: the events' histogram is not the raw counts"
+    );
+    // the origins add up to the counts
+    for i in 0..counts.len() {
+        let s: u64 = h.by_origin.iter().map(|o| o[i]).sum();
+        assert_eq!(s, counts[i], "{name}: origins of element {i}");
+    }
+    // the CLI writes the same histogram
+    ok(lidarsim(&dir, &["histogram", "ph.h5", "-o", "h.h5"], &[]));
+    assert!(raw_counts(&dir.join("h.h5")) == counts);
+    // twice the bin width and twice the shots: sums of the raw counts
+    let (nc, nb) = (h.channels.len(), h.bins);
+    let shots = hdf5::File::open(dir.join("raw.h5"))
+        .unwrap()
+        .dataset("n_shots")
+        .unwrap()
+        .read_raw::<u64>()
+        .unwrap()[0];
+    let dr = h.bin_range_m;
+    let h2 = lidarsim::photons::histogram::histogram(
+        &dir.join("ph.h5"),
+        Some(2.0 * dr),
+        Some(2 * shots),
+    )
+    .unwrap();
+    let (nb2, np2) = (nb.div_ceil(2), profiles.div_ceil(2));
+    assert_eq!((h2.bins, h2.profiles), (nb2, np2));
+    let mut want = vec![0u64; np2 * nc * nb2];
+    for p in 0..profiles {
+        for c in 0..nc {
+            for b in 0..nb {
+                want[((p / 2) * nc + c) * nb2 + b / 2] += counts[(p * nc + c) * nb + b];
+            }
+        }
+    }
+    assert!(
+        h2.counts == want,
+        "{name}: 2x histogram is not the summed counts"
+    );
+}
+
+#[test]
+fn histogram_equals_counts_mpl_like() {
+    // dead time (non-paralyzable, 2 channels) and afterpulsing; 1,000-shot profiles
+    histogram_is_counts(
+        "ph-mpl",
+        "ground/mpl_like.toml",
+        3,
+        &["--set", "acquisition.accumulation_time_s=0.4"],
+    );
+}
+
+#[test]
+fn histogram_equals_counts_ground_532_depol() {
+    histogram_is_counts(
+        "ph-depol",
+        "ground/ground_532_depol.toml",
+        3,
+        &["--set", "acquisition.accumulation_time_s=0.4"],
+    );
+}
+
+#[test]
+fn histogram_equals_counts_icesat2_like() {
+    // 16 pixels, each with its dead time; day background for many events
+    histogram_is_counts(
+        "ph-is2",
+        "instruments/icesat2_like.toml",
+        4,
+        &["--set", "background.radiance=7e17"],
+    );
+}
+
+#[test]
+fn histogram_equals_counts_through_the_walk() {
+    // a paralyzable detector on bins narrower than 2τ: the arrival walk draws the
+    // shots, and the events are its registrations
+    histogram_is_counts(
+        "ph-walk",
+        "instruments/icesat2_like.toml",
+        2,
+        &[
+            "--set",
+            "background.radiance=7e17",
+            "--set",
+            "instrument.detector.dead_time_model=\"paralyzable\"",
+            "--set",
+            "instrument.detector.dead_time_s=1.5e-8",
+        ],
+    );
+    // the walk's registrations: a paralyzable detector records an arrival only τ or
+    // more after the one before, so a pixel's events of one shot are τ apart at least
+    // (events placed in their bins without the walk would not be)
+    let f = hdf5::File::open(scratch_path("ph-walk").join("ph.h5")).unwrap();
+    let read_u = |n: &str| f.dataset(n).unwrap().read_raw::<u64>().unwrap();
+    let (pulse, channel, pixel) = (
+        read_u("heights/ph_id_pulse"),
+        read_u("heights/ph_id_channel"),
+        read_u("heights/ph_id_pixel"),
+    );
+    let tof = f
+        .dataset("heights/time_of_flight")
+        .unwrap()
+        .read_raw::<f64>()
+        .unwrap();
+    let mut last: std::collections::HashMap<(u64, u64, u64), f64> = Default::default();
+    let mut pairs = 0;
+    for i in 0..tof.len() {
+        let key = (pulse[i], channel[i], pixel[i]);
+        if let Some(t) = last.insert(key, tof[i]) {
+            assert!(tof[i] >= t, "events out of time order");
+            assert!(
+                tof[i] - t >= 1.5e-8 - 1e-12,
+                "two events {} s apart",
+                tof[i] - t
+            );
+            pairs += 1;
+        }
+    }
+    assert!(pairs > 1000, "too few pairs ({pairs}) to judge the spacing");
+}
+
+/// The scratch directory `scratch(name)` made (without emptying it).
+fn scratch_path(name: &str) -> std::path::PathBuf {
+    std::env::temp_dir().join(format!("lidarsim-shard-{name}-{}", std::process::id()))
+}
+
+#[test]
+fn raw_file_is_the_same_bytes_with_and_without_photons() {
+    let dir = scratch("ph-bytes");
+    let cfg = config_path("ground/mpl_like.toml");
+    let base = [
+        "simulate",
+        cfg.to_str().unwrap(),
+        "--profiles",
+        "3",
+        "--method",
+        "shot",
+        "--set",
+        "acquisition.accumulation_time_s=0.4",
+    ];
+    let mut with = base.to_vec();
+    with.extend(["-o", "a.h5", "--photons", "ph.h5"]);
+    let mut without = base.to_vec();
+    without.extend(["-o", "b.h5"]);
+    ok(lidarsim(&dir, &with, &[]));
+    ok(lidarsim(&dir, &without, &[]));
+    let a = std::fs::read(dir.join("a.h5")).unwrap();
+    let b = std::fs::read(dir.join("b.h5")).unwrap();
+    assert!(a == b, "the raw file changes with --photons");
+    // and the photon file itself is the same bytes for the same seed
+    let mut again = base.to_vec();
+    again.extend(["-o", "c.h5", "--photons", "ph2.h5", "--threads", "1"]);
+    ok(lidarsim(&dir, &again, &[]));
+    let p1 = std::fs::read(dir.join("ph.h5")).unwrap();
+    let p2 = std::fs::read(dir.join("ph2.h5")).unwrap();
+    assert!(p1 == p2, "the photon file depends on the thread count");
+}
+
+/// The one line a refused run prints, its exit status non-zero, and no file left.
+fn refused(dir: &std::path::Path, args: &[&str]) -> String {
+    let out = lidarsim(dir, args, &[]);
+    assert!(!out.status.success(), "not refused: {args:?}");
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!dir.join("ph.h5").exists() && !dir.join("raw.h5").exists());
+    err
+}
+
+#[test]
+fn refusals() {
+    let dir = scratch("ph-refuse");
+    let depol = config_path("paper/scenario1.toml");
+    let is2 = config_path("instruments/icesat2_like.toml");
+    let d = depol.to_str().unwrap();
+    let i = is2.to_str().unwrap();
+    let e = refused(
+        &dir,
+        &[
+            "simulate",
+            d,
+            "-o",
+            "raw.h5",
+            "--profiles",
+            "2",
+            "--method",
+            "aggregate",
+            "--photons",
+            "ph.h5",
+        ],
+    );
+    assert!(
+        e.contains("--photons") && e.contains("--method shot"),
+        "{e}"
+    );
+    let e = refused(
+        &dir,
+        &[
+            "simulate",
+            d,
+            "-o",
+            "raw.h5",
+            "--profiles",
+            "2",
+            "--method",
+            "shot",
+            "--components",
+            "--photons",
+            "ph.h5",
+        ],
+    );
+    assert!(e.contains("--photons") && e.contains("--components"), "{e}");
+    // a day of ICESat-2 day-time events (~1e11): the photon file cannot fit
+    let e = refused(
+        &dir,
+        &[
+            "simulate",
+            i,
+            "-o",
+            "raw.h5",
+            "--profiles",
+            "2e6",
+            "--set",
+            "background.radiance=7e17",
+            "--photons",
+            "ph.h5",
+        ],
+    );
+    assert!(e.contains("--photons"), "{e}");
+    // the histogram's own inputs
+    let e = refused(&dir, &["histogram", d, "-o", "h.h5"]);
+    assert!(e.contains("photon file"), "{e}");
+}
