@@ -24,6 +24,7 @@ pub mod detector;
 pub mod error;
 pub mod figures;
 pub mod geometry;
+pub mod hdf5_ds;
 pub mod input_file;
 pub mod instrument;
 pub mod laser;

@@ -287,3 +287,71 @@ fn refusals() {
     let e = refused(&dir, &["histogram", d, "-o", "h.h5"]);
     assert!(e.contains("photon file"), "{e}");
 }
+
+/// What a retrieval developer's xarray makes of the two files: the histogram with the
+/// raw file's named dimensions and coordinates (profile, channel with `channel_name`,
+/// bin with `range`), `time` decoded to datetime64 from the run's start, the counts'
+/// total the events'; the photon file's `heights` and `pulse` groups indexed by their
+/// `delta_time`, the origin a CF flag (values 1..8 with meanings). Read by xarray (h5netcdf)
+/// and netCDF4 (the netCDF-C library), skipped loudly where they are missing (a failure
+/// under CI).
+#[test]
+fn xarray_reads_the_histogram_and_the_photon_file_by_name() {
+    if !common::python_has("photons xarray", &["xarray", "h5netcdf", "netCDF4"]) {
+        return;
+    }
+    let dir = scratch("photons_xarray");
+    run(&dir, "instruments/icesat2_like.toml", "4", &[]);
+    let n_events = hdf5::File::open(dir.join("ph.h5"))
+        .unwrap()
+        .dataset("heights/ph_id_pulse")
+        .unwrap()
+        .size();
+    ok(lidarsim(
+        &dir,
+        &[
+            "histogram",
+            "ph.h5",
+            "-o",
+            "h.h5",
+            "--bin-width",
+            "30",
+            "--shots",
+            "400",
+        ],
+        &[],
+    ));
+    let script = format!(
+        r#"
+import numpy as np, xarray as xr
+for engine in ("h5netcdf", "netcdf4"):
+    h = xr.open_dataset("h.h5", engine=engine)
+    assert h.counts.dims == ("profile", "channel", "bin"), h.counts.dims
+    assert list(h.channel.values) == [0] and str(h.channel_name.values[0]) == "532_total"
+    assert np.issubdtype(h.time.dtype, np.datetime64), h.time.dtype
+    assert h.range.dims == ("bin",) and h.sizes["bin"] == 417, h.sizes
+    assert int(h.counts.sel(channel=0).sum()) == {n_events}
+    origins = [v for v in h.data_vars if v.endswith("_counts")]
+    assert int(sum(h[v] for v in origins).sum()) == {n_events}, origins
+    e = xr.open_dataset("ph.h5", engine=engine, group="heights")
+    assert e.ph_id_pulse.dims == ("delta_time",) and e.sizes["delta_time"] == {n_events}
+    assert np.issubdtype(e.delta_time.dtype, np.datetime64)
+    assert list(e.truth_origin.attrs["flag_values"]) == list(range(1, 9))
+    assert len(e.truth_origin.attrs["flag_meanings"].split()) == 8
+    p = xr.open_dataset("ph.h5", engine=engine, group="pulse")
+    assert p.energy.dims == ("delta_time",) and p.sizes["delta_time"] == 1600
+print("ok")
+"#
+    );
+    let o = std::process::Command::new("python3")
+        .current_dir(&dir)
+        .args(["-c", &script])
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}

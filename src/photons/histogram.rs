@@ -13,6 +13,10 @@ use hdf5::{Dataset, File};
 
 use super::model::ORIGINS;
 use super::writer::FLUSH_EVENTS;
+use crate::hdf5_ds::{attach_scales, set_scale, write_num_attr, write_str_attr};
+
+/// The variable of the channels' names, as in the raw file.
+const CHANNEL_NAME: &str = "channel_name";
 use crate::error::{Error, Result};
 
 /// The profiles made of a photon file's events.
@@ -36,6 +40,8 @@ pub struct Histogram {
     pub n_shots: Vec<u64>,
     /// Profile time since the run's start (centre of its shots), s.
     pub time_s: Vec<f64>,
+    /// CF units of `time_s`: `seconds since <acquisition.start_time>`.
+    pub time_units: String,
     /// Latitude and longitude of each profile's centre shot (NaN without an orbit).
     pub latitude: Vec<f64>,
     /// See `latitude`.
@@ -173,6 +179,11 @@ pub fn histogram(path: &Path, bin_width_m: Option<f64>, shots: Option<u64>) -> R
     let time_s = (0..profiles)
         .map(|p| (p as f64 * shots as f64 + 0.5 * n_shots[p] as f64) / rep)
         .collect();
+    let time_units = dataset(&f, path, "pulse/delta_time")?
+        .attr("units")
+        .and_then(|a| a.read_scalar::<hdf5::types::VarLenUnicode>())
+        .map_err(|_| bad(path, "`pulse/delta_time` has no `units`"))?
+        .to_string();
     let lat_ds = dataset(&f, path, "pulse/latitude")?;
     let lon_ds = dataset(&f, path, "pulse/longitude")?;
     let (mut latitude, mut longitude) = (Vec::new(), Vec::new());
@@ -192,14 +203,17 @@ pub fn histogram(path: &Path, bin_width_m: Option<f64>, shots: Option<u64>) -> R
         bin_range_m: width,
         n_shots,
         time_s,
+        time_units,
         latitude,
         longitude,
     })
 }
 
-/// Writes `h` to `path` (a temporary name, shown as `shown`): the raw file's names for
-/// what it holds (`counts` (profile, channel, bin), `range`, `time`, `n_shots`,
-/// `latitude`, `longitude`, `channel`), and `<origin>_counts` for each origin.
+/// Writes `h` to `path` (a temporary name, shown as `shown`) in the raw file's names
+/// and conventions (docs/file-format.md): dimension scales `profile`, `channel` (numbers,
+/// `channel_name` the names) and `bin`; `counts` (profile, channel, bin) and the truth
+/// `<origin>_counts`; `range` (bin), `time`, `n_shots`, `latitude`, `longitude`
+/// (profile); CF-1.10 attributes, so that xarray and netCDF readers see named dimensions.
 pub fn write_histogram(h: &Histogram, path: &Path, shown: &Path) -> Result<()> {
     let fail = |e: hdf5::Error| Error::output(shown, format!("cannot write: {e}"));
     let f = File::with_options()
@@ -212,54 +226,136 @@ pub fn write_histogram(h: &Histogram, path: &Path, shown: &Path) -> Result<()> {
         .with_fcpl(|fcpl| fcpl.obj_track_times(false))
         .create(path)
         .map_err(fail)?;
-    let shape = (h.profiles, h.channels.len(), h.bins);
-    let chunk = (1, h.channels.len().max(1), h.bins.max(1));
-    let write3 = |name: &str, data: &[u64]| -> hdf5::Result<()> {
-        let ds = f
-            .new_dataset::<u64>()
-            .shape(shape)
-            .chunk(chunk)
-            .shuffle()
-            .deflate(1)
-            .obj_track_times(false)
-            .create(name)?;
-        let view = ndarray::ArrayView3::from_shape(shape, data)
-            .map_err(|e| hdf5::Error::from(e.to_string().as_str()))?;
-        ds.write(view)
-    };
-    let write1 = |name: &str, data: &[f64], units: &str| -> hdf5::Result<()> {
-        let ds = f
-            .new_dataset::<f64>()
-            .shape(data.len())
-            .obj_track_times(false)
-            .create(name)?;
-        ds.write(data)?;
-        let u: hdf5::types::VarLenUnicode = units.parse().unwrap_or_default();
-        ds.new_attr::<hdf5::types::VarLenUnicode>()
-            .shape(())
-            .create("units")?
-            .write_scalar(&u)
-    };
     let w = || -> hdf5::Result<()> {
-        write3("counts", &h.counts)?;
-        for ((_, name), c) in ORIGINS.iter().zip(&h.by_origin) {
-            write3(&format!("{name}_counts"), c)?;
+        let text = |ds: &Dataset, pairs: &[(&str, &str)]| -> hdf5::Result<()> {
+            pairs.iter().try_for_each(|(k, v)| write_str_attr(ds, k, v))
+        };
+        let index = |name: &str, n: usize, long_name: &str| -> hdf5::Result<Dataset> {
+            let ds = f
+                .new_dataset::<i64>()
+                .shape(n)
+                .obj_track_times(false)
+                .create(name)?;
+            ds.write(&(0..n as i64).collect::<Vec<_>>())?;
+            text(&ds, &[("long_name", long_name), ("units", "1")])?;
+            set_scale(&ds, name)?;
+            Ok(ds)
+        };
+        let profile = index("profile", h.profiles, "profile index")?;
+        let channel = index("channel", h.channels.len(), "channel number")?;
+        let bin = index("bin", h.bins, "range bin index, 0 nearest the instrument")?;
+        let names: Vec<hdf5::types::VarLenUnicode> = h
+            .channels
+            .iter()
+            .map(|c| c.parse().unwrap_or_default())
+            .collect();
+        let name = f
+            .new_dataset::<hdf5::types::VarLenUnicode>()
+            .shape(names.len())
+            .obj_track_times(false)
+            .create(CHANNEL_NAME)?;
+        name.write(&names)?;
+        text(&name, &[("long_name", "channel name")])?;
+        attach_scales(&name, &[&channel])?;
+        let per_profile = |name: &str, data: &[f64], attrs: &[(&str, &str)]| {
+            let ds = f
+                .new_dataset::<f64>()
+                .shape(data.len())
+                .obj_track_times(false)
+                .create(name)?;
+            ds.write(data)?;
+            text(&ds, attrs)?;
+            attach_scales(&ds, &[&profile])
+        };
+        per_profile(
+            "time",
+            &h.time_s,
+            &[
+                ("units", h.time_units.as_str()),
+                ("standard_name", "time"),
+                ("long_name", "profile centre time"),
+                ("calendar", "standard"),
+                ("axis", "T"),
+            ],
+        )?;
+        for (n, data, units) in [
+            ("latitude", &h.latitude, "degrees_north"),
+            ("longitude", &h.longitude, "degrees_east"),
+        ] {
+            let attrs = [
+                ("units", units),
+                ("standard_name", n),
+                ("long_name", "footprint of the profile's centre shot"),
+            ];
+            per_profile(n, data, &attrs)?;
         }
-        write1("range", &h.range_m, "m")?;
-        write1("time", &h.time_s, "s")?;
-        let shots: Vec<f64> = h.n_shots.iter().map(|&s| s as f64).collect();
-        write1("n_shots", &shots, "1")?;
-        write1("latitude", &h.latitude, "degrees_north")?;
-        write1("longitude", &h.longitude, "degrees_east")?;
-        let names: hdf5::types::VarLenUnicode = h.channels.join(",").parse().unwrap_or_default();
-        f.new_attr::<hdf5::types::VarLenUnicode>()
-            .shape(())
-            .create("channels")?
-            .write_scalar(&names)?;
-        f.new_attr::<f64>()
-            .shape(())
-            .create("bin_range_m")?
-            .write_scalar(&h.bin_range_m)
+        let shots = f
+            .new_dataset::<u64>()
+            .shape(h.n_shots.len())
+            .obj_track_times(false)
+            .create("n_shots")?;
+        shots.write(&h.n_shots)?;
+        text(
+            &shots,
+            &[("units", "1"), ("long_name", "laser shots accumulated")],
+        )?;
+        attach_scales(&shots, &[&profile])?;
+        let range = f
+            .new_dataset::<f64>()
+            .shape(h.range_m.len())
+            .obj_track_times(false)
+            .create("range")?;
+        range.write(&h.range_m)?;
+        let range_attrs = [
+            ("units", "m"),
+            ("long_name", "bin-centre range from the instrument"),
+        ];
+        text(&range, &range_attrs)?;
+        attach_scales(&range, &[&bin])?;
+        let shape = (h.profiles, h.channels.len(), h.bins);
+        let chunk = (1, h.channels.len().max(1), h.bins.max(1));
+        let counts = |name: &str, data: &[u64], long_name: &str| -> hdf5::Result<()> {
+            let ds = f
+                .new_dataset::<u64>()
+                .shape(shape)
+                .chunk(chunk)
+                .shuffle()
+                .deflate(1)
+                .obj_track_times(false)
+                .create(name)?;
+            let view = ndarray::ArrayView3::from_shape(shape, data)
+                .map_err(|e| hdf5::Error::from(e.to_string().as_str()))?;
+            ds.write(view)?;
+            let attrs = [
+                ("units", "count"),
+                ("long_name", long_name),
+                ("coordinates", "time latitude longitude channel_name range"),
+            ];
+            text(&ds, &attrs)?;
+            attach_scales(&ds, &[&profile, &channel, &bin])
+        };
+        counts(
+            "counts",
+            &h.counts,
+            "photon counts, the histogram of the events",
+        )?;
+        for ((_, origin), c) in ORIGINS.iter().zip(&h.by_origin) {
+            let long_name = format!("counts of the {origin} events (truth)");
+            counts(&format!("{origin}_counts"), c, &long_name)?;
+        }
+        for (k, v) in [
+            ("Conventions", "CF-1.10"),
+            ("title", "lidarsim histogram of time-tagged photon events"),
+            ("source", "lidarsim histogram"),
+            (
+                "history",
+                "lidarsim histogram: the profiles of a photon file's events",
+            ),
+        ] {
+            write_str_attr(&f, k, v)?;
+        }
+        write_str_attr(&f, "channels", &h.channels.join(","))?;
+        write_num_attr(&f, "bin_range_m", &h.bin_range_m)
     };
     w().map_err(fail)
 }

@@ -4,11 +4,11 @@
 
 use std::path::{Path, PathBuf};
 
-use hdf5::types::VarLenUnicode;
-use hdf5::{Dataset, File, Group, H5Type, Location};
+use hdf5::{Dataset, File, Group, H5Type};
 
 use super::model::ORIGINS;
 use crate::error::{Error, Result};
+use crate::hdf5_ds::{attach_scales, set_scale, write_num_attr, write_str_attr};
 
 /// Events (and shots) held before they are appended to the file; also the chunk length.
 pub const FLUSH_EVENTS: usize = 1 << 16;
@@ -56,6 +56,8 @@ pub struct ShotRow {
 /// What the file says of its run.
 #[derive(Debug, Clone)]
 pub struct PhotonHeader {
+    /// CF units of the times: `seconds since <acquisition.start_time>`.
+    pub time_units: String,
     /// Channel names.
     pub channels: Vec<String>,
     /// Detector pixels of each channel.
@@ -114,23 +116,6 @@ fn fail(shown: &Path, e: hdf5::Error) -> Error {
     )
 }
 
-fn str_attr(loc: &Location, name: &str, value: &str) -> hdf5::Result<()> {
-    let v: VarLenUnicode = value
-        .parse()
-        .map_err(|_| hdf5::Error::from(format!("attribute `{name}` contains a NUL character")))?;
-    loc.new_attr::<VarLenUnicode>()
-        .shape(())
-        .create(name)?
-        .write_scalar(&v)
-}
-
-fn num_attr<T: H5Type>(loc: &Location, name: &str, value: &T) -> hdf5::Result<()> {
-    loc.new_attr::<T>()
-        .shape(())
-        .create(name)?
-        .write_scalar(value)
-}
-
 /// A growing 1-D dataset of `T`, chunked and compressed, with its units and description.
 fn growing<T: H5Type>(
     g: &Group,
@@ -146,8 +131,8 @@ fn growing<T: H5Type>(
         .deflate(DEFLATE_LEVEL)
         .obj_track_times(false)
         .create(name)?;
-    str_attr(&ds, "units", units)?;
-    str_attr(&ds, "long_name", long_name)?;
+    write_str_attr(&ds, "units", units)?;
+    write_str_attr(&ds, "long_name", long_name)?;
     Ok(ds)
 }
 
@@ -159,7 +144,7 @@ fn fixed<T: H5Type>(g: &Group, name: &str, data: &[T], units: &str) -> hdf5::Res
         .obj_track_times(false)
         .create(name)?;
     ds.write(data)?;
-    str_attr(&ds, "units", units)?;
+    write_str_attr(&ds, "units", units)?;
     Ok(ds)
 }
 
@@ -196,32 +181,39 @@ impl PhotonWriter {
         let f = |e| fail(shown, e);
         let file = create(path).map_err(f)?;
         let make = || -> hdf5::Result<(Vec<Dataset>, Vec<Dataset>)> {
-            str_attr(&file, "title", "lidarsim time-tagged photon events")?;
-            str_attr(&file, "lidarsim_photon_format", "1")?;
-            str_attr(&file, "channels", &h.channels.join(","))?;
-            num_attr(&file, "shots_per_profile", &h.shots_per_profile)?;
-            num_attr(&file, "profiles", &h.profiles)?;
-            num_attr(&file, "rep_rate_hz", &h.rep_rate_hz)?;
-            num_attr(&file, "bin_width_s", &h.bin_width_s)?;
-            num_attr(&file, "bin_range_m", &h.bin_range_m)?;
-            num_attr(&file, "seed", &h.seed)?;
-            str_attr(&file, "config", &h.config_toml)?;
+            write_str_attr(&file, "title", "lidarsim time-tagged photon events")?;
+            write_str_attr(&file, "Conventions", "CF-1.10")?;
+            let history = format!(
+                "lidarsim simulate --photons: every recorded event, seed {}",
+                h.seed
+            );
+            write_str_attr(&file, "history", &history)?;
+            write_str_attr(&file, "lidarsim_photon_format", "1")?;
+            write_str_attr(&file, "channels", &h.channels.join(","))?;
+            write_num_attr(&file, "shots_per_profile", &h.shots_per_profile)?;
+            write_num_attr(&file, "profiles", &h.profiles)?;
+            write_num_attr(&file, "rep_rate_hz", &h.rep_rate_hz)?;
+            write_num_attr(&file, "bin_width_s", &h.bin_width_s)?;
+            write_num_attr(&file, "bin_range_m", &h.bin_range_m)?;
+            write_num_attr(&file, "seed", &h.seed)?;
+            write_str_attr(&file, "config", &h.config_toml)?;
             let bins = group(&file, "bins")?;
             fixed(&bins, "range_start", &h.bin_start_range_m, "m")?;
             let chans = group(&file, "channels")?;
             fixed(&chans, "pixels", &h.pixels, "1")?;
             let heights = group(&file, "heights")?;
-            let origin_list = ORIGINS
+            let flag_values: Vec<u8> = ORIGINS.iter().map(|(o, _)| *o as u8).collect();
+            let flag_meanings = ORIGINS
                 .iter()
-                .map(|(o, n)| format!("{}={n}", *o as u8))
+                .map(|(_, n)| *n)
                 .collect::<Vec<_>>()
                 .join(" ");
             let events = vec![
                 growing::<f64>(
                     &heights,
                     "delta_time",
-                    "s",
-                    "time of the event's shot since the run's start",
+                    &h.time_units,
+                    "time of the event's shot",
                 )?,
                 growing::<u64>(
                     &heights,
@@ -262,15 +254,15 @@ impl PhotonWriter {
                     "where the event came from (truth)",
                 )?,
             ];
-            str_attr(&events[8], "flag_meanings", &origin_list)?;
+            events[8]
+                .new_attr::<u8>()
+                .shape(flag_values.len())
+                .create("flag_values")?
+                .write(&flag_values)?;
+            write_str_attr(&events[8], "flag_meanings", &flag_meanings)?;
             let pulse = group(&file, "pulse")?;
             let shots = vec![
-                growing::<f64>(
-                    &pulse,
-                    "delta_time",
-                    "s",
-                    "time of the shot since the run's start",
-                )?,
+                growing::<f64>(&pulse, "delta_time", &h.time_units, "time of the shot")?,
                 growing::<f64>(
                     &pulse,
                     "energy",
@@ -290,6 +282,17 @@ impl PhotonWriter {
                     "longitude of the footprint (NaN without an orbit)",
                 )?,
             ];
+            // the events' and the shots' times as their dimension scales (as ATL03's
+            // `delta_time`), CF time units
+            for (times, others) in [(&events[0], &events[1..]), (&shots[0], &shots[1..])] {
+                set_scale(times, "delta_time")?;
+                write_str_attr(times, "standard_name", "time")?;
+                write_str_attr(times, "calendar", "standard")?;
+                write_str_attr(times, "axis", "T")?;
+                for ds in others {
+                    attach_scales(ds, &[times])?;
+                }
+            }
             Ok((events, shots))
         };
         let (events, shots) = make().map_err(f)?;
@@ -381,7 +384,7 @@ impl PhotonWriter {
     pub fn finish(mut self) -> Result<u64> {
         self.flush_events()?;
         self.flush_shots()?;
-        num_attr(&self.file, "n_events", &(self.written_events as u64))
+        write_num_attr(&self.file, "n_events", &(self.written_events as u64))
             .map_err(|e| fail(&self.shown, e))?;
         Ok(self.written_events as u64)
     }

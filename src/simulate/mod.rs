@@ -99,7 +99,7 @@ pub fn run(
         (Some(id), Some(shown)) => Some(crate::photons::PhotonWriter::create(
             outputs.temp_path(id)?,
             shown,
-            &photon_header(lidar, &planned),
+            &photon_header(lidar, &planned)?,
         )?),
         _ => None,
     };
@@ -122,10 +122,13 @@ pub fn run(
 }
 
 /// What the photon file says of its run.
-fn photon_header(lidar: &Lidar, planned: &RunPlan) -> crate::photons::PhotonHeader {
+fn photon_header(lidar: &Lidar, planned: &RunPlan) -> Result<crate::photons::PhotonHeader> {
     let first = lidar.first();
     let g = &first.geometry;
-    crate::photons::PhotonHeader {
+    let time_units =
+        crate::output::raw_file::content::time_units(&first.loaded.config.acquisition.start_time)?;
+    Ok(crate::photons::PhotonHeader {
+        time_units,
         channels: lidar
             .channels
             .iter()
@@ -152,7 +155,7 @@ fn photon_header(lidar: &Lidar, planned: &RunPlan) -> crate::photons::PhotonHead
                 _ => None,
             })
             .unwrap_or_default(),
-    }
+    })
 }
 
 /// Runs the Monte Carlo as [`run`] does (the same counts and truth for the same seed) and
