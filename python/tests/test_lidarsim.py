@@ -496,3 +496,27 @@ def test_a_multi_channel_sweep_asks_for_a_channel_in_one_line():
     both = [lidarsim.sweep(CALIOP, vary, "snr_at:10km", channel=c)["snr_at:10km"].values
             for c in ("532_parallel", "1064_total")]
     assert not np.array_equal(*both)
+
+
+def test_photons_are_the_cli_photon_file_byte_for_byte(tmp_path):
+    """``simulate(..., path=, photons=)`` writes the CLI's raw and photon files, byte for
+    byte (same seed, same moment: ``SOURCE_DATE_EPOCH``); without ``path`` it is refused in
+    one line."""
+    icesat2 = ROOT / "configs" / "instruments" / "icesat2_like.toml"
+    env = dict(os.environ, SOURCE_DATE_EPOCH="1733000000")
+    r = subprocess.run([str(CLI), "simulate", str(icesat2), "-o", "cli.h5", "--profiles", "3",
+                        "--photons", "cli_ph.h5"], capture_output=True, text=True,
+                       cwd=tmp_path, env=env)
+    assert r.returncode == 0, r.stderr
+    os.environ["SOURCE_DATE_EPOCH"] = "1733000000"
+    try:
+        lidarsim.simulate(icesat2, profiles=3, path=tmp_path / "py.h5",
+                          photons=tmp_path / "py_ph.h5")
+    finally:
+        del os.environ["SOURCE_DATE_EPOCH"]
+    assert (tmp_path / "py_ph.h5").read_bytes() == (tmp_path / "cli_ph.h5").read_bytes()
+    import h5py
+    with h5py.File(tmp_path / "py.h5") as raw, h5py.File(tmp_path / "py_ph.h5") as ph:
+        assert int(raw["counts"][()].sum()) == ph["heights/ph_id_pulse"].size > 0
+    with pytest.raises(ValueError, match="give path="):
+        lidarsim.simulate(icesat2, profiles=3, photons=tmp_path / "x.h5")
