@@ -216,50 +216,24 @@ impl WalkShots {
         }
     }
 
-    /// [`paralyzable_shot`](Self::paralyzable_shot)'s draws, each recorded arrival's bin
+    /// [`paralyzable_walk`](Self::paralyzable_walk)'s recorded arrivals, each one's bin
     /// and time (in bins) handed to `emit`.
     fn paralyzable_events<R: Rng + Clone>(&self, rng: &mut R, emit: &mut impl FnMut(usize, f64)) {
-        let x = &ziggurat().0;
-        let (mut b, mut last) = (0usize, f64::NEG_INFINITY);
-        let mut g = exp_draw(x, rng);
-        while g < self.total {
-            b = self.bin_from(b, g);
-            let t = self.time(b, g);
-            if t - last >= self.tau {
-                emit(b, t);
+        self.paralyzable_walk(rng, |b, t, recorded| {
+            if recorded {
+                emit(b, t)
             }
-            last = t;
-            g += exp_draw(x, rng);
-        }
+        });
     }
 
-    /// [`nonparalyzable_shot`](Self::nonparalyzable_shot)'s draws, each recorded
-    /// arrival's bin and time (in bins) handed to `emit`.
+    /// [`nonparalyzable_walk`](Self::nonparalyzable_walk)'s recorded arrivals, each one's
+    /// bin and time (in bins) handed to `emit`.
     fn nonparalyzable_events<R: Rng + Clone>(
         &self,
         rng: &mut R,
         emit: &mut impl FnMut(usize, f64),
     ) {
-        let x = &ziggurat().0;
-        let bins = self.means.len();
-        let mut b = 0usize;
-        let mut g = exp_draw(x, rng);
-        while g < self.total {
-            b = self.bin_from(b, g);
-            emit(b, self.time(b, g));
-            let live_g = g + self.tau * self.means[b];
-            if live_g < self.starts[b + 1] {
-                g = live_g + exp_draw(x, rng);
-                continue;
-            }
-            let live = self.time(b, g) + self.tau;
-            let lb = live as usize;
-            if lb >= bins {
-                return;
-            }
-            b = lb;
-            g = self.starts[lb] + (live - lb as f64) * self.means[lb] + exp_draw(x, rng);
-        }
+        self.nonparalyzable_walk(rng, |b, g| emit(b, self.time(b, g)));
     }
 
     /// One shot's recorded counts added to `acc` (the generator a local copy: kept in
@@ -309,13 +283,25 @@ impl WalkShots {
 
     /// Paralyzable: every arrival drawn, recorded when the one before is τ or more away.
     fn paralyzable_shot<R: Rng + Clone>(&self, rng: &mut R, acc: &mut [u64]) {
+        self.paralyzable_walk(rng, |b, _, recorded| acc[b] += u64::from(recorded));
+    }
+
+    /// The paralyzable walk of one shot: each arrival's bin, time (in bins) and whether
+    /// it is recorded (the one before τ or more away) handed to `arrival` (inlined into
+    /// both callers: the counts' path computes no more than it did alone).
+    #[inline(always)]
+    fn paralyzable_walk<R: Rng + Clone>(
+        &self,
+        rng: &mut R,
+        mut arrival: impl FnMut(usize, f64, bool),
+    ) {
         let x = &ziggurat().0;
         let (mut b, mut last) = (0usize, f64::NEG_INFINITY);
         let mut g = exp_draw(x, rng);
         while g < self.total {
             b = self.bin_from(b, g);
             let t = self.time(b, g);
-            acc[b] += u64::from(t - last >= self.tau);
+            arrival(b, t, t - last >= self.tau);
             last = t;
             g += exp_draw(x, rng);
         }
@@ -324,13 +310,25 @@ impl WalkShots {
     /// Non-paralyzable: only the recorded arrivals drawn, each the first after the dead
     /// time of the one before.
     fn nonparalyzable_shot<R: Rng + Clone>(&self, rng: &mut R, acc: &mut [u64]) {
+        self.nonparalyzable_walk(rng, |b, _| acc[b] += 1);
+    }
+
+    /// The non-paralyzable walk of one shot: each recorded arrival's bin and cumulative
+    /// mean Λ handed to `recorded` (its time is [`time`](Self::time)`(b, Λ)`, computed
+    /// only by a caller that needs it).
+    #[inline(always)]
+    fn nonparalyzable_walk<R: Rng + Clone>(
+        &self,
+        rng: &mut R,
+        mut recorded: impl FnMut(usize, f64),
+    ) {
         let x = &ziggurat().0;
         let bins = self.means.len();
         let mut b = 0usize;
         let mut g = exp_draw(x, rng);
         while g < self.total {
             b = self.bin_from(b, g);
-            acc[b] += 1;
+            recorded(b, g);
             // the dead time ends in the same bin (most counts at high rates): Λ moves
             // by τ·λ_b, no time computed
             let live_g = g + self.tau * self.means[b];
