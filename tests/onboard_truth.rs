@@ -562,18 +562,8 @@ for g in f:
             checked += 1
 print(checked)
 "#;
-    let o = std::process::Command::new("python3")
-        .current_dir(&dir)
-        .args(["-c", script, tools.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let checked: usize = String::from_utf8_lossy(&o.stdout).trim().parse().unwrap();
+    let out = common::cli::python_in(&dir, script, &[tools.to_str().unwrap()]);
+    let checked: usize = out.trim().parse().unwrap();
     // 2 × 33 + 6 × 55 + 10 × 200 + 30 × 290 + 30 × 5 region cells
     assert_eq!(checked, 2 * 33 + 6 * 55 + 10 * 200 + 30 * 290 + 30 * 5);
     std::fs::remove_dir_all(&dir).ok();

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::cli::{lidarsim, ok, scratch};
+use common::cli::{lidarsim, ok, python_in, refused, scratch, simulate_with_photons};
 use common::config_path;
 
 /// The raw file's `counts`, as u64, C order (profile, channel, bin).
@@ -18,31 +18,12 @@ fn raw_counts(path: &std::path::Path) -> Vec<u64> {
         .unwrap()
 }
 
-/// `simulate CONFIG --profiles N --method shot MORE -o raw.h5 --photons ph.h5` in `dir`.
-fn run(dir: &std::path::Path, config: &str, profiles: &str, more: &[&str]) {
-    let cfg = config_path(config);
-    let mut args = vec![
-        "simulate",
-        cfg.to_str().unwrap(),
-        "-o",
-        "raw.h5",
-        "--profiles",
-        profiles,
-        "--method",
-        "shot",
-        "--photons",
-        "ph.h5",
-    ];
-    args.extend_from_slice(more);
-    ok(lidarsim(dir, &args, &[]));
-}
-
 /// The events' histogram at the run's resolution equals the raw counts, bit for bit;
 /// at twice the bin width and twice the shots, the raw counts summed in pairs of bins
 /// and of profiles.
 fn histogram_is_counts(name: &str, config: &str, profiles: usize, more: &[&str]) {
     let dir = scratch(name);
-    run(&dir, config, &profiles.to_string(), more);
+    simulate_with_photons(&dir, config, &profiles.to_string(), more);
     let counts = raw_counts(&dir.join("raw.h5"));
     assert!(
         counts.iter().sum::<u64>() > 1000,
@@ -212,80 +193,42 @@ fn raw_file_is_the_same_bytes_with_and_without_photons() {
     assert!(p1 == p2, "the photon file depends on the thread count");
 }
 
-/// The one line a refused run prints, its exit status non-zero, and no file left.
-fn refused(dir: &std::path::Path, args: &[&str]) -> String {
-    let out = lidarsim(dir, args, &[]);
-    assert!(!out.status.success(), "not refused: {args:?}");
-    let err = String::from_utf8_lossy(&out.stderr).to_string();
-    assert_eq!(err.trim().lines().count(), 1, "{err}");
-    assert!(!err.contains("panicked"), "{err}");
-    assert!(!dir.join("ph.h5").exists() && !dir.join("raw.h5").exists());
-    err
-}
-
 #[test]
 fn refusals() {
     let dir = scratch("ph-refuse");
-    let depol = config_path("paper/scenario1.toml");
+    let paper = config_path("paper/scenario1.toml");
     let is2 = config_path("instruments/icesat2_like.toml");
-    let d = depol.to_str().unwrap();
-    let i = is2.to_str().unwrap();
-    let e = refused(
-        &dir,
-        &[
-            "simulate",
-            d,
-            "-o",
-            "raw.h5",
-            "--profiles",
-            "2",
-            "--method",
-            "aggregate",
-            "--photons",
-            "ph.h5",
-        ],
+    let (p, i) = (paper.to_str().unwrap(), is2.to_str().unwrap());
+    // `simulate CONFIG -o raw.h5 --profiles N MORE --photons ph.h5`
+    let photons = |config: &str, profiles: &str, more: &[&str], words: &[&str]| {
+        let mut args = vec!["simulate", config, "-o", "raw.h5", "--profiles", profiles];
+        args.extend_from_slice(more);
+        args.extend(["--photons", "ph.h5"]);
+        refused(&dir, &args, words, "ph.h5");
+        assert!(!dir.join("raw.h5").exists(), "{args:?} left raw.h5");
+    };
+    photons(
+        p,
+        "2",
+        &["--method", "aggregate"],
+        &["--photons", "--method shot"],
     );
-    assert!(
-        e.contains("--photons") && e.contains("--method shot"),
-        "{e}"
-    );
-    let e = refused(
-        &dir,
-        &[
-            "simulate",
-            d,
-            "-o",
-            "raw.h5",
-            "--profiles",
-            "2",
-            "--method",
-            "shot",
-            "--components",
-            "--photons",
-            "ph.h5",
-        ],
-    );
-    assert!(e.contains("--photons") && e.contains("--components"), "{e}");
+    let components = ["--method", "shot", "--components"];
+    photons(p, "2", &components, &["--photons", "--components"]);
     // a day of ICESat-2 day-time events (~1e11): the photon file cannot fit
-    let e = refused(
-        &dir,
-        &[
-            "simulate",
-            i,
-            "-o",
-            "raw.h5",
-            "--profiles",
-            "2e6",
-            "--set",
-            "background.radiance=7e17",
-            "--photons",
-            "ph.h5",
-        ],
+    photons(
+        i,
+        "2e6",
+        &["--set", "background.radiance=7e17"],
+        &["--photons"],
     );
-    assert!(e.contains("--photons"), "{e}");
     // the histogram's own inputs
-    let e = refused(&dir, &["histogram", d, "-o", "h.h5"]);
-    assert!(e.contains("photon file"), "{e}");
+    refused(
+        &dir,
+        &["histogram", p, "-o", "h.h5"],
+        &["photon file"],
+        "h.h5",
+    );
 }
 
 /// What a retrieval developer's xarray makes of the two files: the histogram with the
@@ -301,7 +244,7 @@ fn xarray_reads_the_histogram_and_the_photon_file_by_name() {
         return;
     }
     let dir = scratch("photons_xarray");
-    run(&dir, "instruments/icesat2_like.toml", "4", &[]);
+    simulate_with_photons(&dir, "instruments/icesat2_like.toml", "4", &[]);
     let n_events = hdf5::File::open(dir.join("ph.h5"))
         .unwrap()
         .dataset("heights/ph_id_pulse")
@@ -343,15 +286,5 @@ for engine in ("h5netcdf", "netcdf4"):
 print("ok")
 "#
     );
-    let o = std::process::Command::new("python3")
-        .current_dir(&dir)
-        .args(["-c", &script])
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
+    python_in(&dir, &script, &[]);
 }

@@ -17,8 +17,7 @@
 
 mod common;
 
-use common::cli::{lidarsim, ok, scratch};
-use common::config_path;
+use common::cli::{scratch, simulate_with_photons};
 
 const C: f64 = 299_792_458.0;
 /// KS critical value × √n at α = 1e-3.
@@ -63,21 +62,7 @@ fn erf(x: f64) -> f64 {
 #[test]
 fn surface_echo_events_follow_the_pulse_inside_the_bin() {
     let dir = scratch("ph-ks");
-    let cfg = config_path("instruments/icesat2_like.toml");
-    ok(lidarsim(
-        &dir,
-        &[
-            "simulate",
-            cfg.to_str().unwrap(),
-            "-o",
-            "raw.h5",
-            "--profiles",
-            "20",
-            "--photons",
-            "ph.h5",
-        ],
-        &[],
-    ));
+    simulate_with_photons(&dir, "instruments/icesat2_like.toml", "20", &[]);
     let f = hdf5::File::open(dir.join("ph.h5")).unwrap();
     let starts: Vec<f64> = ints(&f, "bins/range_start");
     let dr: f64 = f.attr("bin_range_m").unwrap().read_scalar().unwrap();
@@ -129,27 +114,14 @@ const SKIP: u32 = 10;
 #[test]
 fn per_pixel_dead_time_of_the_events() {
     let dir = scratch("ph-pixels");
-    let cfg = config_path("instruments/icesat2_like.toml");
     let sets = [
         format!("instrument.dark_count_rate_hz={TOTAL_HZ}"),
         "instrument.pulse_energy_j=1e-12".to_string(),
         "background.radiance=0".to_string(),
         "instrument.detector.pixels=16".to_string(),
     ];
-    let mut args = vec![
-        "simulate",
-        cfg.to_str().unwrap(),
-        "-o",
-        "raw.h5",
-        "--profiles",
-        "2",
-        "--photons",
-        "ph.h5",
-    ];
-    for s in &sets {
-        args.extend(["--set", s.as_str()]);
-    }
-    ok(lidarsim(&dir, &args, &[]));
+    let more: Vec<&str> = sets.iter().flat_map(|s| ["--set", s.as_ref()]).collect();
+    simulate_with_photons(&dir, "instruments/icesat2_like.toml", "2", &more);
     let f = hdf5::File::open(dir.join("ph.h5")).unwrap();
     let bins = ints::<f64>(&f, "bins/range_start").len() as u32;
     let shots: u64 = f.attr("shots_per_profile").unwrap().read_scalar().unwrap();
@@ -181,25 +153,12 @@ fn per_pixel_dead_time_of_the_events() {
 #[test]
 fn dark_and_background_events_in_their_shares() {
     let dir = scratch("ph-shares");
-    let cfg = config_path("instruments/icesat2_like.toml");
     let sets = [
         "background.radiance=7e17",
         "instrument.dark_count_rate_hz=3.3e6",
     ];
-    let mut args = vec![
-        "simulate",
-        cfg.to_str().unwrap(),
-        "-o",
-        "raw.h5",
-        "--profiles",
-        "10",
-        "--photons",
-        "ph.h5",
-    ];
-    for s in &sets {
-        args.extend(["--set", *s]);
-    }
-    ok(lidarsim(&dir, &args, &[]));
+    let more: Vec<&str> = sets.iter().flat_map(|s| ["--set", *s]).collect();
+    simulate_with_photons(&dir, "instruments/icesat2_like.toml", "10", &more);
     let raw = hdf5::File::open(dir.join("raw.h5")).unwrap();
     let d = common::h5::floats(&raw, "expected_dark")[0];
     let b = common::h5::floats(&raw, "expected_background")[0];

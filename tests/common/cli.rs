@@ -50,6 +50,45 @@ pub fn ok(o: Output) -> Output {
     o
 }
 
+/// `simulate CONFIG --profiles N --method shot -o raw.h5 --photons ph.h5 MORE` in `dir`
+/// (`config` a shipped config's path under `configs/`), which must succeed.
+pub fn simulate_with_photons(dir: &Path, config: &str, profiles: &str, more: &[&str]) {
+    let cfg = super::config_path(config);
+    let mut args = vec![
+        "simulate",
+        cfg.to_str().unwrap(),
+        "-o",
+        "raw.h5",
+        "--profiles",
+        profiles,
+        "--method",
+        "shot",
+        "--photons",
+        "ph.h5",
+    ];
+    args.extend_from_slice(more);
+    ok(lidarsim(dir, &args, &[]));
+}
+
+/// Runs the Python `script` (`python3 -c`) with `args` in `dir`, which must succeed; its
+/// standard output.
+pub fn python_in(dir: &Path, script: &str, args: &[&str]) -> String {
+    let o = std::process::Command::new("python3")
+        .current_dir(dir)
+        .arg("-c")
+        .arg(script)
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
 /// Expects `args` to fail with one line containing every one of `words`, leaving no
 /// `out` behind.
 pub fn refused(dir: &Path, args: &[&str], words: &[&str], out: &str) {

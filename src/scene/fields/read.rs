@@ -231,14 +231,7 @@ pub fn for_each_column(
     let read = |v: &Var, role: &str, per_level: bool, b: &Slab| -> Result<Vec<f64>, Fail> {
         let f = units(&files, v, role)?;
         let fail = |why: String| (at(v), format!("`{}`: {why}", v.name));
-        let Slab {
-            t0,
-            ct,
-            y0,
-            cy,
-            x0,
-            cx,
-        } = *b;
+        let (t0, ct, y0, cy, x0, cx) = (b.t0, b.ct, b.y0, b.cy, b.x0, b.cx);
         let (start, count) = match (per_level, &v.shape[..]) {
             (true, [a, b, c, d]) if [*a, *b, *c, *d] == [nt, nl, ny, nx] => {
                 (vec![t0, 0, y0, x0], vec![ct, nl, cy, cx])
