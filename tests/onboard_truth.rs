@@ -562,7 +562,7 @@ for g in f:
             checked += 1
 print(checked)
 "#;
-    let out = common::cli::python_in(&dir, script, &[tools.to_str().unwrap()]);
+    let out = common::cli::python_in(&dir, &["-c", script, tools.to_str().unwrap()]);
     let checked: usize = out.trim().parse().unwrap();
     // 2 × 33 + 6 × 55 + 10 × 200 + 30 × 290 + 30 × 5 region cells
     assert_eq!(checked, 2 * 33 + 6 * 55 + 10 * 200 + 30 * 290 + 30 * 5);

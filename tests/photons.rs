@@ -286,5 +286,5 @@ for engine in ("h5netcdf", "netcdf4"):
 print("ok")
 "#
     );
-    python_in(&dir, &script, &[]);
+    python_in(&dir, &["-c", &script]);
 }

@@ -70,13 +70,11 @@ pub fn simulate_with_photons(dir: &Path, config: &str, profiles: &str, more: &[&
     ok(lidarsim(dir, &args, &[]));
 }
 
-/// Runs the Python `script` (`python3 -c`) with `args` in `dir`, which must succeed; its
-/// standard output.
-pub fn python_in(dir: &Path, script: &str, args: &[&str]) -> String {
+/// Runs `python3 ARGS` in `dir` (`["-c", script, …]` or a script's path and its
+/// arguments), which must succeed; its standard output.
+pub fn python_in(dir: &Path, args: &[&str]) -> String {
     let o = std::process::Command::new("python3")
         .current_dir(dir)
-        .arg("-c")
-        .arg(script)
         .args(args)
         .output()
         .unwrap();

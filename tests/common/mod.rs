@@ -196,19 +196,7 @@ pub fn check_scc_file_with_python(test: &str, out: &Path) {
         return;
     }
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/check_scc_file.py");
-    let o = std::process::Command::new("python3")
-        .arg(script)
-        .arg(out)
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    println!(
-        "netCDF4-python: {}",
-        String::from_utf8_lossy(&o.stdout).trim()
-    );
+    let (script, out) = (script.to_str().unwrap(), out.to_str().unwrap());
+    let said = cli::python_in(Path::new("."), &[script, out]);
+    println!("netCDF4-python: {}", said.trim());
 }
