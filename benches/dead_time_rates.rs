@@ -62,6 +62,7 @@ fn main() {
     let path = match std::env::var("PATH_DT").as_deref() {
         Ok("walk") => DeadTimePath::Walk,
         Ok("photons") => DeadTimePath::Photons,
+        Ok("columns") => DeadTimePath::Columns,
         _ => DeadTimePath::Auto,
     };
     println!(
@@ -89,7 +90,13 @@ fn main() {
                 eprintln!("{lambda}: {}", sampler.strategy());
             }
             let recorded = DeadTimedShots::new(sampler.clone(), dead).with_path(path);
-            let which = if recorded.walks() { "walk" } else { "photons" };
+            let which = if recorded.takes_columns(shots) {
+                "columns"
+            } else if recorded.walks() {
+                "walk"
+            } else {
+                "photons"
+            };
             let mut acc = vec![0u64; BINS];
             // warm up (tables built on first use)
             recorded.profile(1, 0, shots.min(1000), &mut acc);

@@ -81,6 +81,6 @@ mod support;
 mod ziggurat;
 
 pub use family::{Family, MAX_PHOTONS, family};
-pub(crate) use probabilities::pois_tails;
+pub(crate) use probabilities::{pois_pmf, pois_tails};
 pub use rate_law::{Drawn, RateLaw, is_dense, rate_law_bytes};
 pub(crate) use ziggurat::{exp1_slow, ziggurat};

@@ -64,11 +64,13 @@
 //! [`RateLaw`]: super::counting::RateLaw
 
 mod clusters;
+mod columns;
 mod model;
 mod record;
 mod shots;
 mod walk;
 
+pub use columns::{COLUMN_NS_PER_DRAWN_BIN, COLUMN_NS_PER_DRAWN_PHOTON, COLUMN_NS_PER_LEVEL};
 pub use model::{DeadTime, DeadTimeModel, MAX_GRID_STEPS};
 pub use record::{ARRIVAL_STREAM, Scratch};
 pub use shots::{

@@ -2,6 +2,7 @@
 //! photons drawn from their counting law, the others given their photons; what they cost.
 
 use super::clusters::ClusterShots;
+use super::columns::ColumnShots;
 use super::model::{DeadTime, DeadTimeModel};
 use super::record::{ARRIVAL_STREAM, LawBins, Scratch};
 use super::walk::WalkShots;
@@ -81,6 +82,8 @@ pub struct DeadTimedShots {
     /// Which path draws the shots ([`DeadTimePath`]).
     path: DeadTimePath,
     walk: std::sync::OnceLock<Option<WalkShots>>,
+    /// The column path and the other path's cost estimate per shot, ns.
+    columns: std::sync::OnceLock<(ColumnShots, f64)>,
 }
 
 /// Which of [`DeadTimedShots`]' paths draws a profile's shots.
@@ -97,6 +100,9 @@ pub enum DeadTimePath {
     Photons,
     /// The arrival walk, whatever it costs (benches and tests).
     Walk,
+    /// The column path (`columns.rs`) for profiles on bins of 2τ or more, whatever it
+    /// costs (benches and tests); per-shot consumers as [`Auto`](Self::Auto).
+    Columns,
 }
 
 /// The bins drawn by their law and the sampler of the others.
@@ -116,6 +122,7 @@ impl DeadTimedShots {
             every_photon: false,
             path: DeadTimePath::Auto,
             walk: std::sync::OnceLock::new(),
+            columns: std::sync::OnceLock::new(),
         }
     }
 
@@ -124,6 +131,7 @@ impl DeadTimedShots {
     pub fn with_path(mut self, path: DeadTimePath) -> Self {
         self.path = path;
         self.walk = std::sync::OnceLock::new();
+        self.columns = std::sync::OnceLock::new();
         self
     }
 
@@ -135,7 +143,7 @@ impl DeadTimedShots {
                 let walk = match self.path {
                     _ if self.every_photon => false,
                     DeadTimePath::Walk => true,
-                    DeadTimePath::Photons => false,
+                    DeadTimePath::Photons | DeadTimePath::Columns => false,
                     DeadTimePath::Auto => {
                         let other = match self.dead.model {
                             DeadTimeModel::Paralyzable if ClusterShots::serves(&self.dead) => {
@@ -156,6 +164,39 @@ impl DeadTimedShots {
             .as_ref()
     }
 
+    /// Estimated cost of a shot on the path [`for_each_shot`](Self::for_each_shot) takes,
+    /// ns (the walk's, the clusters', or the counting laws' estimate).
+    fn photon_paths_ns_per_shot(&self) -> f64 {
+        let means = self.photons.means();
+        if self.walks() {
+            WalkShots::ns_per_shot(means, &self.dead)
+        } else if self.dead.model == DeadTimeModel::Paralyzable && ClusterShots::serves(&self.dead)
+        {
+            ClusterShots::ns_per_shot(means)
+        } else {
+            self.dead.ns_per_shot(means)
+        }
+    }
+
+    /// The column path, where it draws a profile of `shots` shots: forced
+    /// ([`DeadTimePath::Columns`]), or by [`DeadTimePath::Auto`] where its estimate is
+    /// below the photon paths'; never where every photon is drawn or on bins under 2τ.
+    fn by_columns(&self, shots: u64) -> Option<&ColumnShots> {
+        let auto = match self.path {
+            _ if self.every_photon || !ClusterShots::serves(&self.dead) => return None,
+            DeadTimePath::Columns => false,
+            DeadTimePath::Auto => true,
+            DeadTimePath::Photons | DeadTimePath::Walk => return None,
+        };
+        let (columns, other) = self.columns.get_or_init(|| {
+            (
+                ColumnShots::new(self.photons.means(), &self.dead),
+                self.photon_paths_ns_per_shot(),
+            )
+        });
+        (!auto || columns.ns_per_profile(shots) < other * shots as f64).then_some(columns)
+    }
+
     /// Where the arrival walk draws the shots: [`profile`](Self::profile)'s draws
     /// replayed, each recorded arrival handed to `f(shot, bin, place in the bin)` (their
     /// histogram is `profile`'s counts, bit for bit), and `true`; else `false`, nothing
@@ -167,6 +208,9 @@ impl DeadTimedShots {
         shots: u64,
         f: impl FnMut(u64, usize, f64),
     ) -> bool {
+        if self.by_columns(shots).is_some() {
+            return false; // `profile` takes the column path
+        }
         match self.by_walk() {
             Some(w) => {
                 w.registrations(seed, profile, shots, f);
@@ -174,6 +218,11 @@ impl DeadTimedShots {
             }
             None => false,
         }
+    }
+
+    /// Whether the column path draws a profile of `shots` shots (see [`DeadTimePath`]).
+    pub fn takes_columns(&self, shots: u64) -> bool {
+        self.by_columns(shots).is_some()
     }
 
     /// Whether the arrival walk draws this profile's shots (see [`DeadTimePath`]).
@@ -295,6 +344,9 @@ impl DeadTimedShots {
     /// shots from `stream_rng(seed, profile, block)` (photons) and its arrival stream
     /// (the detector's draws), summed in integers: independent of the thread count.
     pub fn profile(&self, seed: u64, profile: u64, shots: u64, acc: &mut [u64]) {
+        if let Some(c) = self.by_columns(shots) {
+            return c.profile(seed, profile, shots, acc);
+        }
         if let Some(w) = self.by_walk() {
             return w.profile(seed, profile, shots, acc);
         }
