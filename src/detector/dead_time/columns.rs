@@ -48,7 +48,7 @@
 //! bin at τ/Δt = 1/571 (the ideal detector places or draws every photon), and more from
 //! there on, the drawn share growing as λ². Measured by `benches/dead_time_rates.rs`
 //! (`validation/reports/dead_time_cost.md`). It draws profiles only: per-shot consumers
-//! ([`super::DeadTimedShots::for_each_shot`]) take the photon paths.
+//! (`DeadTimedShots::for_each_shot`) take the photon paths.
 
 use rand::Rng;
 use rand_distr::{Binomial, Distribution, Exp1, Poisson};

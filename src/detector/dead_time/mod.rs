@@ -4,7 +4,7 @@
 //!
 //! **Sampler** ([`DeadTime::record_shot`], [`DeadTimedShots`]). The rate is taken
 //! constant within a bin (as in the model below), dead time crosses bin edges, and the
-//! detector is live at the start of the window. Five exact paths:
+//! detector is live at the start of the window. Six exact paths:
 //!
 //! * [`DeadTimedShots`] on bins at least 2τ wide, for a paralyzable detector at every
 //!   rate and for a non-paralyzable one whose bins all hold fewer than
@@ -22,6 +22,11 @@
 //!   of at least [`LAW_FROM_PHOTONS`] photons per shot from the counting law at their
 //!   rate, without their photons ([`RateLaw`], tables built once per run), and the
 //!   others as above;
+//! * for profiles on bins at least 2τ wide, where its estimate is the lower (low rates,
+//!   many shots a profile; [`DeadTimePath::Auto`]), the *column path* (`columns.rs`,
+//!   issue 41): a block's shots drawn bin by bin as counts of shots, only those entering
+//!   a bin dead or whose photons are not *plain* (every gap after the first, and the last
+//!   to the end, at least τ: probability `(1 − kτ)^k`) given times; nothing per photon;
 //! * where its cost estimate is the lower ([`DeadTimePath::Auto`]: the paralyzable
 //!   detector from ~0.5 photons a bin, narrow bins) [`DeadTimedShots`] walks the
 //!   shot's arrivals in time order as a Poisson process of the piecewise-constant rate
