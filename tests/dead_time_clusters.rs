@@ -132,12 +132,7 @@ fn check_path(
     every_photon: bool,
     path: DeadTimePath,
 ) -> Option<String> {
-    let dead = DeadTime {
-        tau_s: TAU,
-        model,
-        bin_width_s: dt,
-        pixels: 1,
-    };
+    let dead = detector(model, dt);
     let photons = ShotSampler::new(&vec![n * dt; bins]);
     let mut shots = DeadTimedShots::new(photons, dead).with_path(path);
     if every_photon {
@@ -264,6 +259,31 @@ fn the_arrival_walk_follows_the_exact_laws() {
     assert!(failed.is_empty(), "{failed:#?}");
 }
 
+/// A single-pixel detector of dead time [`TAU`] on bins of `dt`.
+fn detector(model: DeadTimeModel, dt: f64) -> DeadTime {
+    DeadTime {
+        tau_s: TAU,
+        model,
+        bin_width_s: dt,
+        pixels: 1,
+    }
+}
+
+/// The stationary mean of a bin's recorded count (`nT/(1+nτ)`, `nT·e^{−nτ}`) and its
+/// renewal window variance, T the bin width `dt`.
+fn renewal_mean_and_variance(model: DeadTimeModel, n: f64, dt: f64) -> (f64, f64) {
+    match model {
+        DeadTimeModel::Nonparalyzable => (
+            n * dt / (1.0 + n * TAU),
+            common::reference::nonparalyzable_window_variance(n, TAU, dt),
+        ),
+        DeadTimeModel::Paralyzable => (
+            n * dt * (-n * TAU).exp(),
+            paralyzable_window_variance(n, TAU, dt),
+        ),
+    }
+}
+
 /// The stationary variance of a paralyzable counter's count in a window T ≥ τ: a record
 /// at s is an arrival with none in (s − τ, s), so records at u < v have the product
 /// density `n²e^{−2nτ}` for v − u > τ and 0 below (disjoint empty intervals), whence
@@ -287,12 +307,7 @@ fn the_arrival_walk_has_the_renewal_mean_and_variance() {
     let (bins, skip) = (108usize, 8usize);
     let mut failed = Vec::new();
     for model in [DeadTimeModel::Nonparalyzable, DeadTimeModel::Paralyzable] {
-        let dead = DeadTime {
-            tau_s: TAU,
-            model,
-            bin_width_s: dt,
-            pixels: 1,
-        };
+        let dead = detector(model, dt);
         for n in [1e5, 1e7, 1e8, 3e8] {
             // at 100 kHz a bin holds 0.007 photons: more shots for the same precision
             let shots: u64 = if n < 1e6 { 2_000_000 } else { 20_000 };
@@ -309,16 +324,7 @@ fn the_arrival_walk_has_the_renewal_mean_and_variance() {
             });
             let mean = s1 / count;
             let var = s2 / count - mean * mean;
-            let (want_mean, want_var) = match model {
-                DeadTimeModel::Nonparalyzable => (
-                    n * dt / (1.0 + n * TAU),
-                    common::reference::nonparalyzable_window_variance(n, TAU, dt),
-                ),
-                DeadTimeModel::Paralyzable => (
-                    n * dt * (-n * TAU).exp(),
-                    paralyzable_window_variance(n, TAU, dt),
-                ),
-            };
+            let (want_mean, want_var) = renewal_mean_and_variance(model, n, dt);
             let line = format!(
                 "{model:?} n = {n:e}: mean {mean:.5} vs {want_mean:.5}, variance {var:.5} vs \
                  {want_var:.5}"
@@ -365,12 +371,7 @@ fn the_column_path_follows_the_exact_laws() {
     for model in [DeadTimeModel::Nonparalyzable, DeadTimeModel::Paralyzable] {
         for (n, dt, bins, count) in cases.clone() {
             for per_profile in [3u64, 1] {
-                let dead = DeadTime {
-                    tau_s: TAU,
-                    model,
-                    bin_width_s: dt,
-                    pixels: 1,
-                };
+                let dead = detector(model, dt);
                 let photons = ShotSampler::new(&vec![n * dt; bins]);
                 let path = DeadTimedShots::new(photons, dead).with_path(DeadTimePath::Columns);
                 let l = bins as f64 * dt;
@@ -419,12 +420,7 @@ fn the_column_path_has_the_renewal_mean_and_variance() {
     let (bins, skip, per_profile) = (108usize, 8usize, 4u64);
     let mut failed = Vec::new();
     for model in [DeadTimeModel::Nonparalyzable, DeadTimeModel::Paralyzable] {
-        let dead = DeadTime {
-            tau_s: TAU,
-            model,
-            bin_width_s: dt,
-            pixels: 1,
-        };
+        let dead = detector(model, dt);
         for n in [1e5, 1e7, 1e8, 3e8] {
             let shots: u64 = if n < 1e6 { 2_000_000 } else { 40_000 };
             let photons = ShotSampler::new(&vec![n * dt; bins]);
@@ -444,16 +440,7 @@ fn the_column_path_has_the_renewal_mean_and_variance() {
             let mean = s1 / count;
             let var = (s2 / count - mean * mean) / per_profile as f64;
             let mean = mean / per_profile as f64;
-            let (want_mean, want_var) = match model {
-                DeadTimeModel::Nonparalyzable => (
-                    n * dt / (1.0 + n * TAU),
-                    common::reference::nonparalyzable_window_variance(n, TAU, dt),
-                ),
-                DeadTimeModel::Paralyzable => (
-                    n * dt * (-n * TAU).exp(),
-                    paralyzable_window_variance(n, TAU, dt),
-                ),
-            };
+            let (want_mean, want_var) = renewal_mean_and_variance(model, n, dt);
             // and one profile of several blocks (the binomials of large n)
             acc.iter_mut().for_each(|a| *a = 0);
             let big: u64 = if n < 1e6 { 2_000_000 } else { 200_000 };
