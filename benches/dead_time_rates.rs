@@ -8,6 +8,7 @@
 //! ```text
 //! RAYON_NUM_THREADS=1 cargo bench --bench dead_time_rates
 //! PATH_DT=walk RATES="1e6 3e8" MODELS=par RAYON_NUM_THREADS=1 cargo bench --bench dead_time_rates
+//! SHOTS=100 RAYON_NUM_THREADS=1 cargo bench --bench dead_time_rates   # profiles of 100 shots
 //! ```
 
 use lidarsim::detector::dead_time::{DeadTimePath, DeadTimedShots};
@@ -83,9 +84,19 @@ fn main() {
         for &n in &rates {
             let lambda = n * DT;
             let sampler = ShotSampler::new(&[lambda; BINS]);
-            // ~2e6 photons or 2e5 shot-bins per run, whichever is more
-            let shots =
-                ((2e6 / (lambda * BINS as f64)).max(2e5 / BINS as f64) as u64).clamp(200, 65_536);
+            // ~2e6 photons or 2e5 shot-bins per run, whichever is more; SHOTS=100 draws
+            // profiles of 100 shots (the paper's), as many as make 2e5 shot-bins a run
+            let (shots, profiles) = match std::env::var("SHOTS") {
+                Ok(s) => {
+                    let shots: u64 = s.parse().expect("SHOTS: a number of shots");
+                    (shots, (2e5 / (shots * BINS as u64) as f64).ceil() as u64)
+                }
+                Err(_) => (
+                    ((2e6 / (lambda * BINS as f64)).max(2e5 / BINS as f64) as u64)
+                        .clamp(200, 65_536),
+                    1,
+                ),
+            };
             if std::env::var("STRATEGY").is_ok() {
                 eprintln!("{lambda}: {}", sampler.strategy());
             }
@@ -100,9 +111,17 @@ fn main() {
             let mut acc = vec![0u64; BINS];
             // warm up (tables built on first use)
             recorded.profile(1, 0, shots.min(1000), &mut acc);
-            let ideal = best(|i| shot_profile(&sampler, 7, i, shots, &mut acc));
-            let dead_s = best(|i| recorded.profile(7, i, shots, &mut acc));
-            let per = |s: f64| s * 1e9 / (shots as f64 * BINS as f64);
+            let ideal = best(|i| {
+                for p in i * profiles..(i + 1) * profiles {
+                    shot_profile(&sampler, 7, p, shots, &mut acc);
+                }
+            });
+            let dead_s = best(|i| {
+                for p in i * profiles..(i + 1) * profiles {
+                    recorded.profile(7, p, shots, &mut acc);
+                }
+            });
+            let per = |s: f64| s * 1e9 / ((shots * profiles) as f64 * BINS as f64);
             println!(
                 "| {model:?} | {n:.0e} | {lambda:.3} | {which} | {:.2} | {:.2} | {:.2} |",
                 per(ideal),

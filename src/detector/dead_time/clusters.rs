@@ -137,11 +137,11 @@ impl CountSink for PlacedSink<'_> {
 /// Cost of the clusters path per bin and shot of mean λ (paralyzable), ns:
 /// `CLUSTER_NS_PER_BIN + λ·(CLUSTER_NS_PER_PHOTON + CLUSTER_NS_PER_PAIR·min(λ, 1))`, the
 /// last term the bins hit twice (sorted and swept); fitted to `benches/dead_time_rates.rs`
-/// (`validation/reports/dead_time_cost.md`, 2026-12-02: 0.17 ns a bin at 0.01 photons,
-/// 2.9 at 0.2, 8.4 at 0.5, 29 at 1, 12 ns a photon above).
+/// (`validation/reports/dead_time_cost.md`; 2026-12-05, a quiet machine, profiles of 100
+/// shots: 0.16 ns a bin at 0.01 photons, 0.74 at 0.1, 1.7 at 0.2, 5.9 at 0.48).
 const CLUSTER_NS_PER_BIN: f64 = 0.1;
 /// See [`CLUSTER_NS_PER_BIN`].
-const CLUSTER_NS_PER_PHOTON: f64 = 10.0;
+const CLUSTER_NS_PER_PHOTON: f64 = 6.5;
 /// See [`CLUSTER_NS_PER_BIN`].
 const CLUSTER_NS_PER_PAIR: f64 = 10.0;
 

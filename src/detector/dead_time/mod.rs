@@ -75,7 +75,10 @@ mod record;
 mod shots;
 mod walk;
 
-pub use columns::{COLUMN_NS_PER_DRAWN_BIN, COLUMN_NS_PER_DRAWN_PHOTON, COLUMN_NS_PER_LEVEL};
+pub use columns::{
+    COLUMN_NS_PER_BIN, COLUMN_NS_PER_DRAWN_BIN, COLUMN_NS_PER_DRAWN_PHOTON, COLUMN_NS_PER_LEVEL,
+    COLUMN_NS_PER_LEVEL_HIT,
+};
 pub use model::{DeadTime, DeadTimeModel, MAX_GRID_STEPS};
 pub use record::{ARRIVAL_STREAM, Scratch};
 pub use shots::{

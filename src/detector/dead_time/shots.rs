@@ -22,11 +22,12 @@ pub const NS_PER_PHOTON: f64 = 20.0;
 /// Cost of one photon recorded given its bin's photons by the counting tables
 /// ([`counting::Family`]), and of one bin drawn from its counting law ([`RateLaw`],
 /// below and above 64 MHz at τ = 3.5 ns), ns, for the same estimate: measured by
-/// `benches/dead_time_rates.rs` (one thread; 0.2 photons per bin: 3.3 ns a bin; 2–20
-/// photons: 4.5–7 ns a bin; 100–600: 19–22 ns), the ideal detector's share included.
+/// `benches/dead_time_rates.rs` (one thread; 0.2 photons per bin: 3.3 ns a bin; 1–20
+/// photons: 3.8–6.6 ns a bin on a quiet machine, 2026-12-05; 100–600: 18–22 ns), the
+/// ideal detector's share included.
 pub const NS_PER_GIVEN_PHOTON: f64 = 16.0;
 /// See [`NS_PER_GIVEN_PHOTON`].
-pub const NS_PER_LAW_BIN: f64 = 7.0;
+pub const NS_PER_LAW_BIN: f64 = 5.0;
 /// See [`NS_PER_GIVEN_PHOTON`].
 pub const NS_PER_DENSE_LAW_BIN: f64 = 22.0;
 
@@ -170,8 +171,7 @@ impl DeadTimedShots {
         let means = self.photons.means();
         if self.walks() {
             WalkShots::ns_per_shot(means, &self.dead)
-        } else if self.dead.model == DeadTimeModel::Paralyzable && ClusterShots::serves(&self.dead)
-        {
+        } else if self.by_clusters().is_some() {
             ClusterShots::ns_per_shot(means)
         } else {
             self.dead.ns_per_shot(means)
